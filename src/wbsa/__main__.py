@@ -1,0 +1,5 @@
+import sys
+
+from wbsa.cli import main
+
+sys.exit(main())

@@ -1,0 +1,70 @@
+"""The ``wbsa`` command: a thin argparse layer over the API.
+
+Each pipeline stage registers its own subcommands from a small ``command`` module
+(``wbsa.<stage>.command.register(subparsers)``) that imports heavy libraries only
+inside its handler, so ``wbsa bsa`` starts fast. Every :class:`~wbsa.errors.WbsaError`
+becomes one line on stderr and exit status 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+from wbsa import __version__
+from wbsa.errors import WbsaError
+
+#: Modules that contribute subcommands, in the order of the pipeline.
+COMMAND_MODULES = (
+    "wbsa.population.command",
+    "wbsa.formulae.command",
+    "wbsa.camera.command",
+    "wbsa.scan.command",
+    "wbsa.analysis.command",
+    "wbsa.report.command",
+    "wbsa.study.command",
+)
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse that reports usage errors as one line with exit status 2."""
+
+    def error(self, message: str) -> None:  # noqa: D102
+        sys.stderr.write(f"error: {message} (see wbsa {self.prog.split()[-1]} --help)\n")
+        sys.exit(2)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The full ``wbsa`` parser with every registered subcommand."""
+    parser = _Parser(prog="wbsa", description=__doc__.splitlines()[0])
+    parser.add_argument("--version", action="version", version=f"wbsa {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser, metavar="COMMAND")
+    for name in COMMAND_MODULES:
+        try:
+            module = importlib.import_module(name)
+        except ModuleNotFoundError as exc:
+            if exc.name == name:
+                continue  # stage not present in this build
+            raise
+        module.register(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the ``wbsa`` console script; returns the exit status."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        result = args.func(args)
+    except WbsaError as exc:
+        sys.stderr.write(f"error: {exc}\n")
+        return 2
+    except KeyboardInterrupt:
+        sys.stderr.write("interrupted: finished parts are kept; run the same command again to resume\n")
+        return 130
+    return int(result or 0)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -55,4 +55,8 @@ def triangle_areas_m2(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     f = np.asarray(faces)
     u = v[f[:, 1]] - v[f[:, 0]]
     w = v[f[:, 2]] - v[f[:, 0]]
-    return 0.5 * np.linalg.norm(np.cross(u, w), axis=1)
+    # explicit cross product: several times faster than np.cross on (m, 3) arrays
+    cx = u[:, 1] * w[:, 2] - u[:, 2] * w[:, 1]
+    cy = u[:, 2] * w[:, 0] - u[:, 0] * w[:, 2]
+    cz = u[:, 0] * w[:, 1] - u[:, 1] * w[:, 0]
+    return 0.5 * np.sqrt(cx * cx + cy * cy + cz * cz)

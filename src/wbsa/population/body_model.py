@@ -1,0 +1,221 @@
+"""Virtual bodies from anny phenotype parameters, skin-only, standing on z = 0.
+
+anny (MakeHuman-based, PyTorch) turns phenotype parameters in [0, 1] into a mesh of
+13,718 vertices and 27,420 triangles in its rest A-pose. That mesh holds more than skin:
+two eyeballs, the tongue, and the eye sockets and mouth folded inward to close the shell.
+WBSA is the *skin* area, so :class:`BodyModel` exposes two face masks:
+
+* ``skin_face_mask``: the shell without eyeballs, tongue and the inner cavity faces
+  (a triangle is a cavity face when its three vertices are listed in anny's
+  ``template_mesh_internal_cavities.pth``); this is the surface that is measured and
+  that the camera casts rays against;
+* ``closed_face_mask``: skin plus cavities, a closed surface whose enclosed volume
+  gives the body volume (and mass).
+
+The first ``anny.Anny()`` in a fresh cache builds its data (about 60 s, cached in
+``ANNY_CACHE_DIR``, default ``~/.cache/anny``); later builds take about 0.3 s.
+"""
+
+from __future__ import annotations
+
+import functools
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from wbsa.errors import WbsaError
+from wbsa.population.mesh import TriangleMesh
+
+#: Phenotype columns of a population table, in anny's order (``p_`` + anny label).
+PHENOTYPE_COLUMNS = (
+    "p_gender",
+    "p_age",
+    "p_muscle",
+    "p_weight",
+    "p_height",
+    "p_proportions",
+    "p_cupsize",
+    "p_firmness",
+    "p_african",
+    "p_asian",
+    "p_caucasian",
+)
+#: Columns that may be absent from a table; they default to 0.5 (anny's neutral value).
+OPTIONAL_PHENOTYPES = ("p_cupsize", "p_firmness")
+_EYES_AND_TONGUE = ("eye_front.L", "eye_front.R", "eye_back.L", "eye_back.R", "tongue")
+_ARM_BONE_PREFIXES = ("shoulder01", "upperarm", "lowerarm", "wrist", "finger", "metacarpal")
+
+
+@functools.lru_cache(maxsize=1)
+def load_anny():
+    """The anny full-body model with all phenotypes, built once per process.
+
+    Returns
+    -------
+    anny.Anny
+    """
+    import torch  # noqa: F401  (anny needs it; import here so the CLI starts fast)
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        import anny
+
+        # plain LBS: wbsa uses only rest shapes, and this keeps NVIDIA Warp (and its banner) out
+        return anny.Anny(phenotypes="all", skinning_method="lbs")
+
+
+@dataclass(frozen=True)
+class RestBodies:
+    """A batch of bodies in rest pose, shifted to stand on z = 0.
+
+    Attributes
+    ----------
+    vertices : (b, n, 3) float64
+        Vertex positions in metres.
+    bone_heads : (b, j, 3) float64
+        Joint (bone head) positions in metres, same frame.
+    """
+
+    vertices: np.ndarray
+    bone_heads: np.ndarray
+
+    def __len__(self) -> int:
+        return self.vertices.shape[0]
+
+
+class BodyModel:
+    """Build skin meshes and their helpers from phenotype parameters.
+
+    Parameters
+    ----------
+    batch_size
+        Bodies per anny forward pass.
+    """
+
+    def __init__(self, batch_size: int = 64):
+        import torch
+
+        self._torch = torch
+        self.batch_size = int(batch_size)
+        self.anny = load_anny()
+        self.faces = self.anny.faces.detach().cpu().numpy().astype(np.int32)
+        self.phenotype_labels = tuple(self.anny.phenotype_labels)
+        expected = tuple(c[2:] for c in PHENOTYPE_COLUMNS)
+        if self.phenotype_labels != expected:
+            raise WbsaError(f"unsupported anny phenotypes {self.phenotype_labels}; install anny==0.6.2")
+        self.bone_labels = tuple(self.anny.bone_labels)
+        self.skin_face_mask, self.closed_face_mask = _face_masks(self.anny, self.faces)
+        self.skin_faces = self.faces[self.skin_face_mask]
+        self.closed_faces = self.faces[self.closed_face_mask]
+        weights = self.anny.vertex_bone_weights.detach().cpu().numpy()
+        indices = self.anny.vertex_bone_indices.detach().cpu().numpy()
+        #: (n,) int: the bone that moves each vertex most (used to segment limbs and trunk)
+        self.vertex_bone = indices[np.arange(len(indices)), weights.argmax(axis=1)]
+
+    # -- parameters ---------------------------------------------------------------------
+    def phenotype_array(self, params: pd.DataFrame | dict) -> np.ndarray:
+        """Phenotype parameters as a ``(b, 11)`` float64 array in anny's order.
+
+        Missing optional columns (``p_cupsize``, ``p_firmness``) take 0.5.
+
+        Raises
+        ------
+        WbsaError
+            If a required column is missing or a value is outside [0, 1] or not finite.
+        """
+        df = pd.DataFrame(params) if not isinstance(params, pd.DataFrame) else params
+        cols = []
+        for name in PHENOTYPE_COLUMNS:
+            if name in df.columns:
+                cols.append(df[name].to_numpy(dtype=np.float64))
+            elif name in OPTIONAL_PHENOTYPES:
+                cols.append(np.full(len(df), 0.5))
+            else:
+                raise WbsaError(f"phenotype column {name} is missing; a population table needs {', '.join(PHENOTYPE_COLUMNS[:6])}, ...")
+        arr = np.stack(cols, axis=1) if cols else np.zeros((0, len(PHENOTYPE_COLUMNS)))
+        bad = ~np.isfinite(arr) | (arr < 0.0) | (arr > 1.0)
+        if bad.any():
+            row, col = np.argwhere(bad)[0]
+            raise WbsaError(
+                f"phenotype {PHENOTYPE_COLUMNS[col]} = {arr[row, col]!r} in row {row} is outside [0, 1]; "
+                "anny parameters are normalised to [0, 1]"
+            )
+        return arr
+
+    # -- geometry -----------------------------------------------------------------------
+    def rest_bodies(self, params: pd.DataFrame | dict) -> RestBodies:
+        """Rest-pose vertices and joints of every body, standing on z = 0.
+
+        Parameters
+        ----------
+        params
+            Table with the ``p_*`` phenotype columns, one row per body.
+        """
+        arr = self.phenotype_array(params)
+        torch = self._torch
+        model = self.anny
+        import anny.skinning.skinning as skinning
+
+        verts, heads = [], []
+        with torch.no_grad():
+            for start in range(0, len(arr), self.batch_size):
+                ph = torch.as_tensor(arr[start:start + self.batch_size], dtype=model.dtype)
+                empty = torch.empty((len(ph), 0), dtype=model.dtype)
+                coeffs = model._get_phenotype_blendshape_coefficients(ph, empty, empty)
+                verts.append(model.get_rest_vertices(coeffs).numpy())
+                heads.append(skinning.apply_linear_blendshape(
+                    model.template_bone_heads, model.bone_heads_blendshapes, coeffs).numpy())
+        if not verts:
+            n = model.template_vertices.shape[0]
+            return RestBodies(np.zeros((0, n, 3)), np.zeros((0, len(self.bone_labels), 3)))
+        v = np.concatenate(verts).astype(np.float64)
+        h = np.concatenate(heads).astype(np.float64)
+        floor = v[:, :, 2].min(axis=1)[:, None]
+        v[:, :, 2] -= floor
+        h[:, :, 2] -= floor
+        return RestBodies(v, h)
+
+    def skin_meshes(self, params: pd.DataFrame | dict) -> list[TriangleMesh]:
+        """Skin-only triangle meshes, one per row of ``params`` (see :meth:`rest_bodies`)."""
+        bodies = self.rest_bodies(params)
+        return [TriangleMesh(v, self.skin_faces) for v in bodies.vertices]
+
+    def skin_mesh(self, vertices: np.ndarray) -> TriangleMesh:
+        """The skin mesh over one body's ``(n, 3)`` vertices."""
+        return TriangleMesh(vertices, self.skin_faces)
+
+    def bone_index(self, label: str) -> int:
+        """Index of the bone named ``label`` (e.g. ``"upperarm01.L"``)."""
+        return self.bone_labels.index(label)
+
+    def vertices_of_bones(self, prefixes: tuple[str, ...]) -> np.ndarray:
+        """(n,) bool: vertices whose dominant bone name starts with one of ``prefixes``."""
+        chosen = [i for i, b in enumerate(self.bone_labels) if b.startswith(prefixes)]
+        return np.isin(self.vertex_bone, chosen)
+
+    @property
+    def trunk_vertex_mask(self) -> np.ndarray:
+        """(n,) bool: vertices not moved mainly by an arm or hand bone."""
+        return ~self.vertices_of_bones(_ARM_BONE_PREFIXES)
+
+
+def _face_masks(model, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Skin-only and closed-shell face masks, each ``(m,) bool``."""
+    import anny
+    import torch
+    from anny.face_segmentation import get_face_segmentation_mask
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        eyes_tongue = get_face_segmentation_mask(model, list(_EYES_AND_TONGUE))
+    eyes_tongue = np.asarray(eyes_tongue.cpu().numpy() if hasattr(eyes_tongue, "cpu") else eyes_tongue, dtype=bool)
+    path = f"{anny.__path__[0]}/data/template_mesh_internal_cavities.pth"
+    cav = torch.load(path, weights_only=False)
+    base = model.base_mesh_vertex_indices.detach().cpu().numpy()
+    cavity_vertex = np.isin(base, np.asarray(cav["vertex_indices"]))
+    cavity_face = cavity_vertex[faces].all(axis=1)
+    closed = ~eyes_tongue
+    skin = closed & ~cavity_face
+    return skin, closed

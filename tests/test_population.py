@@ -1,0 +1,253 @@
+"""Virtual bodies, skin mask, anthropometry and the random population."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from wbsa.cli import main
+from wbsa.population.anthropometry import closed_volume_m3, reference_adult
+from wbsa.population.body_model import PHENOTYPE_COLUMNS
+from wbsa.population.mesh import TriangleMesh, triangle_areas_m2
+from wbsa.population.sections import plane_section_points, tape_perimeter_m
+
+
+def _neutral() -> pd.DataFrame:
+    row = {c: 0.5 for c in PHENOTYPE_COLUMNS}
+    return pd.DataFrame([row])
+
+
+# -- skin surface ----------------------------------------------------------------------------
+def test_default_body_skin_area_matches_independent_computation(body_model):
+    """Skin = shell − eyeballs − tongue − cavities, recomputed here with Open3D from anny's own data."""
+    import anny
+    import open3d as o3d
+    import torch
+    from anny.face_segmentation import get_face_segmentation_mask
+
+    mesh = body_model.skin_meshes(_neutral())[0]
+    m = body_model.anny
+    faces = m.faces.numpy()
+    verts = body_model.rest_bodies(_neutral()).vertices[0]
+    drop = np.zeros(len(faces), bool)
+    for label in ("eye_front.L", "eye_front.R", "eye_back.L", "eye_back.R", "tongue"):
+        drop |= np.asarray(get_face_segmentation_mask(m, [label]), bool)
+    cav = torch.load(f"{anny.__path__[0]}/data/template_mesh_internal_cavities.pth", weights_only=False)
+    cav_v = set(int(i) for i in cav["vertex_indices"])
+    base = m.base_mesh_vertex_indices.numpy()
+    is_cav = np.array([int(b) in cav_v for b in base])
+    drop |= is_cav[faces].all(axis=1)
+    o3 = o3d.geometry.TriangleMesh(o3d.utility.Vector3dVector(verts), o3d.utility.Vector3iVector(faces[~drop]))
+    assert mesh.area_m2 == pytest.approx(o3.get_surface_area(), rel=1e-9)
+    # facts.md: the default body's skin is 1.5224 m² (shell 1.5663 m²)
+    assert mesh.area_m2 == pytest.approx(1.5224, abs=5e-4)
+    assert triangle_areas_m2(verts, faces).sum() == pytest.approx(1.5663, abs=5e-4)
+
+
+def test_closed_shell_is_watertight_and_volume_matches_anny(body_model):
+    """Skin + cavities close the body: every edge is shared by exactly two triangles."""
+    import torch
+    from anny import Anthropometry
+
+    f = body_model.closed_faces
+    edges = np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1)
+    _, counts = np.unique(edges, axis=0, return_counts=True)
+    assert (counts == 2).all()
+    v = body_model.rest_bodies(reference_adult(0.0)).vertices
+    ours = closed_volume_m3(v[0], f)
+    theirs = float(Anthropometry(body_model.anny).volume(torch.as_tensor(v))[0])  # includes eyeballs, tongue
+    assert ours == pytest.approx(theirs, rel=0.01)
+
+
+def test_bodies_stand_on_floor_and_face_minus_y(body_model):
+    bodies = body_model.rest_bodies(pd.concat([reference_adult(0.0), reference_adult(1.0)]))
+    for v, joints in zip(bodies.vertices, bodies.bone_heads):
+        assert v[:, 2].min() == pytest.approx(0.0, abs=1e-12)
+        head = joints[body_model.bone_index("head")]
+        face = v[(v[:, 2] > head[2]) & (np.abs(v[:, 0]) < 0.02)]
+        assert face[:, 1].min() < head[1] - 0.05  # the nose points to −Y
+        left_arm = joints[body_model.bone_index("lowerarm01.L")]
+        assert left_arm[0] > 0.1  # the subject's left at +X
+
+
+def test_phenotypes_outside_unit_interval_are_rejected(body_model):
+    from wbsa.errors import WbsaError
+
+    bad = _neutral()
+    bad["p_weight"] = 1.3
+    with pytest.raises(WbsaError, match="p_weight"):
+        body_model.rest_bodies(bad)
+
+
+# -- tape measures ---------------------------------------------------------------------------
+def _cylinder(radius: float, height: float, n: int = 256) -> TriangleMesh:
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    ring = np.stack([radius * np.cos(t), radius * np.sin(t)], axis=1)
+    v = np.concatenate([np.c_[ring, np.zeros(n)], np.c_[ring, np.full(n, height)]])
+    i = np.arange(n)
+    j = (i + 1) % n
+    f = np.concatenate([np.c_[i, j, i + n], np.c_[j, j + n, i + n]])
+    return TriangleMesh(v, f.astype(np.int32))
+
+
+def test_tape_around_a_cylinder_is_its_circumference():
+    cyl = _cylinder(0.15, 1.0)
+    pts = plane_section_points(cyl.vertices, cyl.faces, np.array([0, 0, 0.4]), np.array([0, 0, 1.0]))
+    assert tape_perimeter_m(pts, np.array([0, 0, 1.0])) == pytest.approx(2 * np.pi * 0.15, rel=1e-3)
+
+
+def test_tape_bridges_concavities_like_a_real_tape():
+    """Two touching cylinders: the tape spans the gap, it does not follow the waist between them."""
+    a, b = _cylinder(0.1, 1.0), _cylinder(0.1, 1.0)
+    v = np.concatenate([a.vertices - [0.1, 0, 0], b.vertices + [0.1, 0, 0]])
+    f = np.concatenate([a.faces, b.faces + len(a.vertices)])
+    pts = plane_section_points(v, f, np.array([0, 0, 0.5]), np.array([0, 0, 1.0]))
+    assert tape_perimeter_m(pts, np.array([0, 0, 1.0])) == pytest.approx(2 * np.pi * 0.1 + 4 * 0.1, rel=1e-3)
+
+
+def test_adult_tape_measures_are_human(anthropometer, body_model):
+    """Reference adults: every measure in a plausible adult range; waist agrees with anny's."""
+    import torch
+    from anny import Anthropometry
+
+    params = pd.concat([reference_adult(0.0), reference_adult(1.0)])
+    bodies = body_model.rest_bodies(params)
+    m = anthropometer.measure(bodies)
+    ranges = {
+        "stature_m": (1.5, 2.0), "mass_kg": (45, 110), "bmi": (17, 30), "wbsa_m2": (1.4, 2.4),
+        "waist_circ_m": (0.6, 1.1), "hip_circ_m": (0.8, 1.2), "bust_circ_m": (0.75, 1.2),
+        "underbust_circ_m": (0.65, 1.05), "neck_circ_m": (0.28, 0.45), "upper_arm_circ_m": (0.22, 0.4),
+        "thigh_circ_m": (0.4, 0.7), "front_chest_width_m": (0.25, 0.45),
+    }
+    for col, (lo, hi) in ranges.items():
+        assert m[col].between(lo, hi).all(), (col, m[col].tolist())
+    anny_waist = Anthropometry(body_model.anny).waist_circumference(torch.as_tensor(bodies.vertices)).numpy()
+    assert np.allclose(m["waist_circ_m"], anny_waist, rtol=0.05)
+    # the bust sits above the underbust: a woman's bust tape is longer than her underbust tape
+    assert m["bust_circ_m"].iloc[1] > m["underbust_circ_m"].iloc[1] + 0.05
+    assert m["stature_m"].iloc[0] > m["stature_m"].iloc[1]
+
+
+def test_heavier_body_has_larger_girths_and_area(anthropometer, body_model):
+    light, heavy = reference_adult(0.0), reference_adult(0.0)
+    light["p_weight"], heavy["p_weight"] = 0.2, 0.8
+    m = anthropometer.measure(body_model.rest_bodies(pd.concat([light, heavy])))
+    for col in ("mass_kg", "wbsa_m2", "waist_circ_m", "hip_circ_m", "thigh_circ_m", "upper_arm_circ_m"):
+        assert m[col].iloc[1] > m[col].iloc[0], col
+
+
+def test_age_mapping_follows_anny_anchors():
+    from wbsa.population.age import param_to_years, years_to_param
+
+    assert param_to_years(0.5) == pytest.approx(12.67, abs=0.01)  # facts.md: 0.5 ≈ 12.7 y
+    assert param_to_years(0.77) == pytest.approx(18.0)
+    years = np.array([1.0, 12.0, 30.0, 70.0])
+    assert np.allclose(param_to_years(years_to_param(years)), years)
+
+
+# -- random population -------------------------------------------------------------------------
+def test_random_population_is_deterministic_and_prefix_stable():
+    from wbsa.population.random_population import RandomPopulationSettings, sample_random_parameters
+
+    a = sample_random_parameters(RandomPopulationSettings(n=20, seed=3))
+    b = sample_random_parameters(RandomPopulationSettings(n=20, seed=3))
+    c = sample_random_parameters(RandomPopulationSettings(n=5, seed=3))
+    d = sample_random_parameters(RandomPopulationSettings(n=20, seed=4))
+    pd.testing.assert_frame_equal(a, b)
+    pd.testing.assert_frame_equal(a.iloc[:5], c)
+    assert not a.equals(d)
+    assert a["age_years"].between(12, 70).all()
+    assert set(a["sex"]) <= {"male", "female"}
+    assert np.allclose(a[["p_african", "p_asian", "p_caucasian"]].sum(axis=1), 1.0)
+    assert ((a["p_gender"] == 1.0) == (a["sex"] == "female")).all()
+
+
+def test_population_cli_writes_identical_tables_for_same_seed(tmp_path, body_model):
+    out1, out2 = tmp_path / "a.parquet", tmp_path / "b.parquet"
+    assert main(["population", "--kind", "random", "--n", "6", "--seed", "7", "--out", str(out1)]) == 0
+    assert main(["population", "--kind", "random", "--n", "6", "--seed", "7", "--out", str(out2)]) == 0
+    a, b = pd.read_parquet(out1), pd.read_parquet(out2)
+    pd.testing.assert_frame_equal(a, b)
+    from wbsa.population.table import POPULATION_COLUMNS, read_population
+
+    assert list(read_population(out1).columns[: len(POPULATION_COLUMNS)]) == list(POPULATION_COLUMNS)
+    assert (a["bmi"] - a["mass_kg"] / a["stature_m"] ** 2).abs().max() < 1e-9
+    # csv and xlsx exports carry the same table
+    assert main(["population", "--kind", "random", "--n", "6", "--seed", "7", "--out", str(tmp_path / "a.csv")]) == 0
+    assert main(["population", "--kind", "random", "--n", "6", "--seed", "7", "--out", str(tmp_path / "a.xlsx")]) == 0
+    csv = pd.read_csv(tmp_path / "a.csv")
+    assert np.allclose(csv["wbsa_m2"], a["wbsa_m2"])
+    assert np.allclose(pd.read_excel(tmp_path / "a.xlsx")["stature_m"], a["stature_m"])
+
+
+def test_table_kind_builds_given_phenotypes(tmp_path, body_model):
+    params = pd.concat([reference_adult(0.0), reference_adult(1.0)])
+    params.to_csv(tmp_path / "p.csv", index=False)
+    out = tmp_path / "t.parquet"
+    assert main(["population", "--kind", "table", "--params", str(tmp_path / "p.csv"), "--out", str(out)]) == 0
+    t = pd.read_parquet(out)
+    assert list(t["sex"]) == ["male", "female"]
+    expected = body_model.skin_meshes(params)[1].area_m2
+    assert t["wbsa_m2"].iloc[1] == pytest.approx(expected)
+
+
+def test_body_export_round_trips_through_ply_and_obj(tmp_path, body_model):
+    import open3d as o3d
+
+    for name in ("b.ply", "b.obj"):
+        path = tmp_path / name
+        assert main(["body", "--gender", "1", "--age", "0.8", "--out", str(path)]) == 0
+        m = o3d.io.read_triangle_mesh(str(path))
+        row = _neutral()
+        row["p_gender"], row["p_age"] = 1.0, 0.8
+        row["p_cupsize"] = row["p_firmness"] = 0.5
+        assert m.get_surface_area() == pytest.approx(body_model.skin_meshes(row)[0].area_m2, rel=1e-6)
+
+
+# -- bad input ----------------------------------------------------------------------------------
+def _fails_cleanly(capsys, argv: list[str], words: str) -> None:
+    with pytest.raises(SystemExit) as exc:
+        raise SystemExit(main(argv))
+    assert exc.value.code == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("error:") and "\n" not in err and "Traceback" not in err
+    assert words in err, err
+
+
+def test_bad_inputs_give_one_line_errors(tmp_path, capsys, body_model):
+    out = tmp_path / "p.parquet"
+    _fails_cleanly(capsys, ["population", "--kind", "martian", "--n", "3", "--out", str(out)], "invalid choice")
+    _fails_cleanly(capsys, ["population", "--kind", "random", "--n", "0", "--out", str(out)], "positive")
+    _fails_cleanly(capsys, ["population", "--kind", "random", "--n", "-4", "--out", str(out)], "positive")
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    _fails_cleanly(capsys, ["population", "--kind", "random", "--n", "2", "--out", str(blocker / "p.parquet")],
+                   "cannot")
+    bad = pd.concat([reference_adult(0.0)])
+    bad["p_height"] = -0.2
+    bad.to_parquet(tmp_path / "bad.parquet")
+    _fails_cleanly(capsys, ["population", "--kind", "table", "--params", str(tmp_path / "bad.parquet"),
+                            "--out", str(out)], "outside [0, 1]")
+    (tmp_path / "corrupt.parquet").write_bytes(b"PAR1 this is not parquet")
+    _fails_cleanly(capsys, ["population", "--kind", "table", "--params", str(tmp_path / "corrupt.parquet"),
+                            "--out", str(out)], "not a readable Parquet")
+    pd.DataFrame({"x": [1, 2]}).to_parquet(tmp_path / "foreign.parquet")
+    _fails_cleanly(capsys, ["population", "--kind", "table", "--params", str(tmp_path / "foreign.parquet"),
+                            "--out", str(out)], "missing column")
+    _fails_cleanly(capsys, ["body", "--population", str(tmp_path / "foreign.parquet"), "--out",
+                            str(tmp_path / "b.ply")], "missing column")
+    assert not out.exists()
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]  # no temp files left
+
+
+def test_failed_run_keeps_an_existing_table_intact(tmp_path, capsys, body_model):
+    out = tmp_path / "keep.parquet"
+    assert main(["population", "--kind", "random", "--n", "3", "--out", str(out)]) == 0
+    before = out.read_bytes()
+    bad = reference_adult(0.0)
+    bad["p_weight"] = 2.0
+    bad.to_csv(tmp_path / "bad.csv", index=False)
+    _fails_cleanly(capsys, ["population", "--kind", "table", "--params", str(tmp_path / "bad.csv"),
+                            "--out", str(out)], "p_weight")
+    assert out.read_bytes() == before

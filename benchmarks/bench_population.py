@@ -44,12 +44,10 @@ def main() -> None:
     print(f"anny forward only       : {args.n / forward_s:8.1f} bodies/s")
     print(f"population, 1 process   : {args.n / serial_s:8.1f} bodies/s  "
           f"({serial_s / forward_s:.1f}x the forward pass)")
-    try:
-        from wbsa.population.parallel import measure_population_parallel
-    except ImportError:
-        return
+    from wbsa.parallel import default_workers
+
     t0 = time.perf_counter()
-    measure_population_parallel(params, workers=args.workers)
+    measure_population(params, workers=args.workers or default_workers())
     parallel_s = time.perf_counter() - t0
     print(f"population, all cores   : {args.n / parallel_s:8.1f} bodies/s  (incl. cluster start-up)")
     print(f"paper (quad-core, 2017) : {paper_rate:8.1f} bodies/s  -> speed-up {args.n / parallel_s / paper_rate:.0f}x")

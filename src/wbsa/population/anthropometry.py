@@ -181,7 +181,8 @@ def closed_volume_m3(vertices: np.ndarray, faces: np.ndarray) -> float:
     vertices : (n, 3) float64
     faces : (m, 3) int
     """
-    a, b, c = (vertices[faces[:, k]].T for k in range(3))
+    f = np.asarray(faces, dtype=np.intp)
+    a, b, c = (np.take(vertices, f[:, k], axis=0).T for k in range(3))
     det = (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
            + a[2] * (b[0] * c[1] - b[1] * c[0]))
     return float(abs(det.sum()) / 6.0)

@@ -66,6 +66,37 @@ def load_anny():
         return anny.Anny(phenotypes="all", skinning_method="lbs")
 
 
+def phenotype_array(params: pd.DataFrame | dict) -> np.ndarray:
+    """Phenotype parameters as a ``(b, 11)`` float64 array in anny's order (:data:`PHENOTYPE_COLUMNS`).
+
+    Missing optional columns (``p_cupsize``, ``p_firmness``) take 0.5.
+
+    Raises
+    ------
+    WbsaError
+        If a required column is missing or a value is outside [0, 1] or not finite.
+    """
+    df = pd.DataFrame(params) if not isinstance(params, pd.DataFrame) else params
+    cols = []
+    for name in PHENOTYPE_COLUMNS:
+        if name in df.columns:
+            cols.append(df[name].to_numpy(dtype=np.float64))
+        elif name in OPTIONAL_PHENOTYPES:
+            cols.append(np.full(len(df), 0.5))
+        else:
+            raise WbsaError(f"phenotype column {name} is missing; a population table needs "
+                            f"{', '.join(PHENOTYPE_COLUMNS[:6])}, ...")
+    arr = np.stack(cols, axis=1)
+    bad = ~np.isfinite(arr) | (arr < 0.0) | (arr > 1.0)
+    if bad.any():
+        row, col = np.argwhere(bad)[0]
+        raise WbsaError(
+            f"phenotype {PHENOTYPE_COLUMNS[col]} = {arr[row, col]!r} in row {row} is outside [0, 1]; "
+            "anny parameters are normalised to [0, 1]"
+        )
+    return arr
+
+
 @dataclass(frozen=True)
 class RestBodies:
     """A batch of bodies in rest pose, shifted to stand on z = 0.
@@ -114,35 +145,8 @@ class BodyModel:
         #: (n,) int: the bone that moves each vertex most (used to segment limbs and trunk)
         self.vertex_bone = indices[np.arange(len(indices)), weights.argmax(axis=1)]
 
-    # -- parameters ---------------------------------------------------------------------
-    def phenotype_array(self, params: pd.DataFrame | dict) -> np.ndarray:
-        """Phenotype parameters as a ``(b, 11)`` float64 array in anny's order.
-
-        Missing optional columns (``p_cupsize``, ``p_firmness``) take 0.5.
-
-        Raises
-        ------
-        WbsaError
-            If a required column is missing or a value is outside [0, 1] or not finite.
-        """
-        df = pd.DataFrame(params) if not isinstance(params, pd.DataFrame) else params
-        cols = []
-        for name in PHENOTYPE_COLUMNS:
-            if name in df.columns:
-                cols.append(df[name].to_numpy(dtype=np.float64))
-            elif name in OPTIONAL_PHENOTYPES:
-                cols.append(np.full(len(df), 0.5))
-            else:
-                raise WbsaError(f"phenotype column {name} is missing; a population table needs {', '.join(PHENOTYPE_COLUMNS[:6])}, ...")
-        arr = np.stack(cols, axis=1) if cols else np.zeros((0, len(PHENOTYPE_COLUMNS)))
-        bad = ~np.isfinite(arr) | (arr < 0.0) | (arr > 1.0)
-        if bad.any():
-            row, col = np.argwhere(bad)[0]
-            raise WbsaError(
-                f"phenotype {PHENOTYPE_COLUMNS[col]} = {arr[row, col]!r} in row {row} is outside [0, 1]; "
-                "anny parameters are normalised to [0, 1]"
-            )
-        return arr
+    #: see :func:`phenotype_array`
+    phenotype_array = staticmethod(phenotype_array)
 
     # -- geometry -----------------------------------------------------------------------
     def rest_bodies(self, params: pd.DataFrame | dict) -> RestBodies:
@@ -153,7 +157,7 @@ class BodyModel:
         params
             Table with the ``p_*`` phenotype columns, one row per body.
         """
-        arr = self.phenotype_array(params)
+        arr = phenotype_array(params)
         torch = self._torch
         model = self.anny
         import anny.skinning.skinning as skinning

@@ -25,6 +25,8 @@ def build_population(kind: PopulationKind, n: int | None = None, seed: int = 0, 
         NHANES people, paper's Virtual NHANES) or ``table`` (phenotypes read from ``params_path``).
     n
         Subjects (random) or survey people (survey).
+    workers, scheduler
+        Parallel body building (see :mod:`wbsa.parallel`); the table does not depend on them.
     """
     from wbsa.population.table import measure_population
 
@@ -34,10 +36,11 @@ def build_population(kind: PopulationKind, n: int | None = None, seed: int = 0, 
         if n is None:
             raise WbsaError("--kind random needs --n, the number of subjects")
         params = sample_random_parameters(RandomPopulationSettings(n=n, seed=seed))
-        return measure_population(params, density_kg_m3=density_kg_m3, show_progress=show_progress)
+        return measure_population(params, density_kg_m3=density_kg_m3, show_progress=show_progress,
+                                  workers=workers, scheduler=scheduler)
     if kind == "table":
         return measure_population(_read_params(params_path), density_kg_m3=density_kg_m3,
-                                  show_progress=show_progress)
+                                  show_progress=show_progress, workers=workers, scheduler=scheduler)
     if kind == "survey":
         try:
             from wbsa.population.survey import build_survey_population

@@ -26,6 +26,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--params", help="(--kind table) Parquet/CSV with p_gender, p_age, ... columns in [0, 1]")
     p.add_argument("--variations", type=int, default=0, help="(--kind survey) weight/muscle variations per person")
     p.add_argument("--survey-weights", action="store_true", help="(--kind survey) select people by exam weights")
+    p.add_argument("--workers", type=int, default=None,
+                   help="worker processes (default: all cores; 1 = in this process)")
+    p.add_argument("--scheduler", default=None,
+                   help="address of an existing dask scheduler (default: $DASK_SCHEDULER_ADDRESS)")
     p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                    help="show a progress bar (default: when stderr is a terminal)")
     p.set_defaults(func=run_population)
@@ -42,13 +46,15 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run_population(args: argparse.Namespace) -> int:
     """Handler of ``wbsa population``."""
     from wbsa.io import write_table
+    from wbsa.parallel import default_workers
     from wbsa.population.build import build_population
 
     out = Path(args.out)
     fmt = args.format or _format_of(out)
     df = build_population(kind=args.kind, n=args.n, seed=args.seed, density_kg_m3=args.density,
                           params_path=args.params, variations=args.variations,
-                          survey_weights=args.survey_weights, show_progress=args.progress)
+                          survey_weights=args.survey_weights, show_progress=args.progress,
+                          workers=args.workers or default_workers(), scheduler=args.scheduler)
     write_table(df, out, fmt)
     print(f"wrote {len(df)} subjects to {out}")
     return 0

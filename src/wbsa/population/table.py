@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import os
 
 import numpy as np
@@ -9,7 +10,7 @@ import pandas as pd
 
 from wbsa.io import read_table
 from wbsa.population.anthropometry import DEFAULT_DENSITY_KG_M3, MEASURE_COLUMNS, Anthropometer
-from wbsa.population.body_model import PHENOTYPE_COLUMNS, BodyModel
+from wbsa.population.body_model import PHENOTYPE_COLUMNS, BodyModel, phenotype_array
 from wbsa.progress import progress
 
 #: Columns every population table has.
@@ -18,7 +19,8 @@ POPULATION_COLUMNS = ("subject_id", "sex", "age_years", *PHENOTYPE_COLUMNS, *MEA
 
 def measure_population(params: pd.DataFrame, *, density_kg_m3: float = DEFAULT_DENSITY_KG_M3,
                        model: BodyModel | None = None, batch_size: int = 64,
-                       show_progress: bool | None = None) -> pd.DataFrame:
+                       show_progress: bool | None = None, workers: int = 1,
+                       scheduler: str | None = None) -> pd.DataFrame:
     """Build every body of ``params`` and append its anthropometric measures.
 
     Parameters
@@ -27,27 +29,50 @@ def measure_population(params: pd.DataFrame, *, density_kg_m3: float = DEFAULT_D
         ``subject_id``, ``sex``, ``age_years`` and the ``p_*`` columns (extra columns are kept).
     density_kg_m3
         Body density for mass = volume × density.
+    workers, scheduler
+        Local worker processes, or a dask scheduler address (see :mod:`wbsa.parallel`); the
+        table is the same whatever the worker count.
 
     Returns
     -------
     pandas.DataFrame
         ``params`` followed by :data:`~wbsa.population.anthropometry.MEASURE_COLUMNS`.
     """
-    model = model or BodyModel(batch_size=batch_size)
-    meter = Anthropometer(model, density_kg_m3)
-    model.phenotype_array(params)  # validate every row before any work
-    parts = []
+    from wbsa.parallel import dask_client, map_unordered, resolve_scheduler
+
+    phenotype_array(params)  # validate every row before any work
+    starts = list(range(0, len(params), batch_size))
+    chunks = [(params.iloc[s:s + batch_size], density_kg_m3) for s in starts]
+    parts: list[pd.DataFrame | None] = [None] * len(chunks)
+    scheduler = resolve_scheduler(scheduler)
     with progress(total=len(params), desc="bodies", unit="body", enabled=show_progress) as bar:
-        for start in range(0, len(params), batch_size):
-            chunk = params.iloc[start:start + batch_size]
-            parts.append(meter.measure(model.rest_bodies(chunk)))
-            bar.update(len(chunk))
+        if scheduler is None and (workers <= 1 or len(chunks) <= 1):
+            for i, (chunk, density) in enumerate(chunks):
+                parts[i] = _measure_chunk(chunk, density, model)
+                bar.update(len(chunk))
+        else:
+            with dask_client(workers, scheduler) as client:
+                for i, rows in map_unordered(client, _measure_chunk, chunks, tag="population"):
+                    parts[i] = rows
+                    bar.update(len(rows))
     measures = pd.concat(parts, ignore_index=True) if parts else pd.DataFrame(columns=list(MEASURE_COLUMNS))
     out = params.reset_index(drop=True).copy()
     for name in PHENOTYPE_COLUMNS:
         if name not in out.columns:
             out[name] = 0.5
     return pd.concat([out, measures], axis=1)
+
+
+@functools.lru_cache(maxsize=4)
+def _anthropometer(density_kg_m3: float) -> Anthropometer:
+    """One anthropometer per process and density (the body model inside is built once)."""
+    return Anthropometer(BodyModel(), density_kg_m3)
+
+
+def _measure_chunk(params: pd.DataFrame, density_kg_m3: float, model: BodyModel | None = None) -> pd.DataFrame:
+    """Measures of one chunk of bodies (runs in a worker process or in-process)."""
+    meter = Anthropometer(model, density_kg_m3) if model is not None else _anthropometer(density_kg_m3)
+    return meter.measure(meter.model.rest_bodies(params))
 
 
 def read_population(path: str | os.PathLike) -> pd.DataFrame:

@@ -15,7 +15,8 @@ PopulationKind = Literal["random", "survey", "table"]
 def build_population(kind: PopulationKind, n: int | None = None, seed: int = 0, *,
                      density_kg_m3: float = DEFAULT_DENSITY_KG_M3, params_path: str | None = None,
                      variations: int = 0, survey_weights: bool = False,
-                     show_progress: bool | None = None) -> pd.DataFrame:
+                     show_progress: bool | None = None, workers: int = 1,
+                     scheduler: str | None = None) -> pd.DataFrame:
     """Build a population table.
 
     Parameters

@@ -1,0 +1,121 @@
+"""Subject groups of the paper (sex, age, stature) plus obesity, as boolean membership columns."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal, get_args
+
+import numpy as np
+import pandas as pd
+
+from wbsa.errors import WbsaError
+
+GroupName = Literal["all", "males", "females", "kids", "adults", "small", "normal", "big", "obese"]
+
+#: Every group name, in report order.
+GROUP_NAMES: tuple[str, ...] = get_args(GroupName)
+
+#: The groups of the paper (section 2.5): all, males/females, kids/adults, small/normal/big stature.
+PAPER_GROUPS: tuple[str, ...] = ("all", "males", "females", "kids", "adults", "small", "normal", "big")
+
+#: Groups of the formulae comparison (issue: overall, kids, adults, BMI >= 30, big stature) plus the rest.
+COMPARISON_GROUPS: tuple[str, ...] = GROUP_NAMES
+
+#: Columns of the population table that :func:`assign_groups` reads.
+GROUP_COLUMNS: tuple[str, ...] = ("sex", "age_years", "stature_m", "bmi")
+
+
+@dataclass(frozen=True)
+class GroupSpec:
+    """Thresholds that define the groups.
+
+    Attributes
+    ----------
+    kid_max_age_years : float
+        Kids are ``age_years <= kid_max_age_years`` (paper: 15); adults are older.
+    small_max_stature_m : float
+        Small stature is ``stature_m <= small_max_stature_m`` (paper: 1.40 m).
+    big_min_stature_m : float
+        Big stature is ``stature_m > big_min_stature_m`` (paper: 2.00 m); normal lies between.
+    obese_min_bmi : float
+        Obese is ``bmi >= obese_min_bmi`` (WHO: 30 kg/m²).
+    """
+
+    kid_max_age_years: float = 15.0
+    small_max_stature_m: float = 1.40
+    big_min_stature_m: float = 2.00
+    obese_min_bmi: float = 30.0
+
+    def __post_init__(self) -> None:
+        if not (0 < self.small_max_stature_m < self.big_min_stature_m):
+            raise WbsaError(
+                f"stature cuts {self.small_max_stature_m} m and {self.big_min_stature_m} m must satisfy "
+                "0 < small < big; give --stature-cuts SMALL,BIG in metres, e.g. 1.40,2.00")
+        if not self.kid_max_age_years > 0:
+            raise WbsaError(f"kid age limit {self.kid_max_age_years} must be positive; e.g. --kid-max-age 15")
+        if not self.obese_min_bmi > 0:
+            raise WbsaError(f"obesity BMI limit {self.obese_min_bmi} must be positive; e.g. --obese-bmi 30")
+
+    def describe(self) -> dict[str, str]:
+        """One human-readable definition per group name."""
+        return {
+            "all": "all subjects",
+            "males": "sex == male",
+            "females": "sex == female",
+            "kids": f"age <= {self.kid_max_age_years:g} y",
+            "adults": f"age > {self.kid_max_age_years:g} y",
+            "small": f"stature <= {self.small_max_stature_m:g} m",
+            "normal": f"{self.small_max_stature_m:g} m < stature <= {self.big_min_stature_m:g} m",
+            "big": f"stature > {self.big_min_stature_m:g} m",
+            "obese": f"BMI >= {self.obese_min_bmi:g} kg/m2",
+        }
+
+
+def check_group_names(names: tuple[str, ...] | list[str]) -> tuple[str, ...]:
+    """Validate group names; raise :class:`WbsaError` naming the valid ones."""
+    bad = [g for g in names if g not in GROUP_NAMES]
+    if bad:
+        raise WbsaError(f"unknown group(s) {', '.join(bad)}; choose from {', '.join(GROUP_NAMES)}")
+    if not names:
+        raise WbsaError(f"no group given; choose from {', '.join(GROUP_NAMES)}")
+    return tuple(dict.fromkeys(names))
+
+
+def assign_groups(population: pd.DataFrame, spec: GroupSpec = GroupSpec()) -> pd.DataFrame:
+    """Membership of every subject in every group.
+
+    Parameters
+    ----------
+    population : DataFrame
+        At least ``sex`` ('male'|'female'), ``age_years``, ``stature_m`` and ``bmi``; one row per subject.
+    spec : GroupSpec
+        The thresholds.
+
+    Returns
+    -------
+    DataFrame
+        Same index as ``population``; one bool column per name in :data:`GROUP_NAMES`.
+        males/females, kids/adults and small/normal/big each partition the subjects
+        (a subject with a missing value is in ``all`` only).
+    """
+    missing = [c for c in GROUP_COLUMNS if c not in population.columns]
+    if missing:
+        raise WbsaError(f"population table lacks column(s) {', '.join(missing)} needed for the groups; "
+                        "regenerate it with wbsa population")
+    sex = population["sex"].astype("string").str.lower()
+    age = population["age_years"].to_numpy(dtype=float)
+    stature = population["stature_m"].to_numpy(dtype=float)
+    bmi = population["bmi"].to_numpy(dtype=float)
+    with np.errstate(invalid="ignore"):
+        members = {
+            "all": np.ones(len(population), dtype=bool),
+            "males": (sex == "male").fillna(False).to_numpy(dtype=bool),
+            "females": (sex == "female").fillna(False).to_numpy(dtype=bool),
+            "kids": age <= spec.kid_max_age_years,
+            "adults": age > spec.kid_max_age_years,
+            "small": stature <= spec.small_max_stature_m,
+            "normal": (stature > spec.small_max_stature_m) & (stature <= spec.big_min_stature_m),
+            "big": stature > spec.big_min_stature_m,
+            "obese": bmi >= spec.obese_min_bmi,
+        }
+    return pd.DataFrame(members, index=population.index, columns=list(GROUP_NAMES))

@@ -24,6 +24,7 @@ COMMAND_MODULES = (
     "wbsa.analysis.command",
     "wbsa.report.command",
     "wbsa.study.command",
+    "wbsa.estimate.command",
 )
 
 

@@ -75,7 +75,7 @@ class Landmarks:
         anny's waist vertex ring (model vertex indices).
     bust, underbust, hip : int
         Vertex indices whose height sets the horizontal bust / underbust / hip planes.
-    trunk_edges, neck_edges, upper_arm_edges, thigh_edges : PartEdges
+    trunk_edges, upper_arm_edges, thigh_edges : PartEdges
         Unique skin edges of each body part.
     neck_base, head, shoulder, elbow, hip_joint, knee : int
         Bone indices whose heads (joints) place the neck and limb planes.
@@ -86,7 +86,6 @@ class Landmarks:
     underbust: int
     hip: int
     trunk_edges: "PartEdges"
-    neck_edges: "PartEdges"
     upper_arm_edges: "PartEdges"
     thigh_edges: "PartEdges"
     neck_base: int
@@ -128,7 +127,6 @@ class Landmarks:
             underbust=underbust,
             hip=hip,
             trunk_edges=_part_edges(faces, trunk),
-            neck_edges=_part_edges(faces, trunk),
             upper_arm_edges=_part_edges(faces, model.vertices_of_bones(("upperarm01.L", "upperarm02.L"))),
             thigh_edges=_part_edges(faces, model.vertices_of_bones(("upperleg01.L", "upperleg02.L"))),
             neck_base=model.bone_index("neck01"),
@@ -162,15 +160,6 @@ def _part_edges(faces: np.ndarray, vertex_mask: np.ndarray) -> PartEdges:
     edges = np.unique(np.sort(np.concatenate([part[:, [0, 1]], part[:, [1, 2]], part[:, [2, 0]]]), axis=1), axis=0)
     ids, local = np.unique(edges, return_inverse=True)
     return PartEdges(ids, local.reshape(edges.shape))
-
-
-def _edge_section(vertices: np.ndarray, part: PartEdges, point: np.ndarray, normal: np.ndarray,
-                  radius_m: float = np.inf) -> np.ndarray:
-    """Crossing points ``(k, 3)`` of a part's edges with a plane, within ``radius_m`` of ``point``."""
-    pts = edge_plane_crossings(vertices[part.vertex_ids], part.edges, point, normal)
-    if np.isfinite(radius_m) and len(pts):
-        pts = pts[np.linalg.norm(pts - point, axis=1) < radius_m]
-    return pts
 
 
 def closed_volume_m3(vertices: np.ndarray, faces: np.ndarray) -> float:
@@ -219,20 +208,25 @@ class Anthropometer:
         stature = float(v[:, 2].max() - v[:, 2].min())
         volume = closed_volume_m3(v, self.model.closed_faces)
         mass = volume * self.density_kg_m3
+        trunk_v = v[lm.trunk_edges.vertex_ids]  # gathered once for the five trunk tapes and the neck
 
         def horizontal(z: float) -> np.ndarray:
-            return _edge_section(v, lm.trunk_edges, np.array([0.0, 0.0, z]), _UP)
+            return edge_plane_crossings(trunk_v, lm.trunk_edges.edges, np.array([0.0, 0.0, z]), _UP)
 
         def girth(z: float) -> float:
             return tape_perimeter_m(horizontal(z), _UP)
 
-        def limb(edges: PartEdges, a: int, b: int, at: float = 0.5, min_radius_m: float = 0.0) -> float:
+        def limb(edges: PartEdges, a: int, b: int, at: float = 0.5, min_radius_m: float = 0.0,
+                 part_v: np.ndarray | None = None) -> float:
             # joints lie near the limb's axis (the neck's near the spine, at its back): keep
             # the section points within reach of the joint so no other part enters the tape
             direction = joints[b] - joints[a]
             middle = joints[a] + at * direction
             radius = max(0.6 * np.linalg.norm(direction), min_radius_m)
-            return tape_perimeter_m(_edge_section(v, edges, middle, direction, radius), direction)
+            pv = v[edges.vertex_ids] if part_v is None else part_v
+            pts = edge_plane_crossings(pv, edges.edges, middle, direction)
+            pts = pts[np.linalg.norm(pts - middle, axis=1) < radius]
+            return tape_perimeter_m(pts, direction)
 
         z_chest = 0.5 * (v[lm.bust, 2] + joints[lm.shoulder, 2])
         chest = horizontal(z_chest)
@@ -247,7 +241,7 @@ class Anthropometer:
             "hip_circ_m": girth(v[lm.hip, 2]),
             "bust_circ_m": girth(v[lm.bust, 2]),
             "underbust_circ_m": girth(v[lm.underbust, 2]),
-            "neck_circ_m": limb(lm.neck_edges, lm.neck_base, lm.head, at=0.35, min_radius_m=0.12),
+            "neck_circ_m": limb(lm.trunk_edges, lm.neck_base, lm.head, at=0.35, min_radius_m=0.12, part_v=trunk_v),
             "upper_arm_circ_m": limb(lm.upper_arm_edges, lm.shoulder, lm.elbow),
             "thigh_circ_m": limb(lm.thigh_edges, lm.hip_joint, lm.knee),
             "front_chest_width_m": width_along_m(front, np.array([1.0, 0.0, 0.0])),

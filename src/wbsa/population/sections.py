@@ -82,8 +82,15 @@ def _plane_coordinates(points: np.ndarray, normal: np.ndarray) -> np.ndarray:
     """2-D coordinates of ``points`` (k, 3) in an orthonormal basis of the plane."""
     n = np.asarray(normal, dtype=np.float64)
     n = n / np.linalg.norm(n)
+    if abs(n[2]) > 1 - 1e-12:  # horizontal plane: x and y already are such a basis
+        return points[:, :2]
     helper = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    u = np.cross(n, helper)
+    u = _cross3(n, helper)
     u /= np.linalg.norm(u)
-    v = np.cross(n, u)
+    v = _cross3(n, u)
     return np.stack([points @ u, points @ v], axis=1)
+
+
+def _cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Cross product of two (3,) vectors (np.cross has a large fixed overhead)."""
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])

@@ -1,1 +1,40 @@
-"""sensor stage."""
+"""sensor stage: what a real depth camera does to an ideal ray-cast view.
+
+Nguyen et al. 2012 Kinect v1 noise, disparity quantisation, range limits and holes (the paper's
+dropped triangles, random pixel dropout, grazing-angle dropout), all seeded and optional
+(:class:`SensorModel`, :func:`apply_sensor`); 16-bit millimetre depth PNGs as a sensor writes them.
+
+Names are imported lazily, so ``from wbsa.sensor.cli import add_sensor_arguments`` stays cheap
+for the CLI.
+"""
+
+from __future__ import annotations
+
+import importlib
+
+_EXPORTS = {
+    "apply_sensor": "wbsa.sensor.apply",
+    "depth_to_png_mm": "wbsa.sensor.depth_png",
+    "png_mm_to_depth": "wbsa.sensor.depth_png",
+    "read_depth_png": "wbsa.sensor.depth_png",
+    "write_depth_png": "wbsa.sensor.depth_png",
+    "NOISE_MODELS": "wbsa.sensor.model",
+    "SensorModel": "wbsa.sensor.model",
+    "axial_sigma_m": "wbsa.sensor.nguyen2012",
+    "lateral_sigma_m": "wbsa.sensor.nguyen2012",
+    "lateral_sigma_px": "wbsa.sensor.nguyen2012",
+    "add_sensor_arguments": "wbsa.sensor.cli",
+    "sensor_model_from_args": "wbsa.sensor.cli",
+    "sensor_rng": "wbsa.sensor.cli",
+}
+__all__ = sorted(_EXPORTS)
+
+
+def __getattr__(name: str):
+    if name in _EXPORTS:
+        return getattr(importlib.import_module(_EXPORTS[name]), name)
+    raise AttributeError(f"module 'wbsa.sensor' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return __all__

@@ -1,1 +1,42 @@
-"""surface stage."""
+"""surface stage: reconstruct the visible surface of one depth view and measure its area.
+
+``grid`` (organised pixel-grid mesh with a boundary skirt, vectorised numpy), ``ball-pivoting``
+and ``poisson`` (Open3D, imported only when used); :func:`frame_from_depth_image` turns a depth
+image (e.g. a real sensor's PNG) into a frame the same code can reconstruct.
+
+Names are imported lazily, so ``from wbsa.surface.cli import add_reconstruct_arguments``
+stays cheap for the CLI.
+"""
+
+from __future__ import annotations
+
+import importlib
+
+_EXPORTS = {
+    "backproject_depth": "wbsa.surface.backproject",
+    "frame_from_depth_image": "wbsa.surface.backproject",
+    "organised_normals": "wbsa.surface.backproject",
+    "denoise_depth": "wbsa.surface.denoise",
+    "grid_mesh": "wbsa.surface.grid",
+    "add_reconstruct_arguments": "wbsa.surface.cli",
+    "reconstruct_methods_from_args": "wbsa.surface.cli",
+    "reconstruction_settings_from_args": "wbsa.surface.cli",
+    "reconstruct": "wbsa.surface.reconstruction",
+    "vbsa_recon_m2": "wbsa.surface.reconstruction",
+    "BOUNDARY_MODELS": "wbsa.surface.settings",
+    "DENOISE_METHODS": "wbsa.surface.settings",
+    "METHODS": "wbsa.surface.settings",
+    "ReconstructionSettings": "wbsa.surface.settings",
+    "recon_column": "wbsa.surface.settings",
+}
+__all__ = sorted(_EXPORTS)
+
+
+def __getattr__(name: str):
+    if name in _EXPORTS:
+        return getattr(importlib.import_module(_EXPORTS[name]), name)
+    raise AttributeError(f"module 'wbsa.surface' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return __all__

@@ -1,0 +1,97 @@
+"""Command-line flags of the simulated sensor, shared by ``wbsa view`` and ``wbsa scan``."""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+
+from wbsa.errors import WbsaError
+from wbsa.sensor.model import NOISE_MODELS, SensorModel
+
+
+def _fraction(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a fraction in [0, 1], got {text!r}") from None
+    if not (0.0 <= value <= 1.0):
+        raise argparse.ArgumentTypeError(f"expected a fraction in [0, 1], got {text}")
+    return value
+
+
+def _grazing_deg(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected degrees in [0, 90), got {text!r}") from None
+    if not (0.0 <= value < 90.0):
+        raise argparse.ArgumentTypeError(f"expected degrees in [0, 90), got {text}")
+    return value
+
+
+def add_sensor_arguments(parser: argparse.ArgumentParser, *, seed: bool = False) -> None:
+    """Add the sensor flags (an argument group "sensor") to ``parser``.
+
+    ``--noise {none,nguyen2012}``, ``--holes FRACTION``, ``--pixel-dropout FRACTION``,
+    ``--grazing-dropout DEG``, ``--quantise``, ``--no-lateral-noise``, ``--range-limits`` and, with
+    ``seed=True``, ``--sensor-seed N`` (commands that have their own ``--seed`` pass that instead).
+    """
+    g = parser.add_argument_group("sensor (simulated depth camera; all off by default)")
+    g.add_argument("--noise", choices=NOISE_MODELS, default="none",
+                   help="depth noise model: nguyen2012 = Kinect v1 axial and lateral noise (default: none)")
+    g.add_argument("--holes", type=_fraction, default=0.0, metavar="FRACTION",
+                   help="drop this fraction of the visible triangles and their pixels, as in the paper (default: 0)")
+    g.add_argument("--pixel-dropout", type=_fraction, default=0.0, metavar="FRACTION",
+                   help="lose each returned pixel with this probability (default: 0)")
+    g.add_argument("--grazing-dropout", type=_grazing_deg, default=None, metavar="DEG",
+                   help="drop returns within DEG of grazing incidence (default: 8 with --noise nguyen2012, else 0)")
+    g.add_argument("--quantise", action="store_true",
+                   help="quantise disparity to 1/8 pixel with a 0.075 m baseline (Kinect v1)")
+    g.add_argument("--no-lateral-noise", dest="lateral_noise", action="store_false",
+                   help="with --noise nguyen2012: axial noise only")
+    g.add_argument("--range-limits", action="store_true",
+                   help="drop returns outside the camera preset's depth range (Kinect v1: 0.8-4.0 m)")
+    if seed:
+        g.add_argument("--sensor-seed", type=int, default=0, metavar="N",
+                       help="seed of the sensor's random effects (default: 0)")
+
+
+def sensor_model_from_args(args: argparse.Namespace, camera=None) -> SensorModel:
+    """The :class:`SensorModel` described by the flags of :func:`add_sensor_arguments`.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+    camera : wbsa.camera.Intrinsics, optional
+        The command's camera; with ``--range-limits`` it must have a finite working range.
+
+    Raises
+    ------
+    WbsaError
+        If ``--range-limits`` is asked for a camera without a working range.
+    """
+    if camera is not None and getattr(args, "range_limits", False):
+        lo, hi = float(getattr(camera, "min_range_m", 0.0)), float(getattr(camera, "max_range_m", float("inf")))
+        if lo <= 0.0 and hi == float("inf"):
+            raise WbsaError(f"camera {getattr(camera, 'name', 'custom')} has no working range for --range-limits; "
+                            "set min_range_m/max_range_m in its JSON or use a preset")
+    return SensorModel(
+        noise=getattr(args, "noise", "none"),
+        lateral_noise=getattr(args, "lateral_noise", True),
+        quantise=getattr(args, "quantise", False),
+        holes_fraction=getattr(args, "holes", 0.0),
+        pixel_dropout=getattr(args, "pixel_dropout", 0.0),
+        grazing_dropout_deg=getattr(args, "grazing_dropout", None),
+        range_limits=getattr(args, "range_limits", False),
+    )
+
+
+def sensor_rng(seed: int, *keys: float) -> np.random.Generator:
+    """A generator for one sensor read-out, derived from ``(seed, *keys)`` (e.g. subject id and view angles).
+
+    The same seed and keys give the same noisy image in every command and with any number of
+    workers. Keys may be floats (angles); they are rounded to micro-units.
+    """
+    ints = [int(seed)] + [int(round(float(k) * 1_000_000)) % (2**63) for k in keys]
+    return np.random.default_rng(np.random.SeedSequence(ints))

@@ -1,0 +1,92 @@
+"""Settings of the simulated depth sensor: which non-ideal effects to apply."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+from typing import Literal
+
+from wbsa.errors import WbsaError
+
+NoiseModel = Literal["none", "nguyen2012"]
+NOISE_MODELS: tuple[str, ...] = ("none", "nguyen2012")
+
+#: Returns closer than this to grazing are dropped by default when Nguyen noise is on (facts.md).
+NGUYEN_GRAZING_DROPOUT_DEG = 8.0
+#: Kinect v1 projector–camera baseline (metres) and disparity resolution (pixels).
+KINECT_V1_BASELINE_M = 0.075
+KINECT_V1_DISPARITY_STEP_PX = 1.0 / 8.0
+
+
+@dataclass(frozen=True)
+class SensorModel:
+    """What a simulated depth sensor does to an ideal ray-cast frame. Every effect is optional.
+
+    With the defaults the sensor is ideal and :func:`~wbsa.sensor.apply_sensor` returns the frame's
+    pixels unchanged. Effects are applied in a fixed order (see :func:`~wbsa.sensor.apply_sensor`),
+    each from its own random stream, so switching one on does not change the draws of another.
+
+    Attributes
+    ----------
+    noise : {'none', 'nguyen2012'}
+        Depth noise: Nguyen et al. 2012 Kinect v1 axial σz(z, θ) and lateral σL(θ).
+    lateral_noise : bool
+        With ``noise='nguyen2012'``: also move each pixel's sample point by the lateral σL.
+    quantise : bool
+        Quantise disparity f·b/z to ``disparity_step_px`` (Kinect v1 structured light).
+    baseline_m, disparity_step_px : float
+        Projector–camera baseline and disparity resolution used by ``quantise``.
+    holes_fraction : float
+        The paper's holes: this fraction of the visible triangles is dropped with all their pixels.
+    pixel_dropout : float
+        Probability that any returned pixel is lost (independent per pixel).
+    grazing_dropout_deg : float or None
+        Drop returns whose angle between surface normal and ray is within this many degrees of 90°.
+        None: 8° when ``noise='nguyen2012'`` (its σ diverges at grazing), else 0 (off).
+    range_limits : bool
+        Drop returns outside the camera's ``[min_range_m, max_range_m]`` depth range.
+    """
+
+    noise: NoiseModel = "none"
+    lateral_noise: bool = True
+    quantise: bool = False
+    baseline_m: float = KINECT_V1_BASELINE_M
+    disparity_step_px: float = KINECT_V1_DISPARITY_STEP_PX
+    holes_fraction: float = 0.0
+    pixel_dropout: float = 0.0
+    grazing_dropout_deg: float | None = None
+    range_limits: bool = False
+
+    def __post_init__(self) -> None:
+        if self.noise not in NOISE_MODELS:
+            raise WbsaError(f"unknown sensor noise model {self.noise!r}; use one of {', '.join(NOISE_MODELS)}")
+        for name in ("holes_fraction", "pixel_dropout"):
+            value = getattr(self, name)
+            if not (0.0 <= value <= 1.0):
+                raise WbsaError(f"{name} must be a fraction in [0, 1], got {value}; e.g. --holes 0.1")
+        if self.grazing_dropout_deg is not None and not (0.0 <= self.grazing_dropout_deg < 90.0):
+            raise WbsaError(f"grazing_dropout_deg must be in [0, 90), got {self.grazing_dropout_deg}")
+        if not (self.baseline_m > 0 and math.isfinite(self.baseline_m)):
+            raise WbsaError(f"baseline_m must be positive, got {self.baseline_m}")
+        if not (self.disparity_step_px > 0 and math.isfinite(self.disparity_step_px)):
+            raise WbsaError(f"disparity_step_px must be positive, got {self.disparity_step_px}")
+
+    @property
+    def effective_grazing_dropout_deg(self) -> float:
+        """The grazing dropout actually applied (resolves None, see the class doc)."""
+        if self.grazing_dropout_deg is not None:
+            return float(self.grazing_dropout_deg)
+        return NGUYEN_GRAZING_DROPOUT_DEG if self.noise == "nguyen2012" else 0.0
+
+    @property
+    def is_ideal(self) -> bool:
+        """True when the sensor changes nothing."""
+        return (self.noise == "none" and not self.quantise and self.holes_fraction == 0.0
+                and self.pixel_dropout == 0.0 and self.effective_grazing_dropout_deg == 0.0
+                and not self.range_limits)
+
+    def to_dict(self) -> dict:
+        """Plain settings for recording in outputs (the grazing dropout resolved)."""
+        d = asdict(self)
+        d["grazing_dropout_deg"] = self.effective_grazing_dropout_deg
+        return d

@@ -1,0 +1,81 @@
+"""Command-line flags of surface reconstruction, shared by ``wbsa view`` and ``wbsa scan``."""
+
+from __future__ import annotations
+
+import argparse
+
+from wbsa.surface.settings import BOUNDARY_MODELS, DENOISE_METHODS, METHODS, ReconstructionSettings
+
+
+def _methods(text: str) -> tuple[str, ...]:
+    if text.strip().lower() in ("", "none"):
+        return ()
+    names = tuple(dict.fromkeys(t.strip() for t in text.split(",") if t.strip()))
+    bad = [n for n in names if n not in METHODS]
+    if bad:
+        raise argparse.ArgumentTypeError(f"unknown reconstruction method(s) {', '.join(bad)}; "
+                                         f"use a comma-separated list of {', '.join(METHODS)} or none")
+    return names
+
+
+def _positive(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}") from None
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text}")
+    return value
+
+
+def _non_negative(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}") from None
+    if not value >= 0:
+        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text}")
+    return value
+
+
+def add_reconstruct_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add the reconstruction flags (an argument group "reconstruction") to ``parser``.
+
+    ``--reconstruct METHODS`` (comma-separated: grid, ball-pivoting, poisson; default none),
+    ``--denoise``, ``--denoise-sigma PX``, ``--boundary``, ``--voxel-size M``, ``--smooth``,
+    ``--poisson-depth N``.
+    """
+    g = parser.add_argument_group("reconstruction (surface from the depth image)")
+    g.add_argument("--reconstruct", type=_methods, default=(), metavar="METHODS",
+                   help=f"comma-separated methods among {', '.join(METHODS)} (default: none); "
+                        "adds vbsa_recon_<method>_m2")
+    g.add_argument("--denoise", choices=DENOISE_METHODS, default=ReconstructionSettings.denoise,
+                   help="depth filter before reconstruction (default: %(default)s, robust local quadrics)")
+    g.add_argument("--denoise-sigma", type=_positive, default=ReconstructionSettings.denoise_sigma_px,
+                   metavar="PX", help="spatial scale of the depth filter in pixels (default: %(default)s)")
+    g.add_argument("--boundary", choices=BOUNDARY_MODELS, default=ReconstructionSettings.boundary,
+                   help="grid: skirt along the mesh boundary (default: %(default)s)")
+    g.add_argument("--voxel-size", type=_non_negative, default=0.0, metavar="M",
+                   help="ball-pivoting/poisson: voxel down-sampling size in metres (default: off)")
+    g.add_argument("--smooth", action="store_true",
+                   help="ball-pivoting/poisson: moving-least-squares smoothing of the points")
+    g.add_argument("--poisson-depth", type=int, default=ReconstructionSettings.poisson_depth, metavar="N",
+                   help="poisson: octree depth (default: %(default)s)")
+
+
+def reconstruct_methods_from_args(args: argparse.Namespace) -> tuple[str, ...]:
+    """The methods named by ``--reconstruct`` (empty when none)."""
+    return tuple(getattr(args, "reconstruct", ()) or ())
+
+
+def reconstruction_settings_from_args(args: argparse.Namespace) -> ReconstructionSettings:
+    """The :class:`ReconstructionSettings` described by the flags of :func:`add_reconstruct_arguments`."""
+    d = ReconstructionSettings()
+    return ReconstructionSettings(
+        denoise=getattr(args, "denoise", d.denoise),
+        denoise_sigma_px=getattr(args, "denoise_sigma", d.denoise_sigma_px),
+        boundary=getattr(args, "boundary", d.boundary),
+        voxel_size_m=getattr(args, "voxel_size", d.voxel_size_m),
+        smoothing="mls" if getattr(args, "smooth", False) else "none",
+        poisson_depth=getattr(args, "poisson_depth", d.poisson_depth),
+    )

@@ -1,0 +1,292 @@
+"""Sensor simulation: Nguyen 2012 noise statistics, quantisation, holes, determinism, depth PNG."""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from wbsa.camera import MeshScene, Pose, preset, render
+from wbsa.camera.shapes import box, icosphere
+from wbsa.errors import WbsaError
+from wbsa.population.mesh import TriangleMesh
+from wbsa.sensor import (SensorModel, apply_sensor, axial_sigma_m, depth_to_png_mm, lateral_sigma_px,
+                         png_mm_to_depth, read_depth_png, write_depth_png)
+from wbsa.sensor.cli import add_sensor_arguments, sensor_model_from_args, sensor_rng
+from wbsa.surface import frame_from_depth_image
+
+K = preset("kinect-v1")
+CAMERA = Pose(np.eye(3), np.zeros(3))  # camera at the origin looking along +Z
+
+
+def plane_frame(distance_m: float, tilt_deg: float, half_size_m: float = 3.0, n: int = 1):
+    """A square plane at ``distance_m`` on the optical axis, turned by ``tilt_deg`` about the image's
+    vertical axis, split into ``2·n²`` triangles, rendered by the camera stage."""
+    t = math.radians(tilt_deg)
+    s = np.linspace(-half_size_m, half_size_m, n + 1)
+    a, b = np.meshgrid(s, s, indexing="ij")
+    u_axis = np.array([math.cos(t), 0.0, math.sin(t)])   # in-plane, tilted towards the camera's z
+    v_axis = np.array([0.0, 1.0, 0.0])
+    verts = (np.array([0.0, 0.0, distance_m]) + a[..., None] * u_axis + b[..., None] * v_axis).reshape(-1, 3)
+    i, j = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
+    v00 = i * (n + 1) + j
+    faces = np.concatenate([np.stack([v00, v00 + 1, v00 + n + 2], -1).reshape(-1, 3),
+                            np.stack([v00, v00 + n + 2, v00 + n + 1], -1).reshape(-1, 3)])
+    return render(MeshScene(TriangleMesh(verts, faces.astype(np.int32))), K, CAMERA)
+
+
+def interior(valid: np.ndarray, px: int = 3) -> np.ndarray:
+    """Pixels at least ``px`` pixels away from any pixel without return or the image border."""
+    from scipy import ndimage
+
+    return ndimage.binary_erosion(valid, iterations=px, border_value=0)
+
+
+def incidence(frame) -> np.ndarray:
+    """(h, w) angle between normal and ray at every pixel (radians)."""
+    rays = np.nan_to_num(frame.points_cam.astype(np.float64))
+    rays /= np.maximum(np.linalg.norm(rays, axis=-1, keepdims=True), 1e-12)
+    cos = np.abs(np.einsum("...k,...k->...", np.nan_to_num(frame.normals_cam.astype(np.float64)), rays))
+    return np.arccos(np.clip(cos, 0, 1))
+
+
+# -- the published model ---------------------------------------------------------------------------
+
+def test_nguyen_sigmas_known_values():
+    # σz = 0.0012 + 0.0019 (z - 0.4)² below 60°; ≈ 3 cm at the paper's 4.3 m (facts.md)
+    assert axial_sigma_m(1.0, 0.0) == pytest.approx(0.0012 + 0.0019 * 0.36)
+    assert axial_sigma_m(4.3, math.radians(30)) == pytest.approx(0.030099, abs=1e-6)
+    # above 60° the angular term 0.0001/√z · θ²/(π/2 − θ)² is added
+    th = math.radians(70)
+    steep = 0.0001 / math.sqrt(2) * th**2 / (math.pi / 2 - th) ** 2
+    assert axial_sigma_m(2.0, th) == pytest.approx(0.0012 + 0.0019 * 1.6**2 + steep)
+    # σL = 0.8 + 0.035 θ/(π/2 − θ) px: 0.8 px face-on, 0.835 px at 45°
+    assert lateral_sigma_px(0.0) == pytest.approx(0.8)
+    assert lateral_sigma_px(math.pi / 4) == pytest.approx(0.835)
+
+
+def test_axial_noise_matches_sigma_z_face_on():
+    frame = plane_frame(2.0, 0.0)
+    model = SensorModel(noise="nguyen2012", lateral_noise=False)
+    noisy = apply_sensor(frame, model, np.random.default_rng(1))
+    both = interior(frame.valid) & noisy.valid
+    err = (noisy.depth_m[both] - frame.depth_m[both]).astype(np.float64)
+    sigma = axial_sigma_m(frame.depth_m[both], incidence(frame)[both])
+    z = err / sigma
+    n = z.size
+    assert n > 250_000
+    assert abs(z.mean()) < 4 / math.sqrt(n)
+    assert z.std() == pytest.approx(1.0, abs=4 / math.sqrt(2 * n))
+    # points follow the noisy depth along each pixel's own ray
+    np.testing.assert_allclose(noisy.points_cam[both][:, 2], noisy.depth_m[both], rtol=1e-6)
+
+
+def test_axial_noise_steep_term_at_70_degrees():
+    frame = plane_frame(2.0, 70.0, half_size_m=1.5)
+    noisy = apply_sensor(frame, SensorModel(noise="nguyen2012", lateral_noise=False), np.random.default_rng(2))
+    both = frame.valid & noisy.valid & (incidence(frame) > math.radians(62))
+    assert np.count_nonzero(both) > 50_000
+    err = (noisy.depth_m[both] - frame.depth_m[both]).astype(np.float64)
+    theta = incidence(frame)[both]
+    z = err / axial_sigma_m(frame.depth_m[both], theta)
+    assert z.std() == pytest.approx(1.0, abs=4 / math.sqrt(2 * z.size))
+    # without the steep term the errors would be too large for the flat-angle σz
+    flat = 0.0012 + 0.0019 * (frame.depth_m[both] - 0.4) ** 2
+    assert (err / flat).std() > 1.05
+
+
+def test_lateral_noise_matches_sigma_l_on_a_depth_ramp():
+    # On a plane tilted 70° the depth changes by g = ∂z/∂u per pixel, so a lateral shift of N(0, σL) px
+    # adds (g σL)² to the axial variance; the measured variance must match σz² + σL² (gu² + gv²).
+    frame = plane_frame(2.0, 70.0, half_size_m=1.5)
+    noisy = apply_sensor(frame, SensorModel(noise="nguyen2012"), np.random.default_rng(3))
+    d = frame.depth_m.astype(np.float64)
+    gu = np.zeros_like(d)
+    gv = np.zeros_like(d)
+    gu[:, 1:-1] = 0.5 * (d[:, 2:] - d[:, :-2])
+    gv[1:-1] = 0.5 * (d[2:] - d[:-2])
+    inner = interior(frame.valid) & noisy.valid
+    theta = incidence(frame)[inner]
+    var_axial = axial_sigma_m(d[inner], theta) ** 2
+    var_lateral = lateral_sigma_px(theta) ** 2 * (gu[inner] ** 2 + gv[inner] ** 2)
+    err = noisy.depth_m[inner] - d[inner]
+    assert np.mean(var_lateral) > np.mean(var_axial)  # the test is sensitive to σL
+    z = err / np.sqrt(var_axial + var_lateral)
+    assert z.std() == pytest.approx(1.0, abs=0.02)
+    assert (err / np.sqrt(var_axial)).std() > 1.3
+
+
+def test_same_seed_same_image_and_independent_effects():
+    frame = render(MeshScene(icosphere(0.3, 4, center=np.array([0.0, 0.0, 2.5]))), K, CAMERA)
+    model = SensorModel(noise="nguyen2012", holes_fraction=0.1, pixel_dropout=0.05, quantise=True)
+    a = apply_sensor(frame, model, np.random.default_rng(7))
+    b = apply_sensor(frame, model, np.random.default_rng(7))
+    c = apply_sensor(frame, model, np.random.default_rng(8))
+    for name in ("depth_m", "triangle_id"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+    np.testing.assert_array_equal(a.points_cam, b.points_cam)
+    assert not np.array_equal(a.depth_m, c.depth_m)
+    assert a.settings["sensor"] == model.to_dict()
+    # switching pixel dropout off leaves the noise draws of the other effects unchanged
+    d = apply_sensor(frame, dataclasses.replace(model, pixel_dropout=0.0), np.random.default_rng(7))
+    both = a.valid & d.valid
+    np.testing.assert_array_equal(a.depth_m[both], d.depth_m[both])
+    assert np.count_nonzero(d.valid) > np.count_nonzero(a.valid)
+
+
+def test_ideal_model_changes_nothing():
+    frame = render(MeshScene(icosphere(0.3, 3, center=np.array([0.0, 0.0, 2.5]))), K, CAMERA)
+    out = apply_sensor(frame, SensorModel(), np.random.default_rng(0))
+    assert SensorModel().is_ideal
+    np.testing.assert_array_equal(out.depth_m, frame.depth_m)
+    np.testing.assert_array_equal(out.triangle_id, frame.triangle_id)
+    assert out.settings["sensor"]["noise"] == "none"
+
+
+def test_triangle_holes_fraction_is_honoured():
+    frame = plane_frame(2.0, 20.0, half_size_m=0.5, n=40)  # 3,200 triangles, about 25 pixels each
+    ids_before = np.unique(frame.triangle_id[frame.valid])
+    out = apply_sensor(frame, SensorModel(holes_fraction=0.3), np.random.default_rng(5))
+    ids_after = np.unique(out.triangle_id[out.valid])
+    assert len(ids_after) == len(ids_before) - round(0.3 * len(ids_before))
+    dropped = np.setdiff1d(ids_before, ids_after)
+    # every pixel of a dropped triangle is gone, every other pixel is untouched
+    gone = np.isin(frame.triangle_id, dropped)
+    assert not np.any(out.valid & gone)
+    keep = frame.valid & ~gone
+    np.testing.assert_array_equal(out.depth_m[keep], frame.depth_m[keep])
+    assert np.all(out.triangle_id[~out.valid] == -1)
+    assert np.all(np.isnan(out.points_cam[~out.valid]))
+    # dropping 30 % of the triangles drops about 30 % of the pixels
+    assert 1 - out.n_pixels / frame.n_pixels == pytest.approx(0.3, abs=0.03)
+
+
+def test_pixel_dropout_is_binomial():
+    frame = plane_frame(2.0, 0.0)
+    out = apply_sensor(frame, SensorModel(pixel_dropout=0.2), np.random.default_rng(6))
+    n = frame.n_pixels
+    lost = 1 - out.n_pixels / n
+    assert lost == pytest.approx(0.2, abs=4 * math.sqrt(0.2 * 0.8 / n))
+
+
+def test_grazing_dropout_cuts_at_the_angle():
+    frame = render(MeshScene(icosphere(0.4, 5, center=np.array([0.0, 0.0, 2.5]))), K, CAMERA)
+    out = apply_sensor(frame, SensorModel(grazing_dropout_deg=20.0), np.random.default_rng(0))
+    theta = np.degrees(incidence(frame))
+    assert np.all(theta[out.valid] <= 70.0 + 1e-6)
+    assert not np.any(out.valid & (theta > 70.0 + 1e-6))
+    assert np.all(out.valid[frame.valid & (theta < 69.9)])
+    # the Nguyen model drops the last 8° by default
+    assert SensorModel(noise="nguyen2012").effective_grazing_dropout_deg == 8.0
+    assert SensorModel().effective_grazing_dropout_deg == 0.0
+
+
+def test_disparity_quantisation_kinect_v1():
+    frame = plane_frame(3.0, 40.0)
+    out = apply_sensor(frame, SensorModel(quantise=True), np.random.default_rng(0))
+    fb = K.fx * 0.075
+    z = out.depth_m[out.valid].astype(np.float64)
+    steps = fb / z / 0.125
+    np.testing.assert_allclose(steps, np.round(steps), atol=1e-3)  # disparity on the 1/8 px grid
+    # the disparity error is at most half a step, so |z - z0| = f b |d - d0| / (d d0) <= z z0 q / (2 f b)
+    z0 = frame.depth_m[out.valid].astype(np.float64)
+    assert np.all(np.abs(z - z0) <= z * z0 * 0.125 / (2 * fb) * 1.001 + 1e-6)
+    # at 4.3 m a step is about 5 cm
+    assert 4.3**2 * 0.125 / fb == pytest.approx(0.0535, abs=5e-4)
+
+
+def test_range_limits_of_the_preset():
+    frame = plane_frame(2.0, 75.0)  # the tilted plane spans depths on both sides of 4.0 m
+    z = frame.depth_m
+    assert z[frame.valid].max() > 4.0
+    out = apply_sensor(frame, SensorModel(range_limits=True), np.random.default_rng(0))
+    assert out.depth_m[out.valid].max() <= K.max_range_m
+    assert np.all(out.valid == (frame.valid & (z >= K.min_range_m) & (z <= K.max_range_m)))
+
+
+def test_triangle_holes_need_triangle_ids():
+    frame = frame_from_depth_image(plane_frame(2.0, 0.0).depth_m, K)
+    with pytest.raises(WbsaError, match="triangle"):
+        apply_sensor(frame, SensorModel(holes_fraction=0.1), np.random.default_rng(0))
+    # pixel dropout and noise work on depth images
+    out = apply_sensor(frame, SensorModel(noise="nguyen2012", pixel_dropout=0.1), np.random.default_rng(0))
+    assert 0 < out.n_pixels < frame.n_pixels
+
+
+def test_model_validation():
+    with pytest.raises(WbsaError):
+        SensorModel(noise="kinect")
+    with pytest.raises(WbsaError):
+        SensorModel(holes_fraction=1.5)
+    with pytest.raises(WbsaError):
+        SensorModel(grazing_dropout_deg=90.0)
+
+
+# -- depth PNG -------------------------------------------------------------------------------------
+
+def test_depth_png_known_values_and_round_trip(tmp_path):
+    depth = np.array([[0.0, 1.0, 1.2346], [4.3, np.nan, -1.0]], dtype=np.float32)
+    units = depth_to_png_mm(depth)
+    assert units.dtype == np.uint16
+    np.testing.assert_array_equal(units, [[0, 1000, 1235], [4300, 0, 0]])
+    np.testing.assert_allclose(png_mm_to_depth(units), [[0, 1.0, 1.235], [4.3, 0, 0]], atol=1e-6)
+
+    frame = render(MeshScene(box((0.6, 0.4, 0.3), center=np.array([0.1, 0.0, 2.2]))), K, CAMERA)
+    path = write_depth_png(tmp_path / "depth.png", frame.depth_m)
+    raw = path.read_bytes()
+    assert raw[:8] == b"\x89PNG\r\n\x1a\n"
+    assert raw[24] == 16 and raw[25] == 0  # IHDR: 16-bit greyscale
+    back = read_depth_png(path)
+    assert back.shape == (K.height, K.width) and back.dtype == np.float32
+    np.testing.assert_array_equal(back > 0, frame.valid)
+    assert np.abs(back - frame.depth_m)[frame.valid].max() <= 0.0005 + 1e-6
+    # the same image written again is byte-identical; TUM's 5000 units per metre round-trip too
+    assert write_depth_png(tmp_path / "again.png", frame.depth_m).read_bytes() == raw
+    tum = read_depth_png(write_depth_png(tmp_path / "tum.png", frame.depth_m, depth_scale=5000), depth_scale=5000)
+    assert np.abs(tum - frame.depth_m)[frame.valid].max() <= 0.0001 + 1e-6
+
+
+def test_depth_png_errors(tmp_path):
+    from PIL import Image
+
+    with pytest.raises(WbsaError, match="16-bit"):
+        depth_to_png_mm(np.array([[70.0]]))
+    Image.fromarray(np.zeros((4, 4), np.uint8)).save(tmp_path / "8bit.png")
+    with pytest.raises(WbsaError, match="16-bit"):
+        read_depth_png(tmp_path / "8bit.png")
+    (tmp_path / "junk.png").write_bytes(b"not a png")
+    with pytest.raises(WbsaError, match="not a readable image"):
+        read_depth_png(tmp_path / "junk.png")
+    with pytest.raises(WbsaError, match="does not exist"):
+        read_depth_png(tmp_path / "missing.png")
+
+
+# -- command-line flags ----------------------------------------------------------------------------
+
+def test_sensor_flags():
+    p = argparse.ArgumentParser()
+    add_sensor_arguments(p, seed=True)
+    args = p.parse_args(["--noise", "nguyen2012", "--holes", "0.2", "--pixel-dropout", "0.01", "--quantise",
+                         "--grazing-dropout", "10", "--sensor-seed", "3"])
+    model = sensor_model_from_args(args, K)
+    assert model == SensorModel(noise="nguyen2012", holes_fraction=0.2, pixel_dropout=0.01, quantise=True,
+                                grazing_dropout_deg=10.0)
+    assert args.sensor_seed == 3
+    assert sensor_model_from_args(p.parse_args([])).is_ideal
+    with pytest.raises(SystemExit):
+        p.parse_args(["--holes", "1.5"])
+    with pytest.raises(SystemExit):
+        p.parse_args(["--noise", "gaussian"])
+    from wbsa.camera import Intrinsics
+
+    with pytest.raises(WbsaError, match="range"):
+        sensor_model_from_args(p.parse_args(["--range-limits"]), Intrinsics(64, 48, 50, 50, 31.5, 23.5))
+
+
+def test_sensor_rng_is_keyed():
+    a = sensor_rng(1, 5, 30.0, -45.0).random(3)
+    np.testing.assert_array_equal(a, sensor_rng(1, 5, 30.0, -45.0).random(3))
+    assert not np.array_equal(a, sensor_rng(1, 5, 45.0, -45.0).random(3))

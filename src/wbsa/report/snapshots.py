@@ -1,0 +1,82 @@
+"""Render one subject's point cloud with the camera API, for the snapshot figure (paper Fig 8)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from wbsa.errors import WbsaError
+
+
+@dataclass(frozen=True)
+class Snapshot:
+    """What one camera sees of one subject.
+
+    Attributes
+    ----------
+    subject_id : int
+    points_world : (k, 3) float64
+        Returns in world coordinates, metres.
+    depth_m : (h, w) float32
+        The depth image (0 = no return).
+    body_vertices : (n, 3) float64
+        The whole skin mesh's vertices.
+    """
+
+    subject_id: int
+    points_world: np.ndarray
+    depth_m: np.ndarray
+    body_vertices: np.ndarray
+
+
+def snapshot_intrinsics(scan_paths: tuple[Path, ...], camera: str):
+    """The scan's camera: ``intrinsics.json`` beside the scan table, else the preset named ``camera``.
+
+    Raises
+    ------
+    WbsaError
+        Neither is available (a custom camera whose JSON was not kept).
+    """
+    from wbsa.camera.intrinsics import PRESETS, Intrinsics
+
+    for p in scan_paths:
+        js = Path(p).parent / "intrinsics.json"
+        if js.is_file():
+            k = Intrinsics.from_open3d_json(js)
+            if k.name == camera or camera not in PRESETS:
+                return k
+    if camera in PRESETS:
+        return PRESETS[camera]
+    raise WbsaError(f"camera {camera!r} is not a preset and no intrinsics.json lies beside the scan")
+
+
+def pick_subject(population: pd.DataFrame, subject_id: int = -1) -> int:
+    """``subject_id`` if given (>= 0), else the subject whose WBSA is the median."""
+    if subject_id >= 0:
+        if not (population["subject_id"] == subject_id).any():
+            raise WbsaError(f"snapshot subject {subject_id} is not in the population; set [report] snapshot_subject")
+        return int(subject_id)
+    w = population["wbsa_m2"].to_numpy(float)
+    i = int(np.argmin(np.abs(w - np.nanmedian(w))))
+    return int(population["subject_id"].iloc[i])
+
+
+def render_snapshot(population: pd.DataFrame, subject_id: int, intrinsics, azimuth_deg: float, elevation_deg: float,
+                    distance_m: float) -> Snapshot:
+    """Rebuild the subject's body, ray-cast the view and return its points in world coordinates."""
+    from wbsa.camera.extrinsics import pose_from_view
+    from wbsa.camera.raycast import MeshScene, render
+    from wbsa.camera.views import View
+    from wbsa.population.export import subject_mesh
+
+    mesh = subject_mesh(population, subject_id)
+    scene = MeshScene(mesh)
+    pose = pose_from_view(View(azimuth_deg, elevation_deg, distance_m), scene.center)
+    frame = render(scene, intrinsics, pose)
+    valid = frame.valid
+    pts = pose.inverse().apply(frame.points_cam[valid].astype(np.float64))
+    return Snapshot(subject_id=subject_id, points_world=pts, depth_m=frame.depth_m,
+                    body_vertices=np.asarray(mesh.vertices, dtype=np.float64))

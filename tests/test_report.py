@@ -1,0 +1,206 @@
+"""The report's figures and HTML, built from small synthetic tables with the documented columns.
+
+The synthetic tables (``wbsa.analysis.synthetic``) follow the pinned population and scan schemas, so
+these tests check that each figure draws exactly the numbers of the tables it is given; the end-to-end
+test with real bodies is in ``test_study.py``.
+"""
+
+import base64
+import re
+import struct
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from wbsa.analysis.fit_views import FitSettings
+from wbsa.analysis.outputs import run_fit
+from wbsa.analysis.synthetic import synthetic_population, synthetic_scan
+from wbsa.cli import main
+from wbsa.errors import WbsaError
+from wbsa.report import figures as F
+from wbsa.report.build import build_report
+from wbsa.report.data import load_report_data, nearest_view, select
+from wbsa.report.sources import fit_dir_sources, resolve_sources
+
+VIEWS = [(a, e) for e in (0.0, 60.0) for a in (0.0, 60.0, 90.0, 180.0)]
+DISTANCES = (3.5, 4.3)
+GROUPS = ("all", "males", "kids")
+
+
+def png_size(data: bytes) -> tuple[int, int]:
+    """(width, height) from a PNG's IHDR chunk; fails if ``data`` is not a PNG."""
+    assert data[:8] == b"\x89PNG\r\n\x1a\n"
+    assert data[12:16] == b"IHDR"
+    return struct.unpack(">II", data[16:24])
+
+
+def embedded_figures(html: str) -> dict[str, bytes]:
+    found = re.findall(r'<figure id="([^"]+)"><img alt="[^"]*" src="data:image/png;base64,([A-Za-z0-9+/=]+)"', html)
+    return {fid: base64.b64decode(b64) for fid, b64 in found}
+
+
+@pytest.fixture(scope="module")
+def fit_dir(tmp_path_factory):
+    """A fit folder from synthetic tables: two distances (taller bodies cut at the near one) and a
+    reconstruction column."""
+    root = tmp_path_factory.mktemp("synthetic-fit")
+    pop = synthetic_population(90, seed=5)
+    scans = [synthetic_scan(pop, VIEWS, seed=5, distance_m=d, frame_limit_m=2.25 * d / 4.3) for d in DISTANCES]
+    scan = pd.concat(scans, ignore_index=True)
+    rng = np.random.default_rng(7)
+    scan["vbsa_recon_grid_m2"] = scan["vbsa_visible_m2"] * (1.03 + 0.02 * rng.standard_normal(len(scan)))
+    pop_path, scan_path = root / "population.parquet", root / "scan.parquet"
+    pop.to_parquet(pop_path)
+    scan.to_parquet(scan_path)
+    settings = FitSettings(vbsa_columns=("vbsa_visible_m2", "vbsa_recon_m2:grid"), models=("linear", "loglog"),
+                           groups=GROUPS, k=4)
+    run_fit(pop_path, scan_path, root / "fit", settings)
+    return root
+
+
+@pytest.fixture(scope="module")
+def data(fit_dir):
+    return load_report_data(fit_dir_sources(fit_dir / "fit", fit_dir / "population.parquet",
+                                            [fit_dir / "scan.parquet"]))
+
+
+def test_report_command_embeds_every_figure_as_png_and_every_table(fit_dir, tmp_path, capsys):
+    out = tmp_path / "r.html"
+    code = main(["report", str(fit_dir / "fit"), "--population", str(fit_dir / "population.parquet"),
+                 "--scan", str(fit_dir / "scan.parquet"), "--out", str(out)])
+    assert code == 0
+    assert capsys.readouterr().out.strip() == str(out)  # stdout: just the report's path
+    html = out.read_text()
+    figs = embedded_figures(html)
+    expected = {"fig-wbsa-distribution", "fig-vbsa-wbsa", "fig-group-errors", "fig-models", "fig-nonlinear",
+                "fig-residuals", "fig-reconstruction", "fig-distance", "fig-formulae",
+                *(f"fig-view-{g}" for g in GROUPS)}
+    assert set(figs) == expected
+    for fid, png in figs.items():
+        w, h = png_size(png)
+        assert w >= 300 and h >= 200, fid
+    # synthetic subjects have no body parameters, so there is no point cloud to draw: said, not faked
+    assert re.findall(r'class="na" id="([^"]+)"', html) == ["fig-snapshots-na"]
+    assert "body parameters" in html
+    for tab in ("tab-summary", "tab-population", "tab-correlation", "tab-groups", "tab-models", "tab-distance",
+                "tab-formulae", "tab-fits", "tab-stages", "tab-settings", "tab-versions"):
+        assert f'id="{tab}"' in html, tab
+    assert html.startswith("<!DOCTYPE html>") and html.rstrip().endswith("</html>")
+    assert "<script" not in html and "http://" not in html and "https://" not in html  # self-contained
+
+
+def test_scatter_draws_the_measured_points_and_the_fitted_line(data):
+    fig = F.vbsa_wbsa_scatter(data.population, data.scan, data.fits, view=(0, 0), distance_m=4.3,
+                              camera=data.camera, vbsa_column="vbsa_visible_m2")
+    ax = fig.axes[0]
+    t = F.view_table(data.population, data.scan, "vbsa_visible_m2", 0.0, 0.0, 4.3, data.camera)
+    inside = t[t["fits_in_frame"]]
+    pts = ax.collections[0].get_offsets()
+    np.testing.assert_allclose(np.sort(pts[:, 0]), np.sort(inside["vbsa_m2"] * 100))
+    np.testing.assert_allclose(np.sort(pts[:, 1]), np.sort(inside["wbsa_m2"] * 100))
+    row = select(data.fits, group="all", model="linear", predictors="vbsa", vbsa_column="vbsa_visible_m2",
+                 distance_m=4.3, azimuth_deg=0.0, elevation_deg=0.0).iloc[0]
+    line = ax.lines[0]
+    x, y = line.get_xdata(), line.get_ydata()
+    np.testing.assert_allclose(y, (row["c0"] + row["c1"] * x / 100) * 100)
+    cut = t[~t["fits_in_frame"]]
+    assert len(cut) == (len(ax.collections[1].get_offsets()) if len(ax.collections) > 1 else 0)
+
+
+def test_coefficient_figure_lines_are_the_fit_table(data):
+    fig = F.coefficients_by_view(data.fits, group="all", model="linear", vbsa_column="vbsa_visible_m2",
+                                 distance_m=4.3, camera=data.camera, predictor_labels=data.predictor_labels)
+    axes = fig.axes
+    assert len(axes) == 4  # (VBSA only, VBSA + stature) x (CV RMSE, c1)
+    for row, label in enumerate(["vbsa", "vbsa+stature_m"]):
+        sub = select(data.fits, group="all", model="linear", predictors=label, vbsa_column="vbsa_visible_m2",
+                     distance_m=4.3)
+        rmse_ax, c1_ax = axes[2 * row], axes[2 * row + 1]
+        assert len(c1_ax.lines) == sub["elevation_deg"].nunique()
+        for line_rmse, line_c1, el in zip(rmse_ax.lines, c1_ax.lines, sorted(sub["elevation_deg"].unique())):
+            part = sub[sub["elevation_deg"] == el].sort_values("azimuth_deg")
+            np.testing.assert_allclose(line_c1.get_xdata(), part["azimuth_deg"])
+            np.testing.assert_allclose(line_c1.get_ydata(), part["c1"])
+            np.testing.assert_allclose(line_rmse.get_ydata(), part["cv_rmse_m2"] * 100)
+
+
+def test_wbsa_histogram_counts_every_subject(data):
+    fig = F.wbsa_distribution(data.population)
+    ax = fig.axes[0]
+    top = {}
+    for patch in ax.patches:  # stacked: the top of each bin's last bar is the bin's total
+        x = round(patch.get_x(), 9)
+        top[x] = max(top.get(x, 0.0), patch.get_y() + patch.get_height())
+    assert sum(top.values()) == pytest.approx(len(data.population))
+
+
+def test_group_errors_show_each_group_at_elevation_zero(data):
+    fig = F.group_errors(data.fits, model="linear", vbsa_column="vbsa_visible_m2", distance_m=4.3,
+                         camera=data.camera, predictor_labels=data.predictor_labels)
+    ax = fig.axes[0]
+    sub = select(data.fits, model="linear", predictors="vbsa", vbsa_column="vbsa_visible_m2", distance_m=4.3,
+                 elevation_deg=0.0)
+    groups = list(dict.fromkeys(sub["group"]))
+    assert len(ax.lines) == len(groups)
+    for line, g in zip(ax.lines, groups):
+        np.testing.assert_allclose(line.get_ydata(), sub[sub["group"] == g].sort_values("azimuth_deg")["cv_rmse_m2"] * 100)
+
+
+def test_distance_figure_shows_the_share_of_bodies_in_frame(data):
+    fig = F.distance_effect(data.fits, data.scan, model="linear", vbsa_column="vbsa_visible_m2", camera=data.camera,
+                            views=[(0.0, 0.0)])
+    share_ax = fig.axes[2]
+    rows = select(data.scan, azimuth_deg=0.0, elevation_deg=0.0)
+    expected = rows.groupby("distance_m")["fits_in_frame"].mean() * 100
+    np.testing.assert_allclose(share_ax.lines[0].get_ydata(), expected.to_numpy())
+    assert expected.loc[3.5] < expected.loc[4.3]  # the nearer camera cuts the tallest bodies
+    c1_ax = fig.axes[1]
+    c1 = select(data.fits, group="all", model="linear", predictors="vbsa", vbsa_column="vbsa_visible_m2",
+                azimuth_deg=0.0, elevation_deg=0.0).sort_values("distance_m")["c1"]
+    np.testing.assert_allclose(c1_ax.lines[0].get_ydata(), c1)
+
+
+def test_reconstruction_figure_shows_the_relative_area_error(data):
+    fig = F.reconstruction_by_view(data.scan, data.fits, model="linear", distance_m=4.3, camera=data.camera)
+    err_ax = fig.axes[0]
+    sc = select(data.scan, distance_m=4.3, elevation_deg=0.0)
+    sc = sc[sc["fits_in_frame"]]
+    rel = 100 * (sc["vbsa_recon_grid_m2"] - sc["vbsa_visible_m2"]) / sc["vbsa_visible_m2"]
+    expected = rel.groupby(sc["azimuth_deg"]).mean()
+    np.testing.assert_allclose(np.asarray(err_ax.lines[0].get_ydata(), dtype=float), expected.to_numpy())
+    assert 2.0 < expected.mean() < 4.0  # the synthetic reconstruction over-estimates by 3 %
+
+
+def test_figures_without_their_data_say_why(data):
+    one_distance = select(data.fits, distance_m=4.3)
+    with pytest.raises(F.FigureUnavailable, match="single camera distance"):
+        F.distance_effect(one_distance, data.scan, model="linear", vbsa_column="vbsa_visible_m2", camera=data.camera)
+    with pytest.raises(F.FigureUnavailable, match="no reconstruction columns"):
+        F.reconstruction_by_view(data.scan.drop(columns="vbsa_recon_grid_m2"), data.fits, model="linear",
+                                 distance_m=4.3, camera=data.camera)
+    with pytest.raises(F.FigureUnavailable, match="no per-subject residuals"):
+        F.residual_diagnostics(pd.DataFrame(), data.qq, view=(0, 0), model="linear", vbsa_column="vbsa_visible_m2",
+                               distance_m=4.3, camera=data.camera)
+
+
+def test_nearest_view_is_on_the_sphere():
+    views = pd.DataFrame({"azimuth_deg": [0.0, 60.0, 90.0, 0.0], "elevation_deg": [0.0, 60.0, 0.0, 90.0]})
+    assert nearest_view(views, 60, 60) == (60.0, 60.0)
+    assert nearest_view(views, 170, 88) == (0.0, 90.0)  # near the pole the azimuth hardly matters
+    assert nearest_view(views, 80, 5) == (90.0, 0.0)
+
+
+def test_report_inputs_that_cannot_be_found_are_one_line_errors(fit_dir, tmp_path, capsys):
+    with pytest.raises(WbsaError, match="does not exist"):
+        resolve_sources(tmp_path / "nowhere")
+    with pytest.raises(WbsaError, match="neither a study folder"):
+        resolve_sources(tmp_path)
+    with pytest.raises(WbsaError, match="give --population FILE and --scan FILE"):
+        resolve_sources(fit_dir / "fit")
+    assert main(["report", str(fit_dir / "fit")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: ") and err.count("\n") == 1
+    with pytest.raises(WbsaError, match="must end in .html"):
+        build_report(fit_dir_sources(fit_dir / "fit", fit_dir / "population.parquet", [fit_dir / "scan.parquet"]),
+                     tmp_path / "r.pdf")

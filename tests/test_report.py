@@ -196,9 +196,19 @@ def test_report_inputs_that_cannot_be_found_are_one_line_errors(fit_dir, tmp_pat
         resolve_sources(tmp_path / "nowhere")
     with pytest.raises(WbsaError, match="neither a study folder"):
         resolve_sources(tmp_path)
+    found = resolve_sources(fit_dir / "fit")  # wbsa fit recorded its input tables in fit_info.json
+    assert found.population_path.resolve() == (fit_dir / "population.parquet").resolve()
+    import json
+    import shutil
+
+    bare = tmp_path / "bare_fit"
+    shutil.copytree(fit_dir / "fit", bare)
+    info = json.loads((bare / "fit_info.json").read_text())
+    info.pop("inputs")
+    (bare / "fit_info.json").write_text(json.dumps(info))
     with pytest.raises(WbsaError, match="give --population FILE and --scan FILE"):
-        resolve_sources(fit_dir / "fit")
-    assert main(["report", str(fit_dir / "fit")]) == 2
+        resolve_sources(bare)
+    assert main(["report", str(bare)]) == 2
     err = capsys.readouterr().err
     assert err.startswith("error: ") and err.count("\n") == 1
     with pytest.raises(WbsaError, match="must end in .html"):

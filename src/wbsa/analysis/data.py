@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from wbsa.camera.views import PAPER_DISTANCE_M
 from wbsa.errors import WbsaError
 
 #: Columns of the scan table that identify a view, in table order.
@@ -136,3 +137,20 @@ def join_tables(population: pd.DataFrame, scan: pd.DataFrame, vbsa_columns: tupl
     table = table.merge(pop, on="subject_id", how="left", validate="many_to_one")
     n_not_scanned = int((~population["subject_id"].isin(scan["subject_id"])).sum())
     return Joined(table=table, n_out_of_frame=int((~in_frame).sum()), n_subjects_not_scanned=n_not_scanned)
+
+
+def reference_distance(distances_m) -> float:
+    """The listed camera distance nearest to the paper's 4.3 m (ties: the nearer camera)."""
+    return float(min(distances_m, key=lambda d: (abs(d - PAPER_DISTANCE_M), d)))
+
+
+def nearest_view(df: pd.DataFrame, azimuth_deg: float, elevation_deg: float) -> tuple[float, float]:
+    """The (azimuth, elevation) of ``df`` nearest to the asked one (angular distance on the sphere)."""
+    views = df[["azimuth_deg", "elevation_deg"]].drop_duplicates().to_numpy(float)
+    if len(views) == 0:
+        raise WbsaError("no views in the table")
+    a, e = np.radians(views[:, 0]), np.radians(views[:, 1])
+    a0, e0 = np.radians(azimuth_deg), np.radians(elevation_deg)
+    cos = np.sin(e) * np.sin(e0) + np.cos(e) * np.cos(e0) * np.cos(a - a0)
+    best = views[int(np.argmax(cos))]
+    return float(best[0]), float(best[1])

@@ -5,10 +5,11 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from wbsa.analysis.correlation import correlation_table, spearman_matrix
-from wbsa.analysis.data import POPULATION_COLUMNS, SCAN_COLUMNS, resolve_vbsa_column
+from wbsa.analysis.data import POPULATION_COLUMNS, SCAN_COLUMNS, nearest_view, reference_distance, resolve_vbsa_column
 from wbsa.analysis.fit_views import FitOutput, FitSettings, fit_all
 from wbsa.analysis.formulae_comparison import compare_formulae
 from wbsa.analysis.groups import COMPARISON_GROUPS
@@ -54,8 +55,11 @@ def _sheets(df: pd.DataFrame, order: tuple[str, ...]) -> dict[str, pd.DataFrame]
 
 
 def write_outputs(out: FitOutput, population: pd.DataFrame, scan: pd.DataFrame, out_dir: str | os.PathLike,
-                  settings: FitSettings, correlation: pd.DataFrame) -> dict[str, Path]:
+                  settings: FitSettings, correlation: pd.DataFrame, inputs: dict | None = None) -> dict[str, Path]:
     """Write the fit results, the formulae comparison and the correlation table into ``out_dir``.
+
+    ``inputs`` (e.g. ``{"population": path, "scan": path}``) is recorded in ``fit_info.json`` so a
+    report can find the tables the fit came from.
 
     Returns
     -------
@@ -85,8 +89,8 @@ def write_outputs(out: FitOutput, population: pd.DataFrame, scan: pd.DataFrame, 
     write_table(comparison, p["formulae_parquet"])
     write_table(comparison, p["formulae_csv"])
     write_sheets(_sheets(comparison, COMPARISON_GROUPS), p["formulae_xlsx"])
-    write_json({"settings": settings.to_dict(), "info": out.info, "files": {k: v.name for k, v in p.items()}},
-               p["info"])
+    write_json({"settings": settings.to_dict(), "info": out.info, "files": {k: v.name for k, v in p.items()},
+                "inputs": {k: str(Path(v).resolve()) for k, v in (inputs or {}).items()}}, p["info"])
     return p
 
 
@@ -95,12 +99,14 @@ def run_fit(population_path: str | os.PathLike, scan_path: str | os.PathLike, ou
             show_progress: bool | None = None) -> tuple[FitOutput, dict[str, Path]]:
     """Read the tables, fit every view, write every output; the API behind ``wbsa fit``.
 
-    The correlation matrix (paper Table 2, Spearman) is computed first at ``correlation_view`` with the
-    first VBSA column, so a missing view fails before the long fit.
+    The correlation matrix (paper Table 2, Spearman) is computed first with the first VBSA column,
+    at the scanned distance nearest the paper's 4.3 m and the scanned view nearest ``correlation_view``.
     """
     population, scan = read_inputs(population_path, scan_path, settings.vbsa_columns)
     vcol = resolve_vbsa_column(settings.vbsa_columns[0])
-    distance, camera = _single(scan, "distance_m"), _single(scan, "camera")
+    distance = reference_distance(scan["distance_m"].unique().tolist())
+    camera = _single(scan, "camera")
+    correlation_view = nearest_view(scan[np.isclose(scan["distance_m"], distance)], *correlation_view)
     matrix = spearman_matrix(population, scan, vcol, *correlation_view, require_in_frame=settings.require_in_frame,
                              distance_m=distance, camera=camera)
     correlation = correlation_table(matrix, correlation_view, vcol, distance, camera)
@@ -109,7 +115,8 @@ def run_fit(population_path: str | os.PathLike, scan_path: str | os.PathLike, ou
         reason = out.skipped["reason"].iloc[0] if len(out.skipped) else "no scan rows"
         raise WbsaError(f"no model could be fitted ({len(out.skipped)} combinations skipped, e.g. {reason}); "
                         "lower --k, include more subjects or check the VBSA column")
-    paths = write_outputs(out, population, scan, out_dir, settings, correlation)
+    paths = write_outputs(out, population, scan, out_dir, settings, correlation,
+                          inputs={"population": population_path, "scan": scan_path})
     return out, paths
 
 

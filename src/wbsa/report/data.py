@@ -9,12 +9,13 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from wbsa.analysis.data import nearest_view, reference_distance  # noqa: F401 (nearest_view re-exported)
+from wbsa.camera.views import PAPER_DISTANCE_M
 from wbsa.errors import WbsaError
 from wbsa.io import read_table
 from wbsa.report.sources import FIT_INFO, ReportSources
 
 #: The paper's camera distance: the per-view figures use the fitted distance nearest to it.
-PAPER_DISTANCE_M = 4.3
 
 _FIT_KEYS = ("group", "model", "predictors", "vbsa_column", "camera", "distance_m", "azimuth_deg", "elevation_deg")
 
@@ -127,7 +128,7 @@ def load_report_data(sources: ReportSources) -> ReportData:
     vcols = [c for c in dict.fromkeys(fits["vbsa_column"])]
     cameras = sorted(fits["camera"].unique())
     distances = tuple(sorted(float(d) for d in fits["distance_m"].unique()))
-    ref = min(distances, key=lambda d: (abs(d - PAPER_DISTANCE_M), d))
+    ref = reference_distance(distances)
     return ReportData(
         population=population,
         scan=scan,
@@ -162,13 +163,3 @@ def select(df: pd.DataFrame, **keys) -> pd.DataFrame:
     return df[mask]
 
 
-def nearest_view(df: pd.DataFrame, azimuth_deg: float, elevation_deg: float) -> tuple[float, float]:
-    """The (azimuth, elevation) of ``df`` nearest to the asked one (angular distance on the sphere)."""
-    views = df[["azimuth_deg", "elevation_deg"]].drop_duplicates().to_numpy(float)
-    if len(views) == 0:
-        raise WbsaError("no views in the table")
-    a, e = np.radians(views[:, 0]), np.radians(views[:, 1])
-    a0, e0 = np.radians(azimuth_deg), np.radians(elevation_deg)
-    cos = np.sin(e) * np.sin(e0) + np.cos(e) * np.cos(e0) * np.cos(a - a0)
-    best = views[int(np.argmax(cos))]
-    return float(best[0]), float(best[1])

@@ -30,6 +30,7 @@ from pathlib import Path
 from typing import Callable, TextIO
 
 from wbsa import __version__
+from wbsa.analysis.data import reference_distance
 from wbsa.errors import WbsaError
 from wbsa.io import atomic_path, write_json
 from wbsa.study.settings import StudySettings, fit_settings, scan_settings
@@ -41,7 +42,6 @@ SETTINGS_FILE = "study.toml"
 REPORT_FILE = "report.html"
 
 #: The paper's camera distance; the listed distance nearest to it is the study's reference distance.
-PAPER_DISTANCE_M = 4.3
 
 
 @dataclass
@@ -92,11 +92,6 @@ class StudyResult:
     fits_path: Path
     stages: list[StageRun] = field(default_factory=list)
     seconds: float = 0.0
-
-
-def reference_distance(distances_m: tuple[float, ...] | list[float]) -> float:
-    """The listed camera distance nearest to the paper's 4.3 m (the distance of the per-view figures)."""
-    return float(min(distances_m, key=lambda d: (abs(d - PAPER_DISTANCE_M), d)))
 
 
 def package_versions() -> dict[str, str]:
@@ -269,15 +264,10 @@ def _fit_stage(settings: StudySettings, out: Path, pop: Stage, scans: list[Stage
                          {"population": pop.key, "scans": [s.key for s in scans]})
     if stage.done:
         return _reused("fit", stage)
-    import numpy as np
     import pandas as pd
 
-    from wbsa.analysis.correlation import correlation_table, spearman_matrix
-    from wbsa.analysis.data import resolve_vbsa_column
-    from wbsa.analysis.fit_views import fit_all
-    from wbsa.analysis.outputs import read_inputs, write_outputs
+    from wbsa.analysis.outputs import run_fit
     from wbsa.io import write_table
-    from wbsa.report.data import nearest_view
 
     t = time.perf_counter()
     scan_paths = [s.path / "scan.parquet" for s in scans]
@@ -288,15 +278,8 @@ def _fit_stage(settings: StudySettings, out: Path, pop: Stage, scans: list[Stage
         scan_path = write_table(pd.concat([pd.read_parquet(p) for p in scan_paths], ignore_index=True),
                                 stage.path / "scans.parquet")
         outputs["scans"] = "scans.parquet"
-    population, scan = read_inputs(pop.path / "population.parquet", scan_path, fs.vbsa_columns)
-    vcol = resolve_vbsa_column(fs.vbsa_columns[0])
-    camera = sorted(scan["camera"].astype(str).unique())[0]
-    view = nearest_view(scan[np.isclose(scan["distance_m"], ref)], *corr)  # the asked view, or the nearest scanned
-    matrix = spearman_matrix(population, scan, vcol, *view, distance_m=ref, camera=camera,
-                             require_in_frame=fs.require_in_frame)
-    correlation = correlation_table(matrix, view, vcol, ref, camera)
-    result = fit_all(population, scan, fs, show_progress=show_progress)
-    paths = write_outputs(result, population, scan, stage.path, fs, correlation)
+    result, paths = run_fit(pop.path / "population.parquet", scan_path, stage.path, fs, corr,
+                            show_progress=show_progress)
     seconds = time.perf_counter() - t
     info = result.info
     summary = (f"{info['n_fits']} fits: {info['n_subjects']} subjects x {info['n_views']} views, "

@@ -96,17 +96,20 @@ def write_outputs(out: FitOutput, population: pd.DataFrame, scan: pd.DataFrame, 
 
 def run_fit(population_path: str | os.PathLike, scan_path: str | os.PathLike, out_dir: str | os.PathLike,
             settings: FitSettings = FitSettings(), correlation_view: tuple[float, float] = (0.0, 0.0),
-            show_progress: bool | None = None) -> tuple[FitOutput, dict[str, Path]]:
+            show_progress: bool | None = None, nearest_correlation_view: bool = False
+            ) -> tuple[FitOutput, dict[str, Path]]:
     """Read the tables, fit every view, write every output; the API behind ``wbsa fit``.
 
     The correlation matrix (paper Table 2, Spearman) is computed first with the first VBSA column,
-    at the scanned distance nearest the paper's 4.3 m and the scanned view nearest ``correlation_view``.
+    at the scanned distance nearest the paper's 4.3 m and at ``correlation_view`` (an unscanned view is an
+    error, found before the long fit, unless ``nearest_correlation_view`` picks the nearest scanned one).
     """
     population, scan = read_inputs(population_path, scan_path, settings.vbsa_columns)
     vcol = resolve_vbsa_column(settings.vbsa_columns[0])
     distance = reference_distance(scan["distance_m"].unique().tolist())
     camera = _single(scan, "camera")
-    correlation_view = nearest_view(scan[np.isclose(scan["distance_m"], distance)], *correlation_view)
+    if nearest_correlation_view:
+        correlation_view = nearest_view(scan[np.isclose(scan["distance_m"], distance)], *correlation_view)
     matrix = spearman_matrix(population, scan, vcol, *correlation_view, require_in_frame=settings.require_in_frame,
                              distance_m=distance, camera=camera)
     correlation = correlation_table(matrix, correlation_view, vcol, distance, camera)

@@ -279,7 +279,7 @@ def _fit_stage(settings: StudySettings, out: Path, pop: Stage, scans: list[Stage
                                 stage.path / "scans.parquet")
         outputs["scans"] = "scans.parquet"
     result, paths = run_fit(pop.path / "population.parquet", scan_path, stage.path, fs, corr,
-                            show_progress=show_progress)
+                            show_progress=show_progress, nearest_correlation_view=True)
     seconds = time.perf_counter() - t
     info = result.info
     summary = (f"{info['n_fits']} fits: {info['n_subjects']} subjects x {info['n_views']} views, "

@@ -1,0 +1,159 @@
+"""``wbsa view``: look at a mesh with the virtual depth camera and measure the visible skin.
+
+The argument helpers (:func:`add_camera_arguments`, :func:`add_view_arguments`, :func:`intrinsics_from_args`,
+:func:`views_from_args`) are shared with other commands that need a camera and a set of views.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from wbsa.errors import WbsaError
+
+_INTRINSIC_FLAGS = ("width", "height", "fx", "fy", "cx", "cy", "skew")
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``view`` subcommand."""
+    p = sub.add_parser(
+        "view", help="render a mesh with the virtual depth camera and measure the visible skin area",
+        description="Ray-cast a mesh (metres, +Z up, subject facing -Y; centre = bounding-box centre) with a "
+                    "pinhole depth camera and print the visible areas: vbsa_hit_m2 (the paper's unique hit "
+                    "triangles) and vbsa_visible_m2 (resolution-independent visible area).")
+    p.add_argument("mesh", metavar="MESH", help="triangle mesh file (.ply, .obj, .stl, .off, .gltf, .glb) in metres")
+    add_camera_arguments(p)
+    add_view_arguments(p)
+    p.add_argument("--out", metavar="DIR", help="write depth PNG (mm), point cloud PLY, visible triangle ids, "
+                                                "intrinsics/extrinsics JSON and a preview PNG here")
+    p.add_argument("--coordinates", choices=("camera", "world"), default="camera",
+                   help="frame of the written point cloud (default camera: x right, y down, z forward)")
+    p.add_argument("--json", action="store_true", help="print the results as JSON")
+    p.set_defaults(func=run_view)
+
+
+def add_camera_arguments(p: argparse.ArgumentParser) -> None:
+    """``--camera`` (preset or Open3D JSON) plus per-parameter overrides and ``--scale``."""
+    g = p.add_argument_group("camera")
+    g.add_argument("--camera", default="kinect-v1", metavar="NAME|JSON",
+                   help="preset (kinect-v1, kinect-v2, tum) or Open3D PinholeCameraIntrinsic JSON (default kinect-v1)")
+    g.add_argument("--width", type=int, help="image width in pixels (overrides --camera)")
+    g.add_argument("--height", type=int, help="image height in pixels (overrides --camera)")
+    for name, what in (("fx", "focal length x"), ("fy", "focal length y"), ("cx", "principal point x"),
+                       ("cy", "principal point y"), ("skew", "skew K[0,1]")):
+        g.add_argument(f"--{name}", type=float, help=f"{what} in pixels (overrides --camera)")
+    g.add_argument("--scale", type=float, default=1.0,
+                   help="multiply the resolution (and focal lengths) by this factor, same field of view (default 1)")
+
+
+def add_view_arguments(p: argparse.ArgumentParser) -> None:
+    """Azimuth/elevation lists or a named view set, and the distance."""
+    g = p.add_argument_group("views (paper Fig 1: azimuth 0 = front, 90 = subject's left; elevation +90 = above)")
+    g.add_argument("--azimuth", "--azimuths", dest="azimuths", metavar="DEG",
+                   help="azimuth(s) in degrees: 30, 0,30,90 or 0:180:30 (default 0)")
+    g.add_argument("--elevation", "--elevations", dest="elevations", metavar="DEG",
+                   help="elevation(s) in degrees, same forms (default 0)")
+    g.add_argument("--views", metavar="SET",
+                   help="named view set instead: paper (65 views), front, sphere:N (Fibonacci), grid:STEP")
+    g.add_argument("--distance", default="4.3", metavar="M|fit",
+                   help="camera distance from the subject's centre in metres, or 'fit' for the smallest distance "
+                        "that fits the mesh's height in the vertical field of view (eq. 9) (default 4.3)")
+    g.add_argument("--margin", type=float, default=0.05,
+                   help="with --distance fit: extra fraction of the height kept free (default 0.05)")
+
+
+def intrinsics_from_args(args: argparse.Namespace):
+    """The :class:`~wbsa.camera.intrinsics.Intrinsics` of ``--camera`` with the per-parameter overrides applied.
+
+    When ``--width``/``--height`` change and ``--cx``/``--cy`` are not given, the principal point moves to
+    the new image centre.
+    """
+    from dataclasses import replace
+
+    from wbsa.camera.intrinsics import resolve_camera
+
+    base = resolve_camera(args.camera)
+    changes = {name: getattr(args, name) for name in _INTRINSIC_FLAGS if getattr(args, name, None) is not None}
+    if changes:
+        if "width" in changes and "cx" not in changes:
+            changes["cx"] = (changes["width"] - 1) / 2.0
+        if "height" in changes and "cy" not in changes:
+            changes["cy"] = (changes["height"] - 1) / 2.0
+        base = replace(base, name="custom", **changes)
+    scale = getattr(args, "scale", 1.0)
+    return base if scale == 1.0 else base.scaled(scale)
+
+
+def views_from_args(args: argparse.Namespace, intrinsics, stature_m: float | None = None) -> list:
+    """The views of ``--views`` or ``--azimuths`` × ``--elevations`` at ``--distance``.
+
+    ``--distance fit`` needs ``stature_m`` (the subject's height).
+    """
+    from wbsa.camera.fit import distance_to_fit
+    from wbsa.camera.views import parse_views
+
+    text = str(args.distance).strip().lower()
+    if text == "fit":
+        if stature_m is None:
+            raise WbsaError("--distance fit needs a subject height; give a number of metres")
+        distance = distance_to_fit(stature_m, intrinsics, margin=args.margin)
+    else:
+        try:
+            distance = float(text)
+        except ValueError:
+            raise WbsaError(f"--distance must be metres or 'fit', got {args.distance!r}") from None
+    return parse_views(args.views, azimuths=args.azimuths, elevations=args.elevations, distance_m=distance)
+
+
+def run_view(args: argparse.Namespace) -> int:
+    """Handler of ``wbsa view``."""
+    from wbsa.camera.export import write_view_outputs
+    from wbsa.camera.intrinsics import Intrinsics
+    from wbsa.camera.measure import measure_view
+    from wbsa.camera.scene import MeshScene
+    from wbsa.camera.target import load_target
+    from wbsa.io import write_json, write_table
+
+    intrinsics: Intrinsics = intrinsics_from_args(args)
+    mesh = load_target(args)
+    scene = MeshScene(mesh)
+    stature = float(scene.bbox_max[2] - scene.bbox_min[2])
+    views = views_from_args(args, intrinsics, stature)
+    out = Path(args.out) if args.out else None
+    rows = []
+    for view in views:
+        row, frame = measure_view(scene, intrinsics, view, return_frame=out is not None)
+        row = {"mesh": str(args.mesh), "mesh_area_m2": float(scene.triangle_areas_m2.sum()), **row}
+        rows.append(row)
+        if out is not None:
+            target_dir = out if len(views) == 1 else out / view.label
+            title = (f"{Path(args.mesh).name}  az {view.azimuth_deg:g}°  el {view.elevation_deg:g}°  "
+                     f"D {view.distance_m:.3g} m  {intrinsics.name}  hit {row['vbsa_hit_m2']:.4f} m²  "
+                     f"visible {row['vbsa_visible_m2']:.4f} m²")
+            write_view_outputs(frame, target_dir, row, coordinates=args.coordinates, title=title)
+    if out is not None and len(views) > 1:
+        import pandas as pd
+
+        write_table(pd.DataFrame(rows), out / "views.csv")
+        write_json(intrinsics.to_open3d_json(), out / "intrinsics.json")
+    if args.json:
+        json.dump(rows[0] if len(rows) == 1 else rows, sys.stdout, indent=2)
+        sys.stdout.write("\n")
+    else:
+        _print_rows(rows, intrinsics, out)
+    return 0
+
+
+def _print_rows(rows: list[dict], intrinsics, out: Path | None) -> None:
+    k = intrinsics
+    print(f"camera {k.name}: {k.width}x{k.height}, fx {k.fx:g}, fy {k.fy:g}, cx {k.cx:g}, cy {k.cy:g}"
+          + (f", skew {k.skew:g}" if k.skew else ""))
+    print(f"mesh {rows[0]['mesh']}: total area {rows[0]['mesh_area_m2']:.4f} m²")
+    print(f"{'azimuth':>8s} {'elev.':>6s} {'dist m':>7s} {'pixels':>8s} {'hit m²':>8s} {'visible m²':>10s}  fits")
+    for r in rows:
+        print(f"{r['azimuth_deg']:8.4g} {r['elevation_deg']:6.4g} {r['distance_m']:7.3f} {r['n_pixels']:8d} "
+              f"{r['vbsa_hit_m2']:8.4f} {r['vbsa_visible_m2']:10.4f}  {'yes' if r['fits_in_frame'] else 'CUT'}")
+    if out is not None:
+        print(f"wrote {out}")

@@ -1,0 +1,159 @@
+"""Files of one rendered view: depth PNG, point cloud, visible triangles, camera JSON, preview.
+
+Every file is written under a temporary name beside its final one and renamed when complete,
+so an interrupted run never leaves a half-written file under a final name.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+from pathlib import Path
+from typing import Iterator, Literal
+
+import numpy as np
+
+from wbsa.camera.frame import DepthFrame
+from wbsa.errors import WbsaError
+from wbsa.io import atomic_path, write_json
+
+#: Largest depth a 16-bit millimetre PNG holds (m); farther returns are written as 0 (no return).
+MAX_PNG_DEPTH_M = 65.535
+
+FILES = {
+    "depth": "depth.png",
+    "points": "points.ply",
+    "triangles": "visible_triangles.txt",
+    "triangle_id": "triangle_id.npy",
+    "intrinsics": "intrinsics.json",
+    "extrinsics": "extrinsics.json",
+    "preview": "preview.png",
+    "summary": "view.json",
+}
+
+
+@contextlib.contextmanager
+def _atomic_same_suffix(final: Path) -> Iterator[Path]:
+    """Like :func:`wbsa.io.atomic_path`, but the temporary name keeps the suffix (Open3D picks the format by it)."""
+    final.parent.mkdir(parents=True, exist_ok=True)
+    tmp = final.with_name(f".{final.stem}.{os.getpid()}.part{final.suffix}")
+    try:
+        yield tmp
+        os.replace(tmp, final)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+
+
+def depth_to_mm_u16(depth_m: np.ndarray) -> np.ndarray:
+    """(h, w) uint16 depth in millimetres, 0 = no return (TUM / Open3D convention)."""
+    d = np.asarray(depth_m, dtype=np.float64)
+    ok = np.isfinite(d) & (d > 0) & (d <= MAX_PNG_DEPTH_M)
+    return np.where(ok, np.rint(d * 1000.0), 0).astype(np.uint16)
+
+
+def write_depth_png(frame: DepthFrame, path: str | os.PathLike) -> Path:
+    """16-bit PNG of the z-depth in millimetres (0 = no return), readable by ``open3d.io.read_image``."""
+    import open3d as o3d
+
+    path = Path(path)
+    with _atomic_same_suffix(path) as tmp:
+        if not o3d.io.write_image(str(tmp), o3d.geometry.Image(depth_to_mm_u16(frame.depth_m))):
+            raise WbsaError(f"could not write {path}; choose a writable --out")
+    return path
+
+
+def write_point_cloud(frame: DepthFrame, path: str | os.PathLike,
+                      coordinates: Literal["camera", "world"] = "camera") -> Path:
+    """Binary PLY of the hit points and their camera-facing normals, in the camera or world frame (metres)."""
+    import open3d as o3d
+
+    valid = frame.depth_m > 0
+    points = frame.points_cam[valid].astype(np.float64)
+    normals = frame.normals_cam[valid].astype(np.float64)
+    if coordinates == "world":
+        inv = frame.pose.inverse()
+        points = inv.apply(points)
+        normals = normals @ frame.pose.R  # rotate back: n_world = Rᵀ n_cam
+    cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
+    cloud.normals = o3d.utility.Vector3dVector(normals)
+    path = Path(path)
+    with _atomic_same_suffix(path) as tmp:
+        if not o3d.io.write_point_cloud(str(tmp), cloud, write_ascii=False):
+            raise WbsaError(f"could not write {path}; choose a writable --out")
+    return path
+
+
+def visible_triangle_ids(frame: DepthFrame) -> np.ndarray:
+    """(k,) int64 sorted unique ids of the triangles hit by at least one pixel."""
+    ids = frame.triangle_id[frame.triangle_id >= 0]
+    return np.unique(ids)
+
+
+def write_preview(frame: DepthFrame, path: str | os.PathLike, title: str = "") -> Path:
+    """PNG preview (matplotlib, Agg): depth map and shaded surface side by side."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    valid = frame.depth_m > 0
+    depth = np.where(valid, frame.depth_m, np.nan)
+    # Lambert shading with a light at the camera: |n · ray| on unit rays.
+    from wbsa.camera.intrinsics import pixel_rays
+
+    dirs, cos_axis = pixel_rays(frame.intrinsics)
+    shade = np.abs(np.einsum("hwc,hwc->hw", np.nan_to_num(frame.normals_cam), dirs)) * cos_axis
+    shade = np.where(valid, shade, np.nan)
+    h, w = frame.depth_m.shape
+    fig, axes = plt.subplots(1, 2, figsize=(10, 10 * h / (2 * w) + 0.9), constrained_layout=True)
+    im = axes[0].imshow(depth, cmap="viridis")
+    fig.colorbar(im, ax=axes[0], shrink=0.8, label="z-depth (m)")
+    axes[0].set_title("depth")
+    axes[1].imshow(shade, cmap="gray", vmin=0, vmax=1)
+    axes[1].set_title("surface (light at the camera)")
+    for ax in axes:
+        ax.set_xticks([])
+        ax.set_yticks([])
+        ax.set_facecolor("black")
+    if title:
+        fig.suptitle(title, fontsize=10)
+    path = Path(path)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=100)
+    plt.close(fig)
+    return path
+
+
+def write_view_outputs(frame: DepthFrame, out_dir: str | os.PathLike, summary: dict, *,
+                       coordinates: Literal["camera", "world"] = "camera", title: str = "") -> dict[str, Path]:
+    """Write every file of one view into ``out_dir``; returns {kind: path}.
+
+    Files: ``depth.png`` (uint16 mm, 0 = no return), ``points.ply`` (hit points + normals), ``visible_triangles.txt``
+    (unique hit triangle ids, one per line), ``triangle_id.npy`` ((h, w) int32, −1 = no return),
+    ``intrinsics.json`` (Open3D PinholeCameraIntrinsic), ``extrinsics.json`` (g = [R | T] both ways),
+    ``preview.png`` and ``view.json`` (``summary``).
+    """
+    out = Path(out_dir)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise WbsaError(f"cannot create output folder {out}: {exc.strerror}; choose a writable --out") from None
+    paths = {key: out / name for key, name in FILES.items()}
+    write_depth_png(frame, paths["depth"])
+    write_point_cloud(frame, paths["points"], coordinates)
+    with atomic_path(paths["triangles"]) as tmp:
+        np.savetxt(tmp, visible_triangle_ids(frame), fmt="%d")
+    with atomic_path(paths["triangle_id"]) as tmp:
+        with open(tmp, "wb") as fh:
+            np.save(fh, frame.triangle_id.astype(np.int32))
+    write_json(frame.intrinsics.to_open3d_json(), paths["intrinsics"])
+    extrinsics = dict(frame.pose.to_dict())
+    for key in ("azimuth_deg", "elevation_deg", "distance_m", "target_m"):
+        if key in frame.settings:
+            extrinsics[key] = frame.settings[key]
+    extrinsics["point_cloud_frame"] = coordinates
+    write_json(extrinsics, paths["extrinsics"])
+    write_preview(frame, paths["preview"], title)
+    write_json(summary, paths["summary"])
+    return paths

@@ -1,0 +1,165 @@
+"""A triangle mesh ready for ray casting: Open3D's RaycastingScene plus per-triangle data."""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+import numpy as np
+
+from wbsa.errors import WbsaError
+from wbsa.population.mesh import TriangleMesh
+
+#: Unit cube corners, used for the 8 corners of the mesh's bounding box.
+_CORNERS = np.array([[i, j, k] for i in (0, 1) for j in (0, 1) for k in (0, 1)], dtype=np.float64)
+
+
+class MeshScene:
+    """A triangle mesh ready for ray casting: Open3D BVH plus per-triangle areas and normals.
+
+    Parameters
+    ----------
+    mesh : TriangleMesh
+        Vertices in metres; at least one triangle with non-zero area, finite coordinates.
+    nthreads : int
+        Threads Open3D may use per cast (0 = all cores). Use 1 when many processes cast in parallel.
+
+    Attributes
+    ----------
+    mesh : TriangleMesh
+    triangle_areas_m2 : (m,) float64
+    face_normals : (m, 3) float64
+        Unit normals by the right-hand rule of each face's vertex order (zero for degenerate faces).
+    one_sided : bool
+        True for a consistently oriented, (nearly) closed surface: then only triangles facing the camera
+        can be visible, which halves the object-space visibility tests of the visible-area estimate.
+    centroids : (m, 3) float64
+    bbox_corners : (8, 3) float64
+    bbox_min, bbox_max : (3,) float64
+    center : (3,) float64
+        Bounding-box centre, the subject's centre for the camera.
+    """
+
+    def __init__(self, mesh: TriangleMesh, nthreads: int = 0) -> None:
+        import open3d as o3d
+
+        vertices, faces = validate_mesh(mesh)
+        self.mesh = mesh
+        self.nthreads = int(nthreads)
+        v0, v1, v2 = (vertices[f] for f in faces.T)
+        e01, e12, e20 = v1 - v0, v2 - v1, v0 - v2
+        cross = np.cross(e01, -e20)
+        doubled = np.sqrt(np.einsum("ij,ij->i", cross, cross))
+        self.triangle_areas_m2 = 0.5 * doubled  # paper eq. 4
+        if not self.triangle_areas_m2.sum() > 0:
+            raise WbsaError("the mesh has zero surface area (all triangles are degenerate); check the mesh file")
+        self.face_normals = np.divide(cross, doubled[:, None], out=np.zeros_like(cross), where=doubled[:, None] > 0)
+        self.bbox_min = vertices.min(axis=0)
+        self.bbox_max = vertices.max(axis=0)
+        self.center = 0.5 * (self.bbox_min + self.bbox_max)
+        self.bbox_corners = self.bbox_min + _CORNERS * (self.bbox_max - self.bbox_min)
+        self.centroids = (v0 + v1 + v2) / 3.0
+        local = self.centroids - self.center
+        self.one_sided, sign = _orientation(faces, vertices.shape[0], self.triangle_areas_m2,
+                                            np.einsum("ij,ij->i", self.face_normals, local))
+        # Per-view cosines in a few float32 passes:
+        # n·(C − c) = n·C − n·c and |C − c|² = |C|² − 2 C·c + |c|²,
+        # with the per-triangle columns stored contiguously (structure of arrays), n outward and positions
+        # relative to the bounding-box centre (so float32 keeps its precision wherever the mesh lies).
+        outward = sign * self.face_normals
+        self._soa = np.ascontiguousarray(np.concatenate([
+            outward.T, local.T, np.einsum("ij,ij->i", outward, local)[None],
+            np.einsum("ij,ij->i", local, local)[None]]), dtype=np.float32)
+        # For the silhouette ROI: vertices relative to the centre, each triangle's longest edge, int faces.
+        self._local_vertices_t = np.ascontiguousarray((vertices - self.center).T)
+        self._faces_t = np.ascontiguousarray(faces.T)
+        sq = [np.einsum("ij,ij->i", e, e) for e in (e01, e12, e20)]
+        self._max_edge = np.sqrt(np.maximum(np.maximum(sq[0], sq[1]), sq[2]))
+        self._o3c = o3d.core
+        self._scene = o3d.t.geometry.RaycastingScene()
+        self._scene.add_triangles(o3d.core.Tensor(np.ascontiguousarray(vertices, dtype=np.float32)),
+                                  o3d.core.Tensor(np.ascontiguousarray(faces, dtype=np.uint32)))
+
+    @property
+    def n_triangles(self) -> int:
+        """Number of triangles."""
+        return int(self.triangle_areas_m2.shape[0])
+
+    def contains(self, point: np.ndarray) -> bool:
+        """Whether ``point`` (3,) lies inside the closed surface (ray parity, majority of 3 rays).
+
+        Points outside the bounding box are outside without casting. For open meshes the answer is
+        only as good as the parity test (it is used to refuse a camera placed inside the body).
+        """
+        p = np.asarray(point, dtype=np.float64).reshape(3)
+        if np.any(p < self.bbox_min) or np.any(p > self.bbox_max):
+            return False
+        q = self._o3c.Tensor(p.astype(np.float32).reshape(1, 3))
+        return bool(self._scene.compute_occupancy(q, nthreads=self.nthreads, nsamples=3).numpy()[0] > 0.5)
+
+    def cast_rays(self, rays: np.ndarray) -> dict[str, np.ndarray]:
+        """Bare Open3D ``cast_rays`` on (n, 6) float32 rays (origin, direction); numpy views of its outputs."""
+        ans = self._scene.cast_rays(self._o3c.Tensor.from_numpy(rays), nthreads=self.nthreads)
+        return {k: v.numpy() for k, v in ans.items()}
+
+    def occluded(self, rays: np.ndarray, t_far: float) -> np.ndarray:
+        """(n,) bool: whether anything lies on each ray for 0 < t < ``t_far`` (Open3D ``test_occlusions``)."""
+        ans = self._scene.test_occlusions(self._o3c.Tensor.from_numpy(rays), tnear=0.0, tfar=float(t_far),
+                                          nthreads=self.nthreads)
+        return ans.numpy().astype(bool)
+
+
+@lru_cache(maxsize=8)
+def _topology(faces_bytes: bytes, n_vertices: int) -> tuple[bool, bool]:
+    """(consistently oriented, nearly closed) of a face array (cached: a population shares one topology)."""
+    faces = np.frombuffer(faces_bytes, dtype=np.int64).reshape(-1, 3)
+    n = np.int64(n_vertices)
+    a = faces.reshape(-1)
+    b = faces[:, [1, 2, 0]].reshape(-1)
+    directed = np.sort(a * n + b)
+    if directed.size > 1 and np.any(directed[1:] == directed[:-1]):
+        return False, False
+    _, counts = np.unique(np.minimum(a, b) * n + np.maximum(a, b), return_counts=True)
+    return True, bool(np.count_nonzero(counts == 1) <= 0.01 * counts.size)
+
+
+def _orientation(faces: np.ndarray, n_vertices: int, areas: np.ndarray,
+                 normal_dot_centroid: np.ndarray) -> tuple[bool, float]:
+    """Whether the mesh is a consistently oriented, (nearly) closed surface, and the sign that turns its normals out.
+
+    Consistent: no directed edge is used twice. Nearly closed: at most 1 % of the edges border a single face
+    (a body's small eye and mouth openings). Outward: positive enclosed volume, ⅓ Σ area · n·c (divergence
+    theorem, c the centroids relative to any point). Returns ``(one_sided, sign)``; ``one_sided`` False means
+    back faces must be treated like front faces.
+    """
+    consistent, closed = _topology(np.ascontiguousarray(faces, dtype=np.int64).tobytes(), int(n_vertices))
+    if not (consistent and closed):
+        return False, 1.0
+    volume = float(np.einsum("i,i->", areas, normal_dot_centroid)) / 3.0
+    if abs(volume) < 1e-12:
+        return False, 1.0
+    return True, 1.0 if volume > 0 else -1.0
+
+
+def validate_mesh(mesh: TriangleMesh) -> tuple[np.ndarray, np.ndarray]:
+    """Check a mesh for ray casting; returns (vertices (n, 3) float64, faces (m, 3) int64).
+
+    Raises
+    ------
+    WbsaError
+        If it is not a TriangleMesh, has no triangles, non-finite vertices or out-of-range indices.
+    """
+    if not isinstance(mesh, TriangleMesh):
+        raise WbsaError(f"expected a TriangleMesh, got {type(mesh).__name__}")
+    vertices = np.asarray(mesh.vertices, dtype=np.float64)
+    faces = np.asarray(mesh.faces)
+    if vertices.ndim != 2 or vertices.shape[1] != 3 or vertices.shape[0] == 0:
+        raise WbsaError(f"the mesh has no vertices (shape {vertices.shape}); check the mesh file")
+    if faces.ndim != 2 or faces.shape[1] != 3 or faces.shape[0] == 0:
+        raise WbsaError("the mesh has no triangles (a point cloud or an empty file?); give a triangle mesh")
+    if not np.issubdtype(faces.dtype, np.integer):
+        raise WbsaError(f"mesh faces must be integer vertex indices, got {faces.dtype}")
+    if not np.all(np.isfinite(vertices)):
+        raise WbsaError("the mesh has non-finite vertex coordinates (NaN or inf); repair the mesh")
+    if faces.min() < 0 or faces.max() >= vertices.shape[0]:
+        raise WbsaError(f"mesh faces index vertices outside 0..{vertices.shape[0] - 1}; the mesh file is corrupt")
+    return vertices, faces.astype(np.int64, copy=False)

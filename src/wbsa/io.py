@@ -17,11 +17,12 @@ TableFormat = Literal["parquet", "csv", "xlsx"]
 
 
 @contextmanager
-def atomic_path(final: str | os.PathLike) -> Iterator[Path]:
+def atomic_path(final: str | os.PathLike, keep_suffix: bool = False) -> Iterator[Path]:
     """Yield a temporary path beside ``final``; rename it to ``final`` only on success.
 
     Nothing is left under the final name if the body raises, so a crash or a Ctrl-C
-    never leaves a half-written file that looks finished.
+    never leaves a half-written file that looks finished. ``keep_suffix`` ends the temporary
+    name with ``final``'s suffix, for writers that pick the format by it (Open3D).
     """
     final = Path(final)
     parent = final.parent if str(final.parent) else Path(".")
@@ -32,7 +33,8 @@ def atomic_path(final: str | os.PathLike) -> Iterator[Path]:
     if final.is_dir():
         raise WbsaError(f"output path {final} is a folder; give a file name")
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{final.name}.", suffix=".part", dir=parent)
+        fd, tmp = tempfile.mkstemp(prefix=f".{final.name}.", suffix=".part" + (final.suffix if keep_suffix else ""),
+                                   dir=parent)
     except OSError as exc:
         raise WbsaError(f"cannot write to {parent}: {exc.strerror}; choose a writable --out") from None
     os.close(fd)

@@ -23,9 +23,17 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Ray-cast a mesh (metres, +Z up, subject facing -Y; centre = bounding-box centre) with a "
                     "pinhole depth camera and print the visible areas: vbsa_hit_m2 (the paper's unique hit "
                     "triangles) and vbsa_visible_m2 (resolution-independent visible area).")
-    p.add_argument("mesh", metavar="MESH", help="triangle mesh file (.ply, .obj, .stl, .off, .gltf, .glb) in metres")
+    p.add_argument("mesh", metavar="MESH", nargs="?",
+                   help="triangle mesh file (.ply, .obj, .stl, .off, .gltf, .glb) in metres")
+    p.add_argument("--population", metavar="FILE", help="look at a subject of this population table instead of MESH")
+    p.add_argument("--subject", type=int, default=0, help="subject_id in --population (default 0)")
     add_camera_arguments(p)
     add_view_arguments(p)
+    from wbsa.sensor.cli import add_sensor_arguments
+    from wbsa.surface.cli import add_reconstruct_arguments
+
+    add_sensor_arguments(p, seed=True)
+    add_reconstruct_arguments(p)
     p.add_argument("--out", metavar="DIR", help="write depth PNG (mm), point cloud PLY, visible triangle ids, "
                                                 "intrinsics/extrinsics JSON and a preview PNG here")
     p.add_argument("--coordinates", choices=("camera", "world"), default="camera",
@@ -110,29 +118,50 @@ def views_from_args(args: argparse.Namespace, intrinsics, stature_m: float | Non
 def run_view(args: argparse.Namespace) -> int:
     """Handler of ``wbsa view``."""
     from wbsa.camera.export import write_view_outputs
+    from wbsa.population.export import write_mesh
+    from wbsa.surface import reconstruct, recon_column
     from wbsa.camera.intrinsics import Intrinsics
     from wbsa.camera.measure import measure_view
     from wbsa.camera.scene import MeshScene
     from wbsa.camera.target import load_target
     from wbsa.io import write_json, write_table
 
+    from wbsa.sensor.cli import sensor_model_from_args, sensor_rng
+    from wbsa.surface.cli import reconstruct_methods_from_args, reconstruction_settings_from_args
+
     intrinsics: Intrinsics = intrinsics_from_args(args)
     mesh = load_target(args)
+    source = args.mesh or f"{args.population}#subject={args.subject}"
+    sensor = sensor_model_from_args(args, intrinsics)
+    methods = reconstruct_methods_from_args(args)
+    recon_settings = reconstruction_settings_from_args(args)
     scene = MeshScene(mesh)
     stature = float(scene.bbox_max[2] - scene.bbox_min[2])
     views = views_from_args(args, intrinsics, stature)
     out = Path(args.out) if args.out else None
     rows = []
     for view in views:
-        row, frame = measure_view(scene, intrinsics, view, return_frame=out is not None)
-        row = {"mesh": str(args.mesh), "mesh_area_m2": float(scene.triangle_areas_m2.sum()), **row}
+        need_frame = out is not None or not sensor.is_ideal or bool(methods)
+        row, frame = measure_view(scene, intrinsics, view, return_frame=need_frame)
+        row = {"mesh": source, "mesh_area_m2": float(scene.triangle_areas_m2.sum()), **row}
+        if not sensor.is_ideal:
+            frame, sensed = sense_view(frame, scene, sensor,
+                                       sensor_rng(args.sensor_seed, args.subject if args.population else 0,
+                                                  view.azimuth_deg, view.elevation_deg, view.distance_m))
+            row.update(sensed, sensor=sensor.to_dict())
+        recon = {}
+        for method in methods:
+            recon[method] = reconstruct(frame, method, recon_settings)
+            row[recon_column(method)] = recon[method].area_m2
         rows.append(row)
         if out is not None:
             target_dir = out if len(views) == 1 else out / view.label
-            title = (f"{Path(args.mesh).name}  az {view.azimuth_deg:g}°  el {view.elevation_deg:g}°  "
+            title = (f"{Path(source).name}  az {view.azimuth_deg:g}°  el {view.elevation_deg:g}°  "
                      f"D {view.distance_m:.3g} m  {intrinsics.name}  hit {row['vbsa_hit_m2']:.4f} m²  "
                      f"visible {row['vbsa_visible_m2']:.4f} m²")
             write_view_outputs(frame, target_dir, row, coordinates=args.coordinates, title=title)
+            for method, surface in recon.items():
+                write_mesh(surface, target_dir / f"recon_{method.replace('-', '_')}.ply")
     if out is not None and len(views) > 1:
         import pandas as pd
 
@@ -146,14 +175,36 @@ def run_view(args: argparse.Namespace) -> int:
     return 0
 
 
+def sense_view(frame, scene, sensor, rng) -> tuple:
+    """The frame a simulated sensor returns, and the visible-area columns measured on it.
+
+    On a sensor frame the hit area counts only triangles that still return, and the visible area is
+    the per-pixel estimate of the returns (without the mesh, so dropped returns are not counted back).
+
+    Returns
+    -------
+    DepthFrame, dict
+        The sensed frame; ``{"n_pixels", "vbsa_hit_m2", "vbsa_visible_m2", "sensor": settings}``.
+    """
+    from wbsa.camera.area import vbsa_hit_m2, vbsa_visible_m2
+    from wbsa.sensor import apply_sensor
+
+    sensed = apply_sensor(frame, sensor, rng)
+    return sensed, {"n_pixels": sensed.n_pixels, "vbsa_hit_m2": vbsa_hit_m2(sensed, scene),
+                    "vbsa_visible_m2": vbsa_visible_m2(sensed)}
+
+
 def _print_rows(rows: list[dict], intrinsics, out: Path | None) -> None:
     k = intrinsics
     print(f"camera {k.name}: {k.width}x{k.height}, fx {k.fx:g}, fy {k.fy:g}, cx {k.cx:g}, cy {k.cy:g}"
           + (f", skew {k.skew:g}" if k.skew else ""))
     print(f"mesh {rows[0]['mesh']}: total area {rows[0]['mesh_area_m2']:.4f} m²")
-    print(f"{'azimuth':>8s} {'elev.':>6s} {'dist m':>7s} {'pixels':>8s} {'hit m²':>8s} {'visible m²':>10s}  fits")
+    recon = [c for c in rows[0] if c.startswith("vbsa_recon_")]
+    names = "".join(f" {c[len('vbsa_recon_'):-3] + ' m²':>14s}" for c in recon)
+    print(f"{'azimuth':>8s} {'elev.':>6s} {'dist m':>7s} {'pixels':>8s} {'hit m²':>8s} {'visible m²':>10s}{names}  fits")
     for r in rows:
         print(f"{r['azimuth_deg']:8.4g} {r['elevation_deg']:6.4g} {r['distance_m']:7.3f} {r['n_pixels']:8d} "
-              f"{r['vbsa_hit_m2']:8.4f} {r['vbsa_visible_m2']:10.4f}  {'yes' if r['fits_in_frame'] else 'CUT'}")
+              f"{r['vbsa_hit_m2']:8.4f} {r['vbsa_visible_m2']:10.4f}" + "".join(f" {r[c]:14.4f}" for c in recon)
+              + f"  {'yes' if r['fits_in_frame'] else 'CUT'}")
     if out is not None:
         print(f"wrote {out}")

@@ -6,10 +6,9 @@ so an interrupted run never leaves a half-written file under a final name.
 
 from __future__ import annotations
 
-import contextlib
 import os
 from pathlib import Path
-from typing import Iterator, Literal
+from typing import Literal
 
 import numpy as np
 
@@ -18,7 +17,6 @@ from wbsa.errors import WbsaError
 from wbsa.io import atomic_path, write_json
 
 #: Largest depth a 16-bit millimetre PNG holds (m); farther returns are written as 0 (no return).
-MAX_PNG_DEPTH_M = 65.535
 
 FILES = {
     "depth": "depth.png",
@@ -32,35 +30,11 @@ FILES = {
 }
 
 
-@contextlib.contextmanager
-def _atomic_same_suffix(final: Path) -> Iterator[Path]:
-    """Like :func:`wbsa.io.atomic_path`, but the temporary name keeps the suffix (Open3D picks the format by it)."""
-    final.parent.mkdir(parents=True, exist_ok=True)
-    tmp = final.with_name(f".{final.stem}.{os.getpid()}.part{final.suffix}")
-    try:
-        yield tmp
-        os.replace(tmp, final)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
-
-
-def depth_to_mm_u16(depth_m: np.ndarray) -> np.ndarray:
-    """(h, w) uint16 depth in millimetres, 0 = no return (TUM / Open3D convention)."""
-    d = np.asarray(depth_m, dtype=np.float64)
-    ok = np.isfinite(d) & (d > 0) & (d <= MAX_PNG_DEPTH_M)
-    return np.where(ok, np.rint(d * 1000.0), 0).astype(np.uint16)
-
-
 def write_depth_png(frame: DepthFrame, path: str | os.PathLike) -> Path:
     """16-bit PNG of the z-depth in millimetres (0 = no return), readable by ``open3d.io.read_image``."""
-    import open3d as o3d
+    from wbsa.sensor.depth_png import write_depth_png as write_png
 
-    path = Path(path)
-    with _atomic_same_suffix(path) as tmp:
-        if not o3d.io.write_image(str(tmp), o3d.geometry.Image(depth_to_mm_u16(frame.depth_m))):
-            raise WbsaError(f"could not write {path}; choose a writable --out")
-    return path
+    return write_png(path, frame.depth_m)
 
 
 def write_point_cloud(frame: DepthFrame, path: str | os.PathLike,
@@ -78,7 +52,7 @@ def write_point_cloud(frame: DepthFrame, path: str | os.PathLike,
     cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
     cloud.normals = o3d.utility.Vector3dVector(normals)
     path = Path(path)
-    with _atomic_same_suffix(path) as tmp:
+    with atomic_path(path, keep_suffix=True) as tmp:
         if not o3d.io.write_point_cloud(str(tmp), cloud, write_ascii=False):
             raise WbsaError(f"could not write {path}; choose a writable --out")
     return path

@@ -77,8 +77,17 @@ def load_target(args) -> TriangleMesh:
     Parameters
     ----------
     args : argparse.Namespace
-        With ``mesh``: path of a mesh file in metres, +Z up, the subject facing −Y.
+        With ``mesh``: path of a mesh file in metres, +Z up, the subject facing −Y; or with
+        ``population`` and ``subject``: that subject's skin mesh rebuilt from its phenotypes.
     """
+    population = getattr(args, "population", None)
+    if population:
+        if getattr(args, "mesh", None):
+            raise WbsaError("give either a MESH file or --population, not both")
+        from wbsa.population.export import subject_mesh
+        from wbsa.population.table import read_population
+
+        return subject_mesh(read_population(population), int(args.subject))
     if getattr(args, "mesh", None) is None:
-        raise WbsaError("give a mesh file to look at: wbsa view MESH")
+        raise WbsaError("give a mesh file to look at (wbsa view MESH) or --population FILE --subject ID")
     return read_mesh(args.mesh)

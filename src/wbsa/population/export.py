@@ -23,14 +23,12 @@ def write_mesh(mesh: TriangleMesh, path: str | os.PathLike) -> Path:
         raise WbsaError(f"cannot write a mesh as {path.suffix or 'no suffix'}; use a .ply or .obj name")
     m = o3d.geometry.TriangleMesh(o3d.utility.Vector3dVector(np.asarray(mesh.vertices, dtype=np.float64)),
                                   o3d.utility.Vector3iVector(np.asarray(mesh.faces, dtype=np.int32)))
-    with atomic_path(path) as tmp:
-        tmp_named = tmp.with_suffix(path.suffix.lower())  # open3d picks the format from the suffix
-        ok = o3d.io.write_triangle_mesh(str(tmp_named), m, write_ascii=False, write_vertex_normals=False,
+    with atomic_path(path, keep_suffix=True) as tmp:  # open3d picks the format from the suffix
+        ok = o3d.io.write_triangle_mesh(str(tmp), m, write_ascii=False, write_vertex_normals=False,
                                         write_vertex_colors=False)
         if not ok:
             raise WbsaError(f"open3d could not write {path}")
-        os.replace(tmp_named, tmp)
-        for extra in tmp_named.parent.glob(tmp_named.stem + "*.mtl"):
+        for extra in tmp.parent.glob(tmp.stem + "*.mtl"):
             extra.unlink()
     return path
 

@@ -22,7 +22,7 @@ Names are imported lazily so that ``wbsa --help`` stays fast.
 
 from __future__ import annotations
 
-import importlib
+from wbsa.lazy import lazy_exports
 
 _EXPORTS = {
     "FitSettings": "wbsa.analysis.fit_views",
@@ -40,9 +40,4 @@ _EXPORTS = {
 }
 
 __all__ = sorted(_EXPORTS)
-
-
-def __getattr__(name: str):
-    if name in _EXPORTS:
-        return getattr(importlib.import_module(_EXPORTS[name]), name)
-    raise AttributeError(f"module 'wbsa.analysis' has no attribute {name!r}")
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

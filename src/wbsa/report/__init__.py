@@ -5,7 +5,7 @@ Names are imported lazily, so ``wbsa --help`` does not import matplotlib.
 
 from __future__ import annotations
 
-import importlib
+from wbsa.lazy import lazy_exports
 
 _EXPORTS = {
     "build_report": "wbsa.report.build",
@@ -19,13 +19,4 @@ _EXPORTS = {
     "ReportSources": "wbsa.report.sources",
 }
 __all__ = sorted(_EXPORTS)
-
-
-def __getattr__(name: str):
-    if name in _EXPORTS:
-        return getattr(importlib.import_module(_EXPORTS[name]), name)
-    raise AttributeError(f"module 'wbsa.report' has no attribute {name!r}")
-
-
-def __dir__() -> list[str]:
-    return __all__
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -10,7 +10,7 @@ for the CLI.
 
 from __future__ import annotations
 
-import importlib
+from wbsa.lazy import lazy_exports
 
 _EXPORTS = {
     "apply_sensor": "wbsa.sensor.apply",
@@ -28,13 +28,4 @@ _EXPORTS = {
     "sensor_rng": "wbsa.sensor.cli",
 }
 __all__ = sorted(_EXPORTS)
-
-
-def __getattr__(name: str):
-    if name in _EXPORTS:
-        return getattr(importlib.import_module(_EXPORTS[name]), name)
-    raise AttributeError(f"module 'wbsa.sensor' has no attribute {name!r}")
-
-
-def __dir__() -> list[str]:
-    return __all__
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -5,7 +5,7 @@ Names are imported lazily, so ``wbsa --help`` stays fast.
 
 from __future__ import annotations
 
-import importlib
+from wbsa.lazy import lazy_exports
 
 _EXPORTS = {
     "run_study": "wbsa.study.pipeline",
@@ -17,13 +17,4 @@ _EXPORTS = {
     "stage_key": "wbsa.study.stages",
 }
 __all__ = sorted(_EXPORTS)
-
-
-def __getattr__(name: str):
-    if name in _EXPORTS:
-        return getattr(importlib.import_module(_EXPORTS[name]), name)
-    raise AttributeError(f"module 'wbsa.study' has no attribute {name!r}")
-
-
-def __dir__() -> list[str]:
-    return __all__
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -10,7 +10,7 @@ stays cheap for the CLI.
 
 from __future__ import annotations
 
-import importlib
+from wbsa.lazy import lazy_exports
 
 _EXPORTS = {
     "backproject_depth": "wbsa.surface.backproject",
@@ -30,13 +30,4 @@ _EXPORTS = {
     "recon_column": "wbsa.surface.settings",
 }
 __all__ = sorted(_EXPORTS)
-
-
-def __getattr__(name: str):
-    if name in _EXPORTS:
-        return getattr(importlib.import_module(_EXPORTS[name]), name)
-    raise AttributeError(f"module 'wbsa.surface' has no attribute {name!r}")
-
-
-def __dir__() -> list[str]:
-    return __all__
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -15,7 +15,8 @@ from wbsa.errors import WbsaError
 from wbsa.population.mesh import TriangleMesh
 from wbsa.sensor import (SensorModel, apply_sensor, axial_sigma_m, depth_to_png_mm, lateral_sigma_px,
                          png_mm_to_depth, read_depth_png, write_depth_png)
-from wbsa.sensor.cli import add_sensor_arguments, sensor_model_from_args, sensor_rng
+from wbsa.sensor.cli import add_sensor_arguments, sensor_model_from_args
+from wbsa.sensor.measure import view_rng
 from wbsa.surface import frame_from_depth_image
 
 K = preset("kinect-v1")
@@ -287,6 +288,9 @@ def test_sensor_flags():
 
 
 def test_sensor_rng_is_keyed():
-    a = sensor_rng(1, 5, 30.0, -45.0).random(3)
-    np.testing.assert_array_equal(a, sensor_rng(1, 5, 30.0, -45.0).random(3))
-    assert not np.array_equal(a, sensor_rng(1, 5, 45.0, -45.0).random(3))
+    from wbsa.camera import View
+
+    a = view_rng(1, 5, View(30.0, -45.0, 4.3)).random(3)
+    np.testing.assert_array_equal(a, view_rng(1, 5, View(30.0, -45.0, 4.3)).random(3))
+    assert not np.array_equal(a, view_rng(1, 5, View(45.0, -45.0, 4.3)).random(3))
+    assert not np.array_equal(a, view_rng(1, 6, View(30.0, -45.0, 4.3)).random(3))

@@ -28,10 +28,11 @@ def test_noisy_view_is_seeded_and_recorded(population, tmp_path, capsys):
     b = _view(capsys, *base, "--sensor-seed", "3")
     c = _view(capsys, *base, "--sensor-seed", "4")
     clean = _view(capsys, "--population", str(population), "--subject", "1")
-    assert a["vbsa_visible_m2"] == b["vbsa_visible_m2"] and a["n_pixels"] == b["n_pixels"]
-    assert a["n_pixels"] != c["n_pixels"]
-    assert a["n_pixels"] < 0.95 * clean["n_pixels"]  # 10 % of the visible triangles dropped, plus grazing returns
-    assert a["sensor"]["noise"] == "nguyen2012" and a["sensor"]["holes_fraction"] == 0.1
+    assert a["vbsa_visible_sensor_m2"] == b["vbsa_visible_sensor_m2"] and a["n_pixels_sensor"] == b["n_pixels_sensor"]
+    assert a["n_pixels_sensor"] != c["n_pixels_sensor"]
+    assert a["n_pixels"] == clean["n_pixels"]  # the plain columns stay those of the ideal camera, as in wbsa scan
+    assert a["n_pixels_sensor"] < 0.95 * clean["n_pixels"]  # 10 % of the visible triangles dropped, plus grazing
+    assert a["sensor_noise"] == "nguyen2012" and a["sensor_holes_fraction"] == 0.1
     assert (tmp_path / "a" / "recon_grid.ply").exists()
     import open3d as o3d
 

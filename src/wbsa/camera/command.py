@@ -126,7 +126,8 @@ def run_view(args: argparse.Namespace) -> int:
     from wbsa.camera.target import load_target
     from wbsa.io import write_json, write_table
 
-    from wbsa.sensor.cli import sensor_model_from_args, sensor_rng
+    from wbsa.sensor.cli import sensor_model_from_args
+    from wbsa.sensor.measure import sense_view, view_rng
     from wbsa.surface.cli import reconstruct_methods_from_args, reconstruction_settings_from_args
 
     intrinsics: Intrinsics = intrinsics_from_args(args)
@@ -145,10 +146,9 @@ def run_view(args: argparse.Namespace) -> int:
         row, frame = measure_view(scene, intrinsics, view, return_frame=need_frame)
         row = {"mesh": source, "mesh_area_m2": float(scene.triangle_areas_m2.sum()), **row}
         if not sensor.is_ideal:
-            frame, sensed = sense_view(frame, scene, sensor,
-                                       sensor_rng(args.sensor_seed, args.subject if args.population else 0,
-                                                  view.azimuth_deg, view.elevation_deg, view.distance_m))
-            row.update(sensed, sensor=sensor.to_dict())
+            subject = args.subject if args.population else 0
+            frame, sensed = sense_view(frame, scene, sensor, view_rng(args.sensor_seed, subject, view))
+            row.update(sensed)
         recon = {}
         for method in methods:
             recon[method] = reconstruct(frame, method, recon_settings)
@@ -173,25 +173,6 @@ def run_view(args: argparse.Namespace) -> int:
     else:
         _print_rows(rows, intrinsics, out)
     return 0
-
-
-def sense_view(frame, scene, sensor, rng) -> tuple:
-    """The frame a simulated sensor returns, and the visible-area columns measured on it.
-
-    On a sensor frame the hit area counts only triangles that still return, and the visible area is
-    the per-pixel estimate of the returns (without the mesh, so dropped returns are not counted back).
-
-    Returns
-    -------
-    DepthFrame, dict
-        The sensed frame; ``{"n_pixels", "vbsa_hit_m2", "vbsa_visible_m2", "sensor": settings}``.
-    """
-    from wbsa.camera.area import vbsa_hit_m2, vbsa_visible_m2
-    from wbsa.sensor import apply_sensor
-
-    sensed = apply_sensor(frame, sensor, rng)
-    return sensed, {"n_pixels": sensed.n_pixels, "vbsa_hit_m2": vbsa_hit_m2(sensed, scene),
-                    "vbsa_visible_m2": vbsa_visible_m2(sensed)}
 
 
 def _print_rows(rows: list[dict], intrinsics, out: Path | None) -> None:

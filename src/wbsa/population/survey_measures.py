@@ -1,9 +1,9 @@
-"""Stature, mass, waist and hip of anny bodies in torch, batched and differentiable.
+"""Stature, mass, waist and hip of anny bodies in torch, batched, with exact derivatives.
 
 The survey matcher fits phenotype parameters by Gauss–Newton steps, which need these four
 measures *and* their derivatives for hundreds of bodies at once. The definitions are the
-same as :class:`~wbsa.population.anthropometry.Anthropometer`'s, so a fitted body is measured
-back to the same numbers by the population table:
+same as :class:`~wbsa.population.anthropometry.Anthropometer`'s, so a fitted body measures
+back to the same numbers in the population table:
 
 * stature = max z − min z over all vertices;
 * mass = volume of the closed shell (divergence theorem) × density;
@@ -11,9 +11,15 @@ back to the same numbers by the population table:
   plane at the mean height of anny's waist ring (waist) or at the hip landmark vertex (hip).
 
 The convex hull's *combinatorics* (which crossing points lie on the hull, in which order) is
-found with scipy on detached values; the hull perimeter is then a sum of segment lengths in
-torch, so it is exact and differentiable almost everywhere (the hull vertices are
-interpolated edge crossings, which move smoothly with the vertices and the plane height).
+found with scipy; the perimeter is then a sum of segment lengths in torch, exact and
+differentiable almost everywhere (hull points are interpolated edge crossings, which move
+smoothly with the vertices and the plane height).
+
+Layout: bodies are held coordinate-major, ``(3, n, b)``, so that the blendshape product is one
+matrix product, ``(3n, k) @ (k, b)``, and gathering a face's vertices reads contiguous rows.
+Derivatives are taken with respect to the ``k`` blendshape coefficients: the volume gradient
+is dense and projected with one more matrix product; stature and girths touch a few hundred
+vertices and are projected through a sparse matrix.
 """
 
 from __future__ import annotations
@@ -26,29 +32,30 @@ from scipy.spatial import ConvexHull, QhullError
 from wbsa.population.anthropometry import Anthropometer
 from wbsa.population.body_model import BodyModel
 
-#: The measures this module computes, in column order of :meth:`TorchMeasurer.measures`.
+#: The measures this module computes, in column order of :meth:`TorchMeasurer.evaluate`.
 FIT_MEASURES = ("stature_m", "mass_kg", "waist_circ_m", "hip_circ_m")
+
+_FACE_CHUNK = 4096
 
 
 @dataclass(frozen=True)
-class HullPlan:
-    """Which trunk edges make each body's tape polygon, in hull order.
+class Evaluation:
+    """Measures of a batch of bodies and, optionally, their coefficient gradients.
 
     Attributes
     ----------
-    edge_index : (b, h) int64 tensor
-        Trunk-edge indices of the hull points, counter-clockwise; rows shorter than ``h``
-        repeat their last entry (a zero-length segment).
-    valid : (b,) bool tensor
-        False where the section has fewer than three points or a degenerate hull.
+    values : (b, 4) float64 tensor
+        :data:`FIT_MEASURES` of every body; a girth is NaN where its section is degenerate.
+    grad : (b, 4, k) float64 tensor or None
+        d(measure)/d(blendshape coefficient); zero rows where the value is NaN.
     """
 
-    edge_index: object
-    valid: object
+    values: object
+    grad: object | None
 
 
 class TorchMeasurer:
-    """Differentiable fit measures of a :class:`BodyModel`'s bodies.
+    """The fit measures of a :class:`BodyModel`'s bodies, batched, with exact gradients.
 
     Parameters
     ----------
@@ -67,108 +74,167 @@ class TorchMeasurer:
         self.dtype = anny.dtype
         self.density_kg_m3 = meter.density_kg_m3
         lm = meter.landmarks
-        n_blend = anny.blendshapes.shape[0]
-        #: (k, 3n) blendshape basis; vertices = template + coefficients @ basis
-        self.basis = anny.blendshapes.detach().reshape(n_blend, -1)
-        self.template = anny.template_vertices.detach()
+        n_blend, n_vert = anny.blendshapes.shape[:2]
+        self.n_vertices = int(n_vert)
+        #: (3n, k) blendshape basis, coordinate-major rows ``coordinate * n + vertex``
+        self.basis_t = anny.blendshapes.detach().permute(2, 1, 0).reshape(-1, n_blend).contiguous()
+        self.template = anny.template_vertices.detach().T.reshape(-1, 1)
         self.closed_faces = torch.as_tensor(model.closed_faces, dtype=torch.long)
         ids = np.asarray(lm.trunk_edges.vertex_ids)
         self.edge_a = torch.as_tensor(ids[lm.trunk_edges.edges[:, 0]], dtype=torch.long)
         self.edge_b = torch.as_tensor(ids[lm.trunk_edges.edges[:, 1]], dtype=torch.long)
         self.waist_ring = torch.as_tensor(np.asarray(lm.waist_ring), dtype=torch.long)
-        self.hip_vertex = int(lm.hip)
-        self._empty = None
+        self.hip_ring = torch.as_tensor([int(lm.hip)], dtype=torch.long)
 
     # -- body model ---------------------------------------------------------------------
     def coefficients(self, phenotypes):
         """Blendshape coefficients ``(b, k)`` of phenotypes ``(b, 11)`` (differentiable)."""
-        torch = self.torch
-        empty = torch.empty((phenotypes.shape[0], 0), dtype=self.dtype)
+        empty = self.torch.empty((phenotypes.shape[0], 0), dtype=self.dtype)
         return self.model.anny._get_phenotype_blendshape_coefficients(phenotypes, empty, empty)
 
     def vertices(self, coefficients):
-        """Rest vertices ``(b, n, 3)`` for coefficients ``(b, k)`` (anny's frame, not floor-shifted)."""
-        flat = coefficients @ self.basis
-        return self.template[None] + flat.reshape(len(coefficients), -1, 3)
+        """Rest vertices, coordinate-major ``(3, n, b)``, of coefficients ``(b, k)`` (no gradient)."""
+        with self.torch.no_grad():
+            flat = self.template + self.basis_t @ coefficients.detach().T
+        return flat.reshape(3, self.n_vertices, -1)
 
     # -- measures -----------------------------------------------------------------------
-    def plan(self, vertices) -> tuple[HullPlan, HullPlan]:
-        """Hull combinatorics of the waist and hip sections of ``vertices`` (b, n, 3)."""
-        with self.torch.no_grad():
-            v = vertices.detach()
-            return self._plan(v, self._waist_z(v)), self._plan(v, v[:, self.hip_vertex, 2])
+    def evaluate(self, x, gradient: bool = False) -> Evaluation:
+        """Measures of bodies ``x`` (3, n, b) and, if asked, their coefficient gradients."""
+        torch = self.torch
+        n, b = self.n_vertices, x.shape[2]
+        z = x[2]
+        top, bottom = z.argmax(dim=0), z.argmin(dim=0)
+        cols = torch.arange(b)
+        stature = z[top, cols] - z[bottom, cols]
+        signed, gvol = self._volume(x, gradient)
+        mass = signed.abs() * self.density_kg_m3
+        girths, sparse = [], []
+        for ring, measure in ((self.waist_ring, 2), (self.hip_ring, 3)):
+            value, entries = self._girth(x, ring, measure, gradient)
+            girths.append(value)
+            sparse.append(entries)
+        values = torch.stack([stature, mass, *girths], dim=1)
+        if not gradient:
+            return Evaluation(values, None)
 
-    def measures(self, vertices, plans: tuple[HullPlan, HullPlan] | None = None):
-        """Stature (m), mass (kg), waist and hip girths (m) of every body, ``(b, 4)``.
+        k = self.basis_t.shape[1]
+        grad = torch.zeros((b, 4, k), dtype=self.dtype)
+        # stature: +z of the top vertex, -z of the lowest
+        grad[:, 0] = self.basis_t[2 * n + top] - self.basis_t[2 * n + bottom]
+        # mass: dense volume gradient, one product with the basis
+        scale = (torch.sign(signed) * self.density_kg_m3)[:, None]
+        grad[:, 1] = (gvol.reshape(3 * n, b).T @ self.basis_t) * scale
+        # girths: few vertices each, a sparse product
+        rows = torch.cat([e[0] for e in sparse])
+        vcols = torch.cat([e[1] for e in sparse])
+        vals = torch.cat([e[2] for e in sparse])
+        s = torch.sparse_coo_tensor(torch.stack([rows, vcols]), vals, (4 * b, 3 * n),
+                                    check_invariants=False).coalesce()
+        g = torch.sparse.mm(s, self.basis_t).reshape(4, b, k)
+        grad[:, 2] = g[2]
+        grad[:, 3] = g[3]
+        grad = torch.where(torch.isfinite(values)[..., None], grad, torch.zeros_like(grad))
+        return Evaluation(values, grad)
 
-        Parameters
-        ----------
-        vertices : (b, n, 3) float64 tensor
-            Rest vertices (may require grad).
-        plans
-            Hull combinatorics from :meth:`plan`; computed here when omitted.
+    def _volume(self, x, gradient: bool):
+        """Signed volume ``(b,)`` and, if asked, its vertex gradient ``(3, n, b)``."""
+        torch = self.torch
+        f = self.closed_faces
+        total = torch.zeros(x.shape[2], dtype=self.dtype)
+        grad = torch.zeros_like(x) if gradient else None
+        for start in range(0, len(f), _FACE_CHUNK):
+            fc = f[start:start + _FACE_CHUNK]
+            (ax, ay, az), (bx, by, bz), (cx, cy, cz) = (x[:, fc[:, i]] for i in range(3))
+            # b x c, c x a, a x b, each per coordinate, (faces, b)
+            bc = (by * cz - bz * cy, bz * cx - bx * cz, bx * cy - by * cx)
+            total += (ax * bc[0] + ay * bc[1] + az * bc[2]).sum(dim=0)
+            if gradient:
+                ca = (cy * az - cz * ay, cz * ax - cx * az, cx * ay - cy * ax)
+                ab = (ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx)
+                for i, part in enumerate((bc, ca, ab)):
+                    for axis in range(3):
+                        grad[axis].index_add_(0, fc[:, i], part[axis])
+        if gradient:
+            grad /= 6.0
+        return total / 6.0, grad
 
-        Returns
-        -------
-        (b, 4) tensor
-            Columns :data:`FIT_MEASURES`; a girth is NaN where its section is degenerate.
+    def _girth(self, x, ring, measure: int, gradient: bool):
+        """Tape girth ``(b,)`` at the mean height of ``ring`` vertices, and its sparse gradient.
+
+        Returns the girth and, with ``gradient``, ``(rows, columns, values)`` of
+        d(girth)/d(vertex coordinate): rows ``measure * b + body``, columns ``axis * n + vertex``.
         """
         torch = self.torch
-        waist_plan, hip_plan = plans if plans is not None else self.plan(vertices)
-        z = vertices[..., 2]
-        stature = z.max(dim=1).values - z.min(dim=1).values
-        f = self.closed_faces
-        a, b, c = vertices[:, f[:, 0]], vertices[:, f[:, 1]], vertices[:, f[:, 2]]
-        volume = (a * torch.linalg.cross(b, c, dim=-1)).sum(dim=(1, 2)).abs() / 6.0
-        mass = volume * self.density_kg_m3
-        waist = self._girth(vertices, self._waist_z(vertices), waist_plan)
-        hip = self._girth(vertices, vertices[:, self.hip_vertex, 2], hip_plan)
-        return torch.stack([stature, mass, waist, hip], dim=1)
+        n, b = self.n_vertices, x.shape[2]
+        with torch.no_grad():
+            hull, valid = self._hull_plan(x, x[2, ring].mean(dim=0))
+        va, vb = self.edge_a[hull], self.edge_b[hull]  # (b, h)
+        body = torch.arange(b)[:, None]
+        pa = x[:, va, body].clone().requires_grad_(gradient)  # (3, b, h)
+        pb = x[:, vb, body].clone().requires_grad_(gradient)
+        rz = x[2, ring].T.clone().requires_grad_(gradient)  # (b, r)
+        with torch.set_grad_enabled(gradient):
+            plane_z = rz.mean(dim=1)[:, None]
+            da = pa[2] - plane_z
+            db = pb[2] - plane_z
+            denom = da - db
+            t = da / torch.where(denom == 0, torch.ones_like(denom), denom)
+            pts = pa[:2] + t * (pb[:2] - pa[:2])  # (2, b, h)
+            seg = torch.roll(pts, -1, dims=2) - pts
+            sq = (seg**2).sum(dim=0)
+            nonzero = sq > 0
+            safe = torch.where(nonzero, sq, torch.ones_like(sq))
+            perimeter = torch.where(nonzero, torch.sqrt(safe), torch.zeros_like(sq)).sum(dim=1)
+        value = torch.where(valid, perimeter.detach(), torch.full_like(perimeter, float("nan")))
+        if not gradient:
+            return value, None
+        ga, gb, gr = torch.autograd.grad(perimeter.sum(), (pa, pb, rz))
+        axis = torch.arange(3)[:, None, None] * n
+        rows = measure * b + torch.cat([
+            body.expand_as(va)[None].expand(3, -1, -1).reshape(3, b, -1),
+            body.expand_as(vb)[None].expand(3, -1, -1),
+        ], dim=2)
+        cols = torch.cat([axis + va, axis + vb], dim=2)
+        vals = torch.cat([ga, gb], dim=2)
+        ring_rows = (measure * b + body).expand(b, len(ring))
+        ring_cols = (2 * n + ring)[None].expand(b, len(ring))
+        return value, (torch.cat([rows.reshape(-1), ring_rows.reshape(-1)]),
+                       torch.cat([cols.reshape(-1), ring_cols.reshape(-1)]),
+                       torch.cat([vals.reshape(-1), gr.reshape(-1)]))
 
-    def _waist_z(self, vertices):
-        return vertices[:, self.waist_ring, 2].mean(dim=1)
+    def _hull_plan(self, x, plane):
+        """Trunk-edge indices ``(b, h)`` of each section's convex hull, in order, and validity ``(b,)``.
 
-    def _crossings(self, vertices, plane_z, edges):
-        """Crossing points ``(b, e, 2)`` of trunk edges ``edges`` (b, e) with the planes ``plane_z`` (b,)."""
+        Rows shorter than ``h`` repeat their last index (zero-length segments).
+        """
         torch = self.torch
-        rows = torch.arange(len(vertices))[:, None]
-        va = vertices[rows, self.edge_a[edges]]
-        vb = vertices[rows, self.edge_b[edges]]
-        da = va[..., 2] - plane_z[:, None]
-        db = vb[..., 2] - plane_z[:, None]
-        denom = da - db
-        t = da / torch.where(denom == 0, torch.ones_like(denom), denom)
-        return va[..., :2] + t[..., None] * (vb[..., :2] - va[..., :2])
-
-    def _plan(self, vertices, plane_z) -> HullPlan:
-        torch = self.torch
-        da = vertices[:, self.edge_a, 2] - plane_z[:, None]
-        db = vertices[:, self.edge_b, 2] - plane_z[:, None]
-        cross = (da < 0) != (db < 0)
-        rows = []
-        valid = []
-        for i in range(len(vertices)):
-            idx = torch.nonzero(cross[i]).flatten()
-            hull = None
-            if len(idx) >= 3:
-                pts = self._crossings(vertices[i:i + 1], plane_z[i:i + 1], idx[None])[0].numpy()
+        za = x[2, self.edge_a] - plane  # (e, b)
+        zb = x[2, self.edge_b] - plane
+        cross = ((za < 0) != (zb < 0)).T  # (b, e)
+        body, edge = torch.nonzero(cross, as_tuple=True)
+        da, db = za[edge, body], zb[edge, body]
+        t = da / (da - db)
+        ea, eb = self.edge_a[edge], self.edge_b[edge]
+        px = x[0, ea, body] + t * (x[0, eb, body] - x[0, ea, body])
+        py = x[1, ea, body] + t * (x[1, eb, body] - x[1, ea, body])
+        pts = torch.stack([px, py], dim=1).numpy()
+        counts = torch.bincount(body, minlength=x.shape[2]).numpy()
+        edge = edge.numpy()
+        rows, valid = [], []
+        start = 0
+        for count in counts:
+            e, p = edge[start:start + count], pts[start:start + count]
+            start += count
+            order = None
+            if count >= 3:
                 try:
-                    hull = idx[torch.as_tensor(ConvexHull(pts).vertices, dtype=torch.long)]
+                    order = e[ConvexHull(p).vertices]
                 except QhullError:
-                    hull = None
-            valid.append(hull is not None)
-            rows.append(hull if hull is not None else torch.zeros(1, dtype=torch.long))
-        width = max(len(r) for r in rows) if rows else 1
-        index = torch.stack([torch.cat([r, r[-1:].expand(width - len(r))]) for r in rows]) if rows \
-            else torch.zeros((0, 1), dtype=torch.long)
-        return HullPlan(index, torch.as_tensor(valid, dtype=torch.bool))
-
-    def _girth(self, vertices, plane_z, plan: HullPlan):
-        torch = self.torch
-        pts = self._crossings(vertices, plane_z, plan.edge_index)
-        seg = torch.roll(pts, -1, dims=1) - pts
-        sq = (seg**2).sum(dim=-1)
-        nonzero = sq > 0
-        length = torch.where(nonzero, torch.sqrt(torch.where(nonzero, sq, torch.ones_like(sq))), torch.zeros_like(sq))
-        perimeter = length.sum(dim=1)
-        return torch.where(plan.valid, perimeter, torch.full_like(perimeter, float("nan")))
+                    order = None
+            valid.append(order is not None)
+            rows.append(order if order is not None else np.zeros(1, dtype=np.int64))
+        width = max((len(r) for r in rows), default=1)
+        index = np.stack([np.concatenate([r, np.full(width - len(r), r[-1])]) for r in rows]) if rows \
+            else np.zeros((0, 1), dtype=np.int64)
+        return torch.as_tensor(index, dtype=torch.long), torch.as_tensor(valid, dtype=torch.bool)

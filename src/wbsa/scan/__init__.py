@@ -22,7 +22,6 @@ _EXPORTS = {
     "population_fingerprint": "wbsa.scan.settings",
     "scan_chunk": "wbsa.scan.worker",
     "scan_subject": "wbsa.scan.worker",
-    "view_rng": "wbsa.scan.worker",
     "body_model": "wbsa.scan.worker",
 }
 __all__ = sorted(_EXPORTS)

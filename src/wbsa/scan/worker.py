@@ -51,17 +51,6 @@ def check_population(population: pd.DataFrame) -> None:
                         "make it with wbsa population")
 
 
-def view_rng(seed: int, subject_id: int, view) -> np.random.Generator:
-    """The sensor's random stream for one subject at one view.
-
-    The child of the subject's ``SeedSequence([seed, subject_id])`` keyed by the view's azimuth,
-    elevation (micro-degrees) and distance (micrometres): it depends only on (seed, subject, view),
-    never on chunking, on the workers or on which other views are scanned.
-    """
-    key = (round(view.azimuth_deg * 1e6), round((view.elevation_deg + 90.0) * 1e6), round(view.distance_m * 1e6))
-    return np.random.default_rng(np.random.SeedSequence([int(seed), int(subject_id)], spawn_key=key))
-
-
 def cast_threads() -> int:
     """Open3D threads per ray cast: 1 inside a dask worker (one worker per core), else all cores (0)."""
     return 1 if _in_dask_worker() else 0
@@ -177,10 +166,7 @@ def scan_subject(mesh, subject_id: int, settings: ScanSettings, *, nthreads: int
     sensor, methods = settings.sensor, settings.reconstruct
     need_frame = sensor is not None or bool(methods)
     if sensor is not None:
-        from wbsa.camera import vbsa_hit_m2, vbsa_visible_m2
-        from wbsa.sensor import apply_sensor
-
-        sensor_columns = {f"sensor_{k}": v for k, v in sensor.to_dict().items()}
+        from wbsa.sensor.measure import sense_view, view_rng
     if methods:
         from wbsa.surface import recon_column, vbsa_recon_m2
 
@@ -189,11 +175,8 @@ def scan_subject(mesh, subject_id: int, settings: ScanSettings, *, nthreads: int
         row, frame = measure_view(scene, settings.camera, view, scene.center, return_frame=need_frame)
         row = {"subject_id": subject_id, **row}
         if sensor is not None:
-            frame = apply_sensor(frame, sensor, view_rng(settings.seed, subject_id, view))
-            row["n_pixels_sensor"] = frame.n_pixels
-            row["vbsa_hit_sensor_m2"] = vbsa_hit_m2(frame, scene)
-            row["vbsa_visible_sensor_m2"] = vbsa_visible_m2(frame, scene)
-            row.update(sensor_columns)
+            frame, sensed = sense_view(frame, scene, sensor, view_rng(settings.seed, subject_id, view))
+            row.update(sensed)
         for method in methods:
             row[recon_column(method)] = vbsa_recon_m2(frame, method, settings.reconstruction)
         rows.append(row)

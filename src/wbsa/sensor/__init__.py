@@ -25,7 +25,8 @@ _EXPORTS = {
     "lateral_sigma_px": "wbsa.sensor.nguyen2012",
     "add_sensor_arguments": "wbsa.sensor.cli",
     "sensor_model_from_args": "wbsa.sensor.cli",
-    "sensor_rng": "wbsa.sensor.cli",
+    "view_rng": "wbsa.sensor.measure",
+    "sense_view": "wbsa.sensor.measure",
 }
 __all__ = sorted(_EXPORTS)
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

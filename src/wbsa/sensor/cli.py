@@ -85,13 +85,3 @@ def sensor_model_from_args(args: argparse.Namespace, camera=None) -> SensorModel
         grazing_dropout_deg=getattr(args, "grazing_dropout", None),
         range_limits=getattr(args, "range_limits", False),
     )
-
-
-def sensor_rng(seed: int, *keys: float) -> np.random.Generator:
-    """A generator for one sensor read-out, derived from ``(seed, *keys)`` (e.g. subject id and view angles).
-
-    The same seed and keys give the same noisy image in every command and with any number of
-    workers. Keys may be floats (angles); they are rounded to micro-units.
-    """
-    ints = [int(seed)] + [int(round(float(k) * 1_000_000)) % (2**63) for k in keys]
-    return np.random.default_rng(np.random.SeedSequence(ints))

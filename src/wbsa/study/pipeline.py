@@ -166,7 +166,7 @@ def run_study(settings: StudySettings, out_dir: str | os.PathLike, *, workers: i
     if n_workers < 0:
         raise WbsaError(f"--workers must be 0 (all cores) or more, got {n_workers}")
     if n_workers == 0:
-        from wbsa.scan.engine import default_workers
+        from wbsa.parallel import default_workers
 
         n_workers = default_workers()
     scheduler = settings.run.scheduler or None

@@ -1,0 +1,312 @@
+"""The paper's "Virtual NHANES" population: virtual bodies matched to real survey people.
+
+``build_survey_population`` draws ``n`` people from the NHANES 2017–March 2020 body measures
+(:mod:`~wbsa.population.survey_data`), fits each one's anny phenotypes to its stature, mass,
+waist and hip (:mod:`~wbsa.population.survey_match`), and adds ``variations`` bodies per person
+that differ from the match in weight and muscle only (the paper's 500 × 25). Every body is then
+measured exactly as the random population is (:func:`~wbsa.population.table.measure_population`),
+and the match is checked on those final measures:
+
+* ``matched`` is True when stature is within 1 cm, mass within 1 kg, and waist and hip (where
+  the survey has them) within 3 cm of the survey's; ``matched_stature_mass`` checks stature and
+  mass only. People who miss are kept, flagged, and announced with a
+  :class:`SurveyMatchWarning`, never dropped silently.
+* ``match_*_err_*`` = table measure − survey measure, on the matched body's row (variation 0);
+  NaN on variations.
+
+Extra columns beyond :data:`~wbsa.population.table.POPULATION_COLUMNS`: see :data:`SURVEY_COLUMNS`.
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from wbsa.errors import WbsaError
+from wbsa.population.age import years_to_param
+from wbsa.population.anthropometry import DEFAULT_DENSITY_KG_M3
+from wbsa.population.survey_match import MatchSettings
+
+#: Columns a survey population has beyond the random population's.
+SURVEY_COLUMNS = (
+    "survey_id",
+    "variation",
+    "survey_age_years",
+    "survey_race",
+    "survey_exam_weight",
+    "survey_stature_m",
+    "survey_mass_kg",
+    "survey_bmi",
+    "survey_waist_circ_m",
+    "survey_hip_circ_m",
+    "match_stature_err_m",
+    "match_mass_err_kg",
+    "match_waist_err_m",
+    "match_hip_err_m",
+    "matched",
+    "matched_stature_mass",
+)
+
+#: (population column, survey column, error column) of each matched measure.
+_MATCHED = (
+    ("stature_m", "survey_stature_m", "match_stature_err_m"),
+    ("mass_kg", "survey_mass_kg", "match_mass_err_kg"),
+    ("waist_circ_m", "survey_waist_circ_m", "match_waist_err_m"),
+    ("hip_circ_m", "survey_hip_circ_m", "match_hip_err_m"),
+)
+_VARIATION_STREAM = 0x7A21A7
+
+
+class SurveyMatchWarning(UserWarning):
+    """Some survey people could not be matched within the tolerances (they are flagged)."""
+
+
+@dataclass(frozen=True)
+class SurveyPopulationSettings:
+    """How the survey population is built.
+
+    Attributes
+    ----------
+    match
+        Fit tolerances and limits.
+    weight_spread, muscle_spread
+        A variation draws ``p_weight`` and ``p_muscle`` uniformly within ± these of the matched
+        body's values (the interval cut to [0, 1]); everything else stays the match's.
+    survey_path
+        Survey CSV; None = the copy shipped in the package.
+    """
+
+    match: MatchSettings = field(default_factory=MatchSettings)
+    weight_spread: float = 0.2
+    muscle_spread: float = 0.3
+    survey_path: str | None = None
+
+    def __post_init__(self) -> None:
+        for name in ("weight_spread", "muscle_spread"):
+            if not 0.0 <= getattr(self, name) <= 1.0:
+                raise WbsaError(f"{name} = {getattr(self, name)} must lie in [0, 1]")
+
+
+def build_survey_population(n: int, variations: int = 0, seed: int = 0, *,
+                            density_kg_m3: float = DEFAULT_DENSITY_KG_M3, survey_weights: bool = False,
+                            show_progress: bool | None = None,
+                            settings: SurveyPopulationSettings | None = None) -> pd.DataFrame:
+    """Build the survey-matched population table.
+
+    Parameters
+    ----------
+    n
+        Survey people to draw (all ages with a standing height, 2–80 years).
+    variations
+        Extra bodies per person, varying weight and muscle around the match (0 = matches only).
+    seed
+        Seed of the draw and of the variations.
+    density_kg_m3
+        Body density for mass = volume × density, in the fit and in the table.
+    survey_weights
+        Draw people with probability proportional to their exam weight (the survey's
+        population weights) instead of uniformly.
+    settings
+        Tolerances, variation spreads and the survey file.
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``n × (variations + 1)`` rows: :data:`~wbsa.population.table.POPULATION_COLUMNS` then
+        :data:`SURVEY_COLUMNS`. ``subject_id = person × (variations + 1) + variation``. The
+        frame's ``attrs["survey"]`` holds the cleaning counts, the match summary
+        (:func:`match_rates`) and the wall and CPU seconds of each stage.
+    """
+    from wbsa.population.anthropometry import Anthropometer
+    from wbsa.population.body_model import BodyModel
+    from wbsa.population.survey_data import load_survey, select_people
+    from wbsa.population.survey_match import match_bodies
+    from wbsa.population.survey_measures import TorchMeasurer
+    from wbsa.population.survey_start import StartTable
+    from wbsa.population.table import measure_population
+
+    s = settings or SurveyPopulationSettings()
+    if not isinstance(variations, (int, np.integer)) or variations < 0:
+        raise WbsaError(f"--variations {variations} must be a whole number >= 0 (the paper used 25)")
+    clock = _Clock()
+    data = load_survey(s.survey_path)
+    people = select_people(data.people, n, seed, weighted=survey_weights)
+    clock.lap("survey")
+
+    model = BodyModel()
+    meter = Anthropometer(model, density_kg_m3)
+    measurer = TorchMeasurer(model, meter)
+    clock.lap("model")
+    table = StartTable.build(measurer, s.match.start)
+    clock.lap("start_table")
+    fit = match_bodies(survey_targets(people), measurer, s.match, table=table, show_progress=show_progress)
+    clock.lap("match")
+
+    params = _with_variations(people, fit, variations, seed, s)
+    table = measure_population(params, density_kg_m3=density_kg_m3, model=model, show_progress=show_progress)
+    table = _add_match_columns(table, s.match)
+    clock.lap("measure")
+    summary = {
+        "source": data.source,
+        "rows": data.n_rows,
+        "usable": len(data.people),
+        "skipped": dict(data.skipped),
+        "dropped": dict(data.dropped),
+        "fit_iterations_p50": float(np.median(fit["fit_iterations"])),
+        "fit_iterations_max": int(fit["fit_iterations"].max()),
+        **match_rates(table),
+        "seconds": clock.wall,
+        "cpu_seconds": clock.cpu,
+    }
+    table.attrs["survey"] = summary
+    _warn_unmatched(table, summary)
+    return table
+
+
+def survey_targets(people: pd.DataFrame) -> pd.DataFrame:
+    """Fixed phenotypes and match targets of survey ``people`` (as from ``select_people``)."""
+    return pd.DataFrame({
+        "p_gender": (people["sex"] == "female").astype(np.float64).to_numpy(),
+        "p_age": years_to_param(people["age_years"].to_numpy()),
+        "p_african": people["p_african"].to_numpy(),
+        "p_asian": people["p_asian"].to_numpy(),
+        "p_caucasian": people["p_caucasian"].to_numpy(),
+        "target_stature_m": people["stature_m"].to_numpy(),
+        "target_mass_kg": people["mass_kg"].to_numpy(),
+        "target_waist_circ_m": people["waist_circ_m"].to_numpy(),
+        "target_hip_circ_m": people["hip_circ_m"].to_numpy(),
+    })
+
+
+def _with_variations(people: pd.DataFrame, fit: pd.DataFrame, k: int, seed: int,
+                     s: SurveyPopulationSettings) -> pd.DataFrame:
+    """Phenotype rows of every matched body and its ``k`` variations, with the survey columns."""
+    from wbsa.population.body_model import PHENOTYPE_COLUMNS
+
+    n = len(people)
+    rep = np.repeat(np.arange(n), k + 1)
+    variation = np.tile(np.arange(k + 1), n)
+    phen = fit[list(PHENOTYPE_COLUMNS)].to_numpy()[rep].copy()
+    iw, im = PHENOTYPE_COLUMNS.index("p_weight"), PHENOTYPE_COLUMNS.index("p_muscle")
+    ids = people["survey_id"].to_numpy()
+    for row in np.flatnonzero(variation > 0):
+        # the stream depends on the person and the variation only, not on who else was drawn
+        rng = np.random.default_rng(np.random.SeedSequence([int(seed), _VARIATION_STREAM, int(ids[rep[row]]),
+                                                            int(variation[row])]))
+        u = rng.random(2)
+        for col, spread, x in ((iw, s.weight_spread, u[0]), (im, s.muscle_spread, u[1])):
+            lo, hi = max(0.0, phen[row, col] - spread), min(1.0, phen[row, col] + spread)
+            phen[row, col] = lo + x * (hi - lo)
+    out = pd.DataFrame({
+        "subject_id": np.arange(len(rep), dtype=np.int64),
+        "sex": people["sex"].to_numpy()[rep],
+        "age_years": people["age_years"].to_numpy()[rep],
+    })
+    for j, name in enumerate(PHENOTYPE_COLUMNS):
+        out[name] = phen[:, j]
+    out["survey_id"] = ids[rep].astype(np.int64)
+    out["variation"] = variation.astype(np.int64)
+    out["survey_age_years"] = people["survey_age_years"].to_numpy()[rep].astype(np.int64)
+    out["survey_race"] = people["survey_race"].to_numpy()[rep].astype(np.int64)
+    out["survey_exam_weight"] = people["exam_weight"].to_numpy()[rep]
+    for src, col in (("stature_m", "survey_stature_m"), ("mass_kg", "survey_mass_kg"), ("bmi", "survey_bmi"),
+                     ("waist_circ_m", "survey_waist_circ_m"), ("hip_circ_m", "survey_hip_circ_m")):
+        out[col] = people[src].to_numpy()[rep]
+    return out
+
+
+def _add_match_columns(table: pd.DataFrame, m: MatchSettings) -> pd.DataFrame:
+    """Match errors on each matched body's row and the ``matched`` flags on every row."""
+    from wbsa.population.table import POPULATION_COLUMNS
+
+    out = table.copy()
+    first = out["variation"].to_numpy() == 0
+    ok = np.ones(len(out), dtype=bool)
+    tol = dict(zip(("stature_m", "mass_kg", "waist_circ_m", "hip_circ_m"), m.tolerances))
+    for measure, survey, err in _MATCHED:
+        e = out[measure].to_numpy() - out[survey].to_numpy()
+        within = np.abs(e) <= tol[measure]
+        # a girth the survey lacks is not matched and cannot fail; a body whose own girth is
+        # undefined (NaN) where the survey has one fails
+        within = np.where(np.isnan(out[survey].to_numpy()), True, within)
+        ok &= within
+        out[err] = np.where(first, e, np.nan)
+        if measure == "mass_kg":
+            stature_mass = ok.copy()
+    person = out["survey_id"].to_numpy()
+    matched = pd.Series(np.where(first, ok, True)).groupby(person).transform("all").to_numpy()
+    stature_mass_ok = pd.Series(np.where(first, stature_mass, True)).groupby(person).transform("all").to_numpy()
+    out["matched"] = matched
+    out["matched_stature_mass"] = stature_mass_ok
+    return out[[*POPULATION_COLUMNS, *SURVEY_COLUMNS]]
+
+
+def match_rates(table: pd.DataFrame) -> dict[str, object]:
+    """Match rates and error quantiles of a survey population's matched bodies.
+
+    Groups: all people, and adults (18+) with survey BMI ≤ 40 (the target group).
+
+    Returns
+    -------
+    dict
+        ``{group: {"people", "matched", "matched_stature_mass", "waist_within", "hip_within",
+        "<error>_abs_p50" / "_p95" / "_max"}}`` with rates as fractions and errors in cm / kg.
+    """
+    first = table[table["variation"] == 0]
+    groups = {
+        "all": first,
+        "adults_bmi_le_40": first[(first["survey_age_years"] >= 18) & (first["survey_bmi"] <= 40)],
+    }
+    out: dict[str, object] = {}
+    for name, g in groups.items():
+        row: dict[str, float] = {"people": int(len(g))}
+        if len(g):
+            row["matched"] = float(g["matched"].mean())
+            row["matched_stature_mass"] = float(g["matched_stature_mass"].mean())
+            for err, scale, unit, tol in (("match_stature_err_m", 100, "cm", 1.0), ("match_mass_err_kg", 1, "kg", 1.0),
+                                          ("match_waist_err_m", 100, "cm", 3.0), ("match_hip_err_m", 100, "cm", 3.0)):
+                e = (g[err].abs() * scale).dropna()
+                key = err.removeprefix("match_").removesuffix("_m").removesuffix("_kg")
+                if len(e):
+                    row[f"{key}_within"] = float((e <= tol).mean())
+                    row[f"{key}_{unit}_p50"] = float(e.quantile(0.5))
+                    row[f"{key}_{unit}_p95"] = float(e.quantile(0.95))
+                    row[f"{key}_{unit}_max"] = float(e.max())
+                    row[f"{key}_{unit}_mean_signed"] = float((g[err] * scale).mean())
+        out[name] = row
+    return out
+
+
+def _warn_unmatched(table: pd.DataFrame, summary: dict) -> None:
+    first = table[table["variation"] == 0]
+    bad = int((~first["matched"]).sum())
+    skipped = sum(summary["skipped"].values())
+    if bad:
+        bad_sm = int((~first["matched_stature_mass"]).sum())
+        warnings.warn(
+            f"{bad} of {len(first)} survey people are not matched within 1 cm / 1 kg / 3 cm "
+            f"({bad_sm} miss stature or mass, the rest waist or hip); they are kept with matched=False. "
+            f"{skipped} of {summary['rows']} survey rows were skipped ({_counts(summary['skipped'])})",
+            SurveyMatchWarning, stacklevel=3)
+
+
+def _counts(counts: dict[str, int]) -> str:
+    return ", ".join(f"{k}: {v}" for k, v in counts.items()) or "none"
+
+
+class _Clock:
+    """Wall and CPU seconds of consecutive stages."""
+
+    def __init__(self) -> None:
+        self.wall: dict[str, float] = {}
+        self.cpu: dict[str, float] = {}
+        self._t, self._c = time.perf_counter(), time.process_time()
+
+    def lap(self, name: str) -> None:
+        t, c = time.perf_counter(), time.process_time()
+        self.wall[name], self.cpu[name] = t - self._t, c - self._c
+        self._t, self._c = t, c

@@ -1,0 +1,336 @@
+"""Fit anny phenotypes to body measures: stature, mass, waist and hip of real people.
+
+Each person keeps the fixed parameters it is given (gender, age, ethnic mix) and the free
+ones (muscle, weight, height, proportions, and cup size for women) are fitted so that the
+body's stature, mass, waist and hip (as :class:`~wbsa.population.anthropometry.Anthropometer`
+defines them) equal the person's. The fit is a damped Gauss–Newton (Levenberg–Marquardt)
+least-squares problem per person, solved for a whole batch at once:
+
+* unknowns: ``u`` with ``parameter = low + (high − low) · sigmoid(u)``, so every step stays
+  inside the parameter bounds;
+* residuals: ``(measure − target) / tolerance`` for every measure the person has (a missing
+  waist or hip simply drops out; girths weigh ``girth_weight``, so stature and mass come first), plus a weak pull of each free parameter towards 0.5
+  (``prior_weight``) that picks the most neutral body when several fit equally well;
+* Jacobian: exact, from :class:`~wbsa.population.survey_measures.TorchMeasurer` (measure
+  gradients in blendshape space) chained through anny's phenotype → coefficient map;
+* start: a tabulated inverse (:class:`~wbsa.population.survey_start.StartTable`), which puts
+  every person in the right basin (anny's mass and waist are not monotone in muscle).
+
+A person leaves the batch once every measure it has is within ``converge_fraction`` of its
+tolerance, or after ``max_iterations``. Each person's steps depend on that person only, so
+results do not depend on the batch size or on who else is in the batch (up to floating-point
+rounding of the batched products).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from wbsa.errors import WbsaError
+from wbsa.population.body_model import PHENOTYPE_COLUMNS
+from wbsa.population.survey_measures import FIT_MEASURES, TorchMeasurer
+from wbsa.population.survey_start import StartGrid, StartTable
+from wbsa.progress import progress
+
+#: Target columns :func:`match_bodies` reads (NaN waist/hip = not measured).
+TARGET_COLUMNS = ("target_stature_m", "target_mass_kg", "target_waist_circ_m", "target_hip_circ_m")
+#: Fixed phenotype columns :func:`match_bodies` reads.
+FIXED_COLUMNS = ("p_gender", "p_age", "p_african", "p_asian", "p_caucasian")
+#: Free phenotypes, in fit order (``p_cupsize`` only for women, see :class:`MatchSettings`).
+FREE_PHENOTYPES = ("p_muscle", "p_weight", "p_height", "p_proportions", "p_cupsize")
+
+_INDEX = {name: i for i, name in enumerate(PHENOTYPE_COLUMNS)}
+_STALL = 5
+_DAMPING_FLOOR = 1e-3
+_MAX_STEP = 3.0
+
+
+@dataclass(frozen=True)
+class MatchSettings:
+    """How bodies are fitted to survey measures.
+
+    Attributes
+    ----------
+    stature_tol_m, mass_tol_kg, girth_tol_m
+        Match tolerances (1 cm, 1 kg, 3 cm): a body matches when every measured quantity is
+        within them; residuals are scaled by them, so they also weigh the least squares.
+    bounds
+        ``(low, high)`` range of every free phenotype.
+    free_cupsize
+        Fit cup size for women (men keep 0.5, where it has almost no effect).
+    girth_weight
+        Weight of the waist and hip residuals relative to stature and mass (in tolerance
+        units). Below 1, stature and mass are met first and the girths are fitted as well
+        as the body model allows with them held (anny cannot reach every real waist-hip
+        combination at a given stature and mass).
+    prior_weight
+        Weight of the pull of each free phenotype towards 0.5 (in tolerance units per unit
+        of phenotype).
+    max_iterations
+        Levenberg–Marquardt iterations per person at most.
+    converge_fraction
+        A person is done when every error is below this fraction of its tolerance.
+    batch_size
+        People fitted together.
+    start
+        The bodies of the tabulated inverse that starts every fit.
+    """
+
+    stature_tol_m: float = 0.01
+    mass_tol_kg: float = 1.0
+    girth_tol_m: float = 0.03
+    bounds: tuple[float, float] = (0.0, 1.0)
+    free_cupsize: bool = True
+    girth_weight: float = 0.1
+    prior_weight: float = 0.05
+    max_iterations: int = 40
+    converge_fraction: float = 0.25
+    batch_size: int = 256
+    start: StartGrid = field(default_factory=StartGrid)
+
+    def __post_init__(self) -> None:
+        lo, hi = self.bounds
+        if not 0.0 <= lo < hi <= 1.0:
+            raise WbsaError(f"match bounds {self.bounds} must satisfy 0 <= low < high <= 1")
+        for name in ("stature_tol_m", "mass_tol_kg", "girth_tol_m"):
+            if not getattr(self, name) > 0:
+                raise WbsaError(f"match tolerance {name} = {getattr(self, name)} must be positive")
+        if self.max_iterations < 0 or self.batch_size < 1:
+            raise WbsaError("match max_iterations must be >= 0 and batch_size >= 1")
+
+    @property
+    def tolerances(self) -> np.ndarray:
+        """(4,) tolerances in the order of :data:`~wbsa.population.survey_measures.FIT_MEASURES`."""
+        return np.array([self.stature_tol_m, self.mass_tol_kg, self.girth_tol_m, self.girth_tol_m])
+
+
+def match_bodies(targets: pd.DataFrame, measurer: TorchMeasurer, settings: MatchSettings = MatchSettings(), *,
+                 table: StartTable | None = None, show_progress: bool | None = None) -> pd.DataFrame:
+    """Fit the free phenotypes of every row of ``targets`` to its measures.
+
+    Parameters
+    ----------
+    targets
+        :data:`FIXED_COLUMNS` (in [0, 1]) and :data:`TARGET_COLUMNS` (SI units; waist and hip
+        may be NaN, stature and mass must be finite and positive).
+    measurer
+        Differentiable measures of the body model.
+    settings
+        Tolerances, bounds and iteration limits.
+    table
+        The tabulated inverse that gives each person's start; built here from
+        ``settings.start`` when omitted.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per target, same index order: every ``p_*`` column, ``fit_<measure>`` (the
+        fitted body's measures as the fit saw them, SI), ``fit_iterations`` and
+        ``fit_converged`` (every measured quantity within ``converge_fraction`` of its tolerance).
+    """
+    missing = [c for c in (*FIXED_COLUMNS, *TARGET_COLUMNS) if c not in targets.columns]
+    if missing:
+        raise WbsaError(f"match targets lack columns {missing}")
+    fixed = targets[list(FIXED_COLUMNS)].to_numpy(dtype=np.float64)
+    goal = targets[list(TARGET_COLUMNS)].to_numpy(dtype=np.float64)
+    if not (np.isfinite(goal[:, :2]).all() and (goal[:, :2] > 0).all()):
+        raise WbsaError("every match target needs a finite, positive stature and mass")
+    n = len(targets)
+    phen = np.zeros((n, len(PHENOTYPE_COLUMNS)))
+    fit = np.full((n, 4), np.nan)
+    iters = np.zeros(n, dtype=np.int64)
+    done = np.zeros(n, dtype=bool)
+    table = table if table is not None else StartTable.build(measurer, settings.start)
+    with progress(total=n, desc="matching", unit="person", enabled=show_progress) as bar:
+        for start in range(0, n, settings.batch_size):
+            sl = slice(start, start + settings.batch_size)
+            phen[sl], fit[sl], iters[sl], done[sl] = _match_batch(fixed[sl], goal[sl], measurer, settings, table)
+            bar.update(len(fixed[sl]))
+    out = pd.DataFrame(phen, columns=list(PHENOTYPE_COLUMNS), index=targets.index)
+    for j, name in enumerate(FIT_MEASURES):
+        out[f"fit_{name}"] = fit[:, j]
+    out["fit_iterations"] = iters
+    out["fit_converged"] = done
+    return out
+
+
+# -- the fit ---------------------------------------------------------------------------------
+class _Problem:
+    """One batch: fixed phenotypes, targets, and the map from unknowns to residuals."""
+
+    def __init__(self, fixed: np.ndarray, goal: np.ndarray, measurer: TorchMeasurer, settings: MatchSettings):
+        import torch
+
+        self.torch = torch
+        self.m = measurer
+        self.s = settings
+        b = len(fixed)
+        base = np.full((b, len(PHENOTYPE_COLUMNS)), 0.5)
+        for j, name in enumerate(FIXED_COLUMNS):
+            base[:, _INDEX[name]] = fixed[:, j]
+        self.base = torch.as_tensor(base, dtype=measurer.dtype)
+        self.free_index = [_INDEX[c] for c in FREE_PHENOTYPES]
+        # (b, d) mask of the unknowns each person really has (cup size: women only)
+        mask = np.ones((b, len(FREE_PHENOTYPES)), dtype=bool)
+        if not settings.free_cupsize:
+            mask[:, -1] = False
+        else:
+            mask[:, -1] = fixed[:, 0] >= 0.5
+        self.free_mask = torch.as_tensor(mask)
+        # (unknown index, unknown value) of every inner interpolation anchor of a free phenotype
+        lo, hi = settings.bounds
+        self.kinks = []
+        for j, name in enumerate(FREE_PHENOTYPES):
+            for a in measurer.model.anny.anchors[name[2:]][1:-1].tolist():
+                if lo < a < hi:
+                    self.kinks.append((j, float(_logit(np.array(a), settings.bounds))))
+        self.goal = torch.as_tensor(np.nan_to_num(goal, nan=0.0), dtype=measurer.dtype)
+        self.has = torch.as_tensor(np.isfinite(goal))
+        self.tol = torch.as_tensor(settings.tolerances, dtype=measurer.dtype)
+        weight = np.array([1.0, 1.0, settings.girth_weight, settings.girth_weight])
+        #: residual unit of each measure: its tolerance over its weight
+        self.unit = self.tol / torch.as_tensor(weight, dtype=measurer.dtype)
+
+    def phenotypes(self, u):
+        """(b, 11) phenotypes and (b, d) free values of unknowns ``u`` (b, d) (differentiable)."""
+        return _SubProblem(self, slice(None)).phenotypes(u)
+
+    def stop_at_kinks(self, u, step):
+        """``u + step``, cut short just past the first interpolation anchor the step crosses.
+
+        anny interpolates each phenotype linearly between anchors (0, 0.5, 1 for muscle,
+        weight and cup size), so the measures have a kink at every inner anchor. A Gauss–Newton
+        step that crosses one is based on the slope of the wrong side; stopping just beyond
+        it lets the next step use the new side's slope.
+        """
+        torch = self.torch
+        alpha = torch.ones(len(u), dtype=u.dtype)
+        for j, u_kink in self.kinks:
+            crossing = (u[:, j] - u_kink) * (u[:, j] + step[:, j] - u_kink) < 0
+            frac = (u_kink - u[:, j]) / torch.where(crossing, step[:, j], torch.ones_like(step[:, j]))
+            alpha = torch.where(crossing & (frac < alpha), frac, alpha)
+        trial = u + alpha[:, None] * step
+        for j, u_kink in self.kinks:
+            landed = (alpha < 1) & ((trial[:, j] - u_kink).abs() <= 1e-9 + 1e-9 * alpha * step[:, j].abs())
+            trial[:, j] = torch.where(landed, u_kink + 1e-4 * torch.sign(step[:, j]), trial[:, j])
+        return trial
+
+    def residuals(self, u, rows, jacobian: bool):
+        """Residuals ``(b, 4 + d)``, measures ``(b, 4)`` and Jacobian ``(b, 4 + d, d)`` of ``u[rows]``."""
+        torch = self.torch
+        sub = _SubProblem(self, rows)
+        uu = u.detach().clone().requires_grad_(jacobian)
+        with torch.set_grad_enabled(jacobian):
+            ph, free = sub.phenotypes(uu)
+            coeffs = self.m.coefficients(ph)
+        ev = self.m.evaluate(self.m.vertices(coeffs), gradient=jacobian)
+        values = ev.values
+        has = sub.has & torch.isfinite(values)
+        err = torch.where(has, (values - sub.goal) / self.unit, torch.zeros_like(values))
+        prior = self.s.prior_weight * (free.detach() - 0.5) * sub.free_mask
+        r = torch.cat([err, prior], dim=1)
+        if not jacobian:
+            return r, values, None
+        d = u.shape[1]
+        jac = torch.zeros((len(rows), 4 + d, d), dtype=u.dtype)
+        for k in range(4):
+            weight = torch.where(has[:, k:k + 1], ev.grad[:, k] / self.unit[k], torch.zeros_like(ev.grad[:, k]))
+            (g,) = torch.autograd.grad(coeffs, uu, grad_outputs=weight, retain_graph=True)
+            jac[:, k] = g
+        lo, hi = self.s.bounds
+        dfree = (hi - lo) * torch.sigmoid(uu.detach()) * (1 - torch.sigmoid(uu.detach()))
+        jac[:, 4:] = torch.diag_embed(self.s.prior_weight * dfree * sub.free_mask)
+        jac = jac * sub.free_mask[:, None, :]
+        return r, values, jac
+
+
+class _SubProblem:
+    """The rows ``rows`` of a :class:`_Problem`."""
+
+    def __init__(self, p: _Problem, rows):
+        self.p = p
+        self.base = p.base[rows]
+        self.free_mask = p.free_mask[rows]
+        self.goal = p.goal[rows]
+        self.has = p.has[rows]
+
+    def phenotypes(self, u):
+        torch = self.p.torch
+        lo, hi = self.p.s.bounds
+        free = lo + (hi - lo) * torch.sigmoid(u)
+        free = torch.where(self.free_mask, free, torch.full_like(free, 0.5))
+        ph = self.base.clone()
+        ph[:, self.p.free_index] = free
+        return ph, free
+
+
+def _logit(p: np.ndarray, bounds: tuple[float, float]) -> np.ndarray:
+    lo, hi = bounds
+    q = np.clip((np.asarray(p, dtype=np.float64) - lo) / (hi - lo), 1e-4, 1 - 1e-4)
+    return np.log(q / (1 - q))
+
+
+def _start(problem: _Problem, table: StartTable, fixed: np.ndarray, goal: np.ndarray) -> np.ndarray:
+    """Starting unknowns ``(b, d)`` from the tabulated inverse (cup size starts at 0.5)."""
+    free = np.full((len(fixed), len(FREE_PHENOTYPES)), 0.5)
+    free[:, :4] = table.start(fixed, goal, problem.s.tolerances)
+    lo, hi = problem.s.bounds
+    margin = 0.02 * (hi - lo)
+    return _logit(np.clip(free, lo + margin, hi - margin), problem.s.bounds)
+
+
+def _match_batch(fixed: np.ndarray, goal: np.ndarray, measurer: TorchMeasurer, s: MatchSettings,
+                 table: StartTable):
+    """Fit one batch; returns phenotypes (b, 11), fit measures (b, 4), iterations (b,), converged (b,)."""
+    torch = measurer.torch
+    problem = _Problem(fixed, goal, measurer, s)
+    b = len(fixed)
+    u = torch.as_tensor(_start(problem, table, fixed, goal), dtype=measurer.dtype)
+    all_rows = torch.arange(b)
+    r, values, jac = problem.residuals(u, all_rows, jacobian=True)
+    mu = torch.full((b,), 1e-2, dtype=u.dtype)
+    iters = torch.zeros(b, dtype=torch.long)
+    stall = torch.zeros(b, dtype=torch.long)
+    tol_frac = s.converge_fraction
+
+    def converged():
+        err = (values - problem.goal).abs() / problem.tol
+        return ((err <= tol_frac) | ~problem.has).all(dim=1)
+
+    done = converged()
+    for _ in range(s.max_iterations):
+        active = torch.nonzero(~done).flatten()
+        if len(active) == 0:
+            break
+        ra, ja, ua, mua = r[active], jac[active], u[active], mu[active]
+        jtj = ja.transpose(1, 2) @ ja
+        jtr = (ja.transpose(1, 2) @ ra[..., None])[..., 0]
+        # Marquardt damping, with a floor so that a flat direction (a saturated sigmoid, or
+        # cup size for men) gets a small step rather than a huge one
+        diag = torch.diagonal(jtj, dim1=1, dim2=2) + _DAMPING_FLOOR
+        a = jtj + torch.diag_embed(mua[:, None] * diag + _DAMPING_FLOOR)
+        step = -torch.linalg.solve(a, jtr)
+        step = step * problem.free_mask[active]
+        norm = step.norm(dim=1, keepdim=True)
+        step = step * torch.clamp(_MAX_STEP / torch.clamp(norm, min=1e-12), max=1.0)
+        trial = problem.stop_at_kinks(ua, step)
+        rt, vt, jt = problem.residuals(trial, active, jacobian=True)
+        old, new = (ra**2).sum(dim=1), (rt**2).sum(dim=1)
+        better = new < old
+        mu[active] = torch.where(better, mua / 3.0, mua * 4.0)
+        iters[active] += 1
+        # a person is at its optimum when for `_STALL` iterations no step has lowered the cost
+        # by 0.1 % while moving some measure by 1 % of its tolerance (creeping towards a bound
+        # of the sigmoid lowers the cost forever, but by nothing that matters)
+        moved = ((vt - values[active]).abs() / problem.tol > 0.01).any(dim=1)
+        progress_made = better & moved & (old - new > 1e-3 * old + 1e-9)
+        stall[active] = torch.where(progress_made, torch.zeros_like(stall[active]), stall[active] + 1)
+        acc = active[better]
+        u[acc], r[acc], values[acc], jac[acc] = trial[better], rt[better], vt[better], jt[better]
+        done = converged() | (stall >= _STALL)
+    ph, _ = problem.phenotypes(u)
+    ok = converged()
+    return ph.detach().numpy(), values.numpy(), iters.numpy(), ok.numpy()

@@ -1,0 +1,41 @@
+"""Read one view through the simulated sensor and measure what it returns (shared by view and scan)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from wbsa.camera.frame import DepthFrame
+
+
+def view_rng(seed: int, subject_id: int, view) -> np.random.Generator:
+    """The sensor's random stream for one subject at one view.
+
+    The child of ``SeedSequence([seed, subject_id])`` keyed by the view's azimuth, elevation
+    (micro-degrees) and distance (micrometres): it depends only on (seed, subject, view), never on
+    chunking, on the workers or on which other views are scanned, so ``wbsa view`` and ``wbsa scan``
+    give the same noisy image.
+    """
+    key = (round(view.azimuth_deg * 1e6), round((view.elevation_deg + 90.0) * 1e6), round(view.distance_m * 1e6))
+    return np.random.default_rng(np.random.SeedSequence([int(seed), int(subject_id)], spawn_key=key))
+
+
+def sense_view(frame: DepthFrame, scene, sensor, rng: np.random.Generator) -> tuple[DepthFrame, dict]:
+    """The frame a simulated sensor returns, and the visible-area columns measured on it.
+
+    The hit area counts only triangles that still return; the visible area is the per-pixel estimate
+    of the returns, without the mesh, so returns the sensor dropped are not counted back.
+
+    Returns
+    -------
+    DepthFrame, dict
+        The sensed frame and ``{"n_pixels_sensor", "vbsa_hit_sensor_m2", "vbsa_visible_sensor_m2",
+        "sensor_<setting>"...}``.
+    """
+    from wbsa.camera.area import vbsa_hit_m2, vbsa_visible_m2
+    from wbsa.sensor.apply import apply_sensor
+
+    sensed = apply_sensor(frame, sensor, rng)
+    row = {"n_pixels_sensor": sensed.n_pixels, "vbsa_hit_sensor_m2": vbsa_hit_m2(sensed, scene),
+           "vbsa_visible_sensor_m2": vbsa_visible_m2(sensed)}
+    row.update({f"sensor_{k}": v for k, v in sensor.to_dict().items()})
+    return sensed, row

@@ -1,0 +1,241 @@
+"""Survey population: NHANES cleaning and selection, differentiable measures, matching."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from wbsa.errors import WbsaError
+from wbsa.population.survey_data import (
+    ETHNIC_MIX,
+    PEOPLE_COLUMNS,
+    SURVEY_COLUMNS,
+    clean_survey,
+    load_survey,
+    select_people,
+)
+
+# -- survey data (no body model needed) ---------------------------------------------------
+
+
+def _raw(rows: list[dict]) -> pd.DataFrame:
+    base = {"SEQN": "1", "RIAGENDR": "1", "RIDAGEYR": "40", "RIDRETH3": "3", "RIDEXPRG": "NA", "BMXWT": "80",
+            "BMXHT": "175", "BMXWAIST": "95", "BMXHIP": "100", "WTMECPRP": "1000"}
+    return pd.DataFrame([{**base, **r} for r in rows], columns=list(SURVEY_COLUMNS))
+
+
+def test_clean_survey_skips_and_counts_bad_values():
+    raw = _raw([
+        {"SEQN": "1"},
+        {"SEQN": "2", "BMXHT": "NA"},  # no stature: skipped
+        {"SEQN": "3", "BMXWT": "heavy"},  # not a number: skipped as missing mass
+        {"SEQN": "4", "BMXHT": "17.5"},  # stature in the wrong unit: implausible, skipped
+        {"SEQN": "5", "RIAGENDR": "9"},  # unknown sex: skipped
+        {"SEQN": "6", "RIDEXPRG": "1", "RIAGENDR": "2"},  # pregnant: skipped
+        {"SEQN": "7", "BMXWAIST": "NA", "BMXHIP": "-3"},  # girths dropped, person kept
+        {"SEQN": "8", "RIDRETH3": "NA", "WTMECPRP": "0"},  # unknown race, no weight: kept
+        {"SEQN": "1"},  # duplicate id: skipped
+    ])
+    data = clean_survey(raw)
+    assert list(data.people.columns) == list(PEOPLE_COLUMNS)
+    assert data.people["survey_id"].tolist() == [1, 7, 8]
+    assert data.skipped == {"sex missing": 1, "pregnant": 1, "stature implausible": 1, "stature missing": 1,
+                            "mass missing": 1, "duplicate id": 1}
+    assert data.dropped == {"waist missing": 1, "hip implausible": 1, "race unknown": 1, "exam weight missing": 1}
+    assert data.n_rows == len(raw)
+    p = data.people.set_index("survey_id")
+    assert np.isnan(p.loc[7, "waist_circ_m"]) and np.isnan(p.loc[7, "hip_circ_m"])
+    assert p.loc[1, "stature_m"] == pytest.approx(1.75) and p.loc[1, "waist_circ_m"] == pytest.approx(0.95)
+    assert p.loc[1, "age_years"] == 40.5 and p.loc[1, "bmi"] == pytest.approx(80 / 1.75**2)
+    assert p.loc[8, "survey_race"] == -1 and p.loc[8, ["p_african", "p_asian", "p_caucasian"]].tolist() == \
+        pytest.approx([1 / 3] * 3)
+    assert np.isnan(p.loc[8, "exam_weight"])
+
+
+def test_ethnic_mix_is_a_mix():
+    for code, mix in ETHNIC_MIX.items():
+        assert sum(mix) == pytest.approx(1.0) and min(mix) >= 0, code
+    assert ETHNIC_MIX[3] == (0.0, 0.0, 1.0) and ETHNIC_MIX[6] == (0.0, 1.0, 0.0)
+
+
+def test_packaged_survey_loads_and_equals_the_shared_file():
+    data = load_survey()
+    assert data.n_rows == 14300
+    assert data.skipped["stature missing"] > 1000  # infants have no standing height
+    assert len(data.people) == 14300 - sum(data.skipped.values())
+    assert data.people["age_years"].between(2, 81).all()
+    assert data.people["survey_id"].is_unique
+    from pathlib import Path
+
+    shared = Path(__file__).resolve().parents[2] / "shared" / "data" / "nhanes-2017-2020-bmx-demo.csv"
+    if shared.exists():
+        assert load_survey(shared).people.equals(data.people)
+
+
+def test_missing_survey_file_is_a_user_error(tmp_path):
+    with pytest.raises(WbsaError, match="cannot read survey file"):
+        load_survey(tmp_path / "absent.csv")
+    bad = tmp_path / "bad.csv"
+    bad.write_text("a,b\n1,2\n")
+    with pytest.raises(WbsaError, match="lacks the survey columns"):
+        load_survey(bad)
+
+
+def test_select_people_is_seeded_and_weighted():
+    people = clean_survey(_raw([{"SEQN": str(i), "WTMECPRP": "0" if i < 5 else "1"} for i in range(20)])).people
+    a = select_people(people, 6, seed=3)
+    assert a.equals(select_people(people, 6, seed=3))
+    assert not a["survey_id"].equals(select_people(people, 6, seed=4)["survey_id"])
+    assert a["survey_id"].is_unique
+    w = select_people(people, 15, seed=1, weighted=True)
+    assert set(w["survey_id"]) == set(range(5, 20))  # zero exam weight is never drawn
+    with pytest.raises(WbsaError, match="more than the 15"):
+        select_people(people, 16, weighted=True)
+    with pytest.raises(WbsaError, match="positive"):
+        select_people(people, 0)
+
+
+# -- body model ---------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def tools():
+    from wbsa.population.anthropometry import Anthropometer
+    from wbsa.population.body_model import BodyModel
+    from wbsa.population.survey_measures import TorchMeasurer
+
+    model = BodyModel()
+    meter = Anthropometer(model)
+    return model, meter, TorchMeasurer(model, meter)
+
+
+def _bodies() -> pd.DataFrame:
+    from wbsa.population.age import years_to_param
+
+    rows = [
+        dict(p_gender=0.0, p_age=years_to_param(35), p_muscle=0.3, p_weight=0.7, p_height=0.4, p_proportions=0.6,
+             p_african=0.0, p_asian=0.0, p_caucasian=1.0),
+        dict(p_gender=1.0, p_age=years_to_param(52), p_muscle=0.6, p_weight=0.35, p_height=0.55,
+             p_proportions=0.4, p_cupsize=0.7, p_african=0.75, p_asian=0.0, p_caucasian=0.25),
+        dict(p_gender=0.0, p_age=years_to_param(9), p_muscle=0.45, p_weight=0.6, p_height=0.5, p_proportions=0.5,
+             p_african=0.05, p_asian=0.4, p_caucasian=0.55),
+    ]
+    return pd.DataFrame(rows).fillna({"p_cupsize": 0.5})
+
+
+def test_torch_measures_equal_the_anthropometer(tools):
+    model, meter, measurer = tools
+    import torch
+
+    params = _bodies()
+    exact = meter.measure(model.rest_bodies(params))
+    ph = torch.as_tensor(model.phenotype_array(params))
+    values = measurer.evaluate(measurer.vertices(measurer.coefficients(ph))).values.numpy()
+    cols = ["stature_m", "mass_kg", "waist_circ_m", "hip_circ_m"]
+    np.testing.assert_allclose(values, exact[cols].to_numpy(), rtol=1e-9, atol=1e-9)
+
+
+def test_torch_measure_gradients_match_finite_differences(tools):
+    model, _, measurer = tools
+    import torch
+
+    ph = torch.as_tensor(model.phenotype_array(_bodies()))
+    c = measurer.coefficients(ph).detach()
+    grad = measurer.evaluate(measurer.vertices(c), gradient=True).grad
+    direction = torch.as_tensor(np.random.default_rng(0).normal(size=c.shape)) * 1e-6
+    plus = measurer.evaluate(measurer.vertices(c + direction)).values
+    minus = measurer.evaluate(measurer.vertices(c - direction)).values
+    fd = (plus - minus) / 2
+    analytic = (grad * direction[:, None, :]).sum(-1)
+    np.testing.assert_allclose(analytic.numpy(), fd.numpy(), rtol=2e-3, atol=1e-9)
+
+
+def _small_settings(**kw):
+    from wbsa.population.survey_match import MatchSettings
+    from wbsa.population.survey_start import StartGrid
+
+    grid = StartGrid(age_nodes_years=(6.0, 12.0, 30.0, 60.0), muscle=(0.0, 0.5, 1.0), weight=(0.2, 0.5, 0.8),
+                     proportions=(0.5,), heights=(0.0, 0.5, 1.0))
+    return MatchSettings(start=grid, **kw)
+
+
+def test_known_bodies_are_matched_back_within_tolerance(tools):
+    from wbsa.population.survey_match import match_bodies
+
+    model, meter, measurer = tools
+    params = _bodies()
+    own = meter.measure(model.rest_bodies(params))
+    targets = params[["p_gender", "p_age", "p_african", "p_asian", "p_caucasian"]].copy()
+    for name in ("stature_m", "mass_kg", "waist_circ_m", "hip_circ_m"):
+        targets[f"target_{name}"] = own[name].to_numpy()
+    targets.loc[2, "target_hip_circ_m"] = np.nan  # a child without a hip measure
+    fit = match_bodies(targets, measurer, _small_settings(max_iterations=25), show_progress=False)
+    # the fixed parameters are kept
+    for col in ("p_gender", "p_age", "p_african", "p_asian", "p_caucasian"):
+        np.testing.assert_allclose(fit[col], params[col])
+    assert fit.loc[0, "p_cupsize"] == 0.5  # men keep the neutral cup size
+    back = meter.measure(model.rest_bodies(fit))
+    assert np.all(np.abs(back["stature_m"] - own["stature_m"]) <= 0.01)
+    assert np.all(np.abs(back["mass_kg"] - own["mass_kg"]) <= 1.0)
+    assert np.all(np.abs(back["waist_circ_m"] - own["waist_circ_m"]) <= 0.03)
+    assert np.all(np.abs(back["hip_circ_m"] - own["hip_circ_m"])[:2] <= 0.03)
+    assert fit["fit_converged"].all()
+
+
+def test_match_rejects_targets_without_stature(tools):
+    from wbsa.population.survey_match import match_bodies
+
+    _, _, measurer = tools
+    bad = pd.DataFrame([dict(p_gender=0.0, p_age=0.8, p_african=0.0, p_asian=0.0, p_caucasian=1.0,
+                             target_stature_m=np.nan, target_mass_kg=70.0, target_waist_circ_m=np.nan,
+                             target_hip_circ_m=np.nan)])
+    with pytest.raises(WbsaError, match="stature and mass"):
+        match_bodies(bad, measurer, _small_settings(max_iterations=1), show_progress=False)
+
+
+@pytest.mark.slow
+def test_survey_population_end_to_end(tmp_path):
+    from wbsa.population.survey import SURVEY_COLUMNS as EXTRA
+    from wbsa.population.survey import SurveyMatchWarning, SurveyPopulationSettings, build_survey_population
+    from wbsa.population.table import POPULATION_COLUMNS
+
+    # a small survey file with one bad row, so the run also counts what it skips
+    with _packaged() as fh:
+        raw = pd.read_csv(fh, comment="#", dtype=str, keep_default_na=False)
+    raw = raw[raw["RIDAGEYR"].astype(int).between(20, 60) & (raw["RIDEXPRG"] != "1")].head(6).copy()
+    raw.iloc[0, raw.columns.get_loc("BMXHT")] = "oops"
+    path = tmp_path / "survey.csv"
+    raw.to_csv(path, index=False)
+    settings = SurveyPopulationSettings(match=_small_settings(max_iterations=15), survey_path=str(path))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", SurveyMatchWarning)
+        table = build_survey_population(2, variations=2, seed=5, settings=settings, show_progress=False)
+        again = build_survey_population(2, variations=2, seed=5, settings=settings, show_progress=False)
+    assert list(table.columns) == [*POPULATION_COLUMNS, *EXTRA]
+    assert len(table) == 6 and table["subject_id"].tolist() == list(range(6))
+    assert table["variation"].tolist() == [0, 1, 2, 0, 1, 2]
+    summary = table.attrs["survey"]
+    assert summary["skipped"] == {"stature missing": 1} and summary["usable"] == 5
+    for _, person in table.groupby("survey_id"):
+        base = person.iloc[0]
+        # variations change weight and muscle only, and keep the survey's values
+        for col in ("p_gender", "p_age", "p_height", "p_proportions", "p_cupsize", "p_african", "survey_mass_kg"):
+            assert (person[col] == base[col]).all()
+        assert (person["p_weight"] - base["p_weight"]).abs().max() <= 0.2 + 1e-12
+        assert (person["p_muscle"] - base["p_muscle"]).abs().max() <= 0.3 + 1e-12
+        assert person["match_mass_err_kg"].iloc[1:].isna().all()
+        err = base["stature_m"] - base["survey_stature_m"]
+        assert base["match_stature_err_m"] == pytest.approx(err)
+        ok = (abs(err) <= 0.01 and abs(base["match_mass_err_kg"]) <= 1.0
+              and not abs(base["match_waist_err_m"]) > 0.03 and not abs(base["match_hip_err_m"]) > 0.03)
+        assert (person["matched"] == ok).all()
+    pd.testing.assert_frame_equal(table, again)
+
+
+def _packaged():
+    from importlib.resources import files
+
+    return files("wbsa").joinpath("data/nhanes_bmx_demo.csv").open("r", encoding="utf-8")

@@ -19,7 +19,7 @@ os.environ.setdefault("WBSA_PROGRESS", "0")
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--n", type=int, default=512)
+    parser.add_argument("--n", type=int, default=4000)
     parser.add_argument("--workers", type=int, default=None, help="worker processes (default: all cores)")
     args = parser.parse_args()
 
@@ -36,7 +36,7 @@ def main() -> None:
     forward_s = time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    measure_population(params, model=model)
+    serial = measure_population(params, model=model)
     serial_s = time.perf_counter() - t0
 
     paper_rate = 20000 / (2.5 * 3600)
@@ -47,9 +47,11 @@ def main() -> None:
     from wbsa.parallel import default_workers
 
     t0 = time.perf_counter()
-    measure_population(params, workers=args.workers or default_workers())
+    parallel = measure_population(params, workers=args.workers or default_workers())
     parallel_s = time.perf_counter() - t0
-    print(f"population, all cores   : {args.n / parallel_s:8.1f} bodies/s  (incl. cluster start-up)")
+    same = serial.equals(parallel)
+    print(f"population, all cores   : {args.n / parallel_s:8.1f} bodies/s  (incl. cluster start-up; "
+          f"table identical to 1 process: {same})")
     print(f"paper (quad-core, 2017) : {paper_rate:8.1f} bodies/s  -> speed-up {args.n / parallel_s / paper_rate:.0f}x")
 
 

@@ -32,8 +32,8 @@ import numpy as np
 import pandas as pd
 
 from wbsa.population.body_model import PHENOTYPE_COLUMNS, BodyModel, RestBodies
-from wbsa.population.mesh import triangle_areas_m2
-from wbsa.population.sections import edge_plane_crossings, tape_perimeter_m, width_along_m
+from wbsa.population.mesh import face_cross_products
+from wbsa.population.sections import HorizontalSlicer, edge_plane_crossings, tape_perimeter_m, width_along_m
 
 #: Default body density (kg/m³), as anny's own ``Anthropometry``.
 DEFAULT_DENSITY_KG_M3 = 980.0
@@ -170,11 +170,13 @@ def closed_volume_m3(vertices: np.ndarray, faces: np.ndarray) -> float:
     vertices : (n, 3) float64
     faces : (m, 3) int
     """
-    f = np.asarray(faces, dtype=np.intp)
-    a, b, c = (np.take(vertices, f[:, k], axis=0).T for k in range(3))
-    det = (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
-           + a[2] * (b[0] * c[1] - b[1] * c[0]))
-    return float(abs(det.sum()) / 6.0)
+    cross, a = face_cross_products(vertices, faces)
+    return _volume_from(cross, a)
+
+
+def _volume_from(cross: np.ndarray, a: np.ndarray) -> float:
+    """Σ a · ((b − a) × (c − a)) / 6 = Σ a · (b × c) / 6 over the triangles."""
+    return float(abs((a * cross).sum()) / 6.0)
 
 
 class Anthropometer:
@@ -196,6 +198,8 @@ class Anthropometer:
         self.model = model
         self.density_kg_m3 = float(density_kg_m3)
         self.landmarks = Landmarks.from_model(model)
+        #: (closed,) bool: which closed-shell triangles are skin (skin faces are the closed ones minus cavities)
+        self._skin_in_closed = model.skin_face_mask[model.closed_face_mask]
 
     def measure(self, bodies: RestBodies) -> pd.DataFrame:
         """One row of :data:`MEASURE_COLUMNS` per body, SI units."""
@@ -206,12 +210,13 @@ class Anthropometer:
         """Measures of one body from its ``(n, 3)`` vertices and ``(j, 3)`` joints."""
         lm = self.landmarks
         stature = float(v[:, 2].max() - v[:, 2].min())
-        volume = closed_volume_m3(v, self.model.closed_faces)
+        cross, corner = face_cross_products(v, self.model.closed_faces)  # skin faces are a subset
+        volume = _volume_from(cross, corner)
+        skin = cross[:, self._skin_in_closed]
+        wbsa = float(0.5 * np.sqrt((skin * skin).sum(axis=0)).sum())
         mass = volume * self.density_kg_m3
         trunk_v = v[lm.trunk_edges.vertex_ids]  # gathered once for the five trunk tapes and the neck
-
-        def horizontal(z: float) -> np.ndarray:
-            return edge_plane_crossings(trunk_v, lm.trunk_edges.edges, np.array([0.0, 0.0, z]), _UP)
+        horizontal = HorizontalSlicer(trunk_v, lm.trunk_edges.edges).points
 
         def girth(z: float) -> float:
             return tape_perimeter_m(horizontal(z), _UP)
@@ -236,7 +241,7 @@ class Anthropometer:
             "volume_m3": volume,
             "mass_kg": mass,
             "bmi": mass / stature**2,
-            "wbsa_m2": float(triangle_areas_m2(v, self.model.skin_faces).sum()),
+            "wbsa_m2": wbsa,
             "waist_circ_m": girth(v[lm.waist_ring, 2].mean()),
             "hip_circ_m": girth(v[lm.hip, 2]),
             "bust_circ_m": girth(v[lm.bust, 2]),

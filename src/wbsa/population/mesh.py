@@ -39,6 +39,30 @@ class TriangleMesh:
         return 0.5 * (self.vertices.min(axis=0) + self.vertices.max(axis=0))
 
 
+def face_cross_products(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per-triangle (b − a) × (c − a) and the first corner a.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float
+    faces : (m, 3) int
+
+    Returns
+    -------
+    cross : (3, m) float64
+        Twice the area-weighted normal of each triangle, component-major.
+    a : (3, m) float64
+        First corner of each triangle, component-major.
+    """
+    v = np.asarray(vertices, dtype=np.float64)
+    f = np.asarray(faces, dtype=np.intp)
+    a, b, c = (np.take(v, f[:, k], axis=0).T for k in range(3))  # np.take: ~2x faster than v[f[:, k]]
+    u = b - a
+    w = c - a
+    cross = np.stack([u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]])
+    return cross, a
+
+
 def triangle_areas_m2(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     """Area of each triangle, ½|u × v| (paper eq. 4).
 
@@ -51,13 +75,5 @@ def triangle_areas_m2(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     -------
     (m,) float64
     """
-    v = np.asarray(vertices, dtype=np.float64)
-    f = np.asarray(faces, dtype=np.intp)
-    a, b, c = (np.take(v, f[:, k], axis=0) for k in range(3))  # np.take: ~2x faster than v[f[:, k]]
-    u = b - a
-    w = c - a
-    # explicit cross product: several times faster than np.cross on (m, 3) arrays
-    cx = u[:, 1] * w[:, 2] - u[:, 2] * w[:, 1]
-    cy = u[:, 2] * w[:, 0] - u[:, 0] * w[:, 2]
-    cz = u[:, 0] * w[:, 1] - u[:, 1] * w[:, 0]
-    return 0.5 * np.sqrt(cx * cx + cy * cy + cz * cz)
+    cross, _ = face_cross_products(vertices, faces)
+    return 0.5 * np.sqrt((cross * cross).sum(axis=0))

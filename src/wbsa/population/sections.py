@@ -46,6 +46,30 @@ def edge_plane_crossings(vertices: np.ndarray, edges: np.ndarray, point: np.ndar
     return vertices[a] + t * (vertices[b] - vertices[a])
 
 
+class HorizontalSlicer:
+    """Horizontal sections of one set of edges at many heights, gathering edge heights once.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float64
+    edges : (e, 2) int
+    """
+
+    def __init__(self, vertices: np.ndarray, edges: np.ndarray):
+        self.vertices = vertices
+        self.edges = edges
+        self.za = vertices[edges[:, 0], 2]
+        self.zb = vertices[edges[:, 1], 2]
+
+    def points(self, z: float) -> np.ndarray:
+        """(k, 3) crossings of the edges with the plane at height ``z``; same as :func:`edge_plane_crossings`."""
+        cross = (self.za < z) != (self.zb < z)
+        za, zb = self.za[cross], self.zb[cross]
+        a, b = self.vertices[self.edges[cross, 0]], self.vertices[self.edges[cross, 1]]
+        t = ((z - za) / (zb - za))[:, None]
+        return a + t * (b - a)
+
+
 def tape_perimeter_m(points: np.ndarray, normal: np.ndarray) -> float:
     """Perimeter of the convex hull of planar points: a tape pulled around the section.
 

@@ -13,6 +13,9 @@ from wbsa.population.anthropometry import DEFAULT_DENSITY_KG_M3, MEASURE_COLUMNS
 from wbsa.population.body_model import PHENOTYPE_COLUMNS, BodyModel, phenotype_array
 from wbsa.progress import progress
 
+#: Smallest local population worth starting worker processes for.
+PARALLEL_MIN_BODIES = 2000
+
 #: Columns every population table has.
 POPULATION_COLUMNS = ("subject_id", "sex", "age_years", *PHENOTYPE_COLUMNS, *MEASURE_COLUMNS)
 
@@ -30,8 +33,8 @@ def measure_population(params: pd.DataFrame, *, density_kg_m3: float = DEFAULT_D
     density_kg_m3
         Body density for mass = volume × density.
     workers, scheduler
-        Local worker processes, or a dask scheduler address (see :mod:`wbsa.parallel`); the
-        table is the same whatever the worker count.
+        Local worker processes (used from :data:`PARALLEL_MIN_BODIES` bodies up), or a dask
+        scheduler address (see :mod:`wbsa.parallel`); the table is the same whatever the worker count.
 
     Returns
     -------
@@ -46,9 +49,11 @@ def measure_population(params: pd.DataFrame, *, density_kg_m3: float = DEFAULT_D
     parts: list[pd.DataFrame | None] = [None] * len(chunks)
     scheduler = resolve_scheduler(scheduler)
     with progress(total=len(params), desc="bodies", unit="body", enabled=show_progress) as bar:
-        if scheduler is None and (workers <= 1 or len(chunks) <= 1):
-            for i, (chunk, density) in enumerate(chunks):
-                parts[i] = _measure_chunk(chunk, density, model)
+        # starting workers costs each a model load (~5 s): below PARALLEL_MIN_BODIES one process is faster
+        if scheduler is None and (workers <= 1 or len(params) < PARALLEL_MIN_BODIES):
+            meter = Anthropometer(model, density_kg_m3) if model is not None else _anthropometer(density_kg_m3)
+            for i, (chunk, _) in enumerate(chunks):
+                parts[i] = meter.measure(meter.model.rest_bodies(chunk))
                 bar.update(len(chunk))
         else:
             with dask_client(workers, scheduler) as client:
@@ -69,9 +74,9 @@ def _anthropometer(density_kg_m3: float) -> Anthropometer:
     return Anthropometer(BodyModel(), density_kg_m3)
 
 
-def _measure_chunk(params: pd.DataFrame, density_kg_m3: float, model: BodyModel | None = None) -> pd.DataFrame:
-    """Measures of one chunk of bodies (runs in a worker process or in-process)."""
-    meter = Anthropometer(model, density_kg_m3) if model is not None else _anthropometer(density_kg_m3)
+def _measure_chunk(params: pd.DataFrame, density_kg_m3: float) -> pd.DataFrame:
+    """Measures of one chunk of bodies in a worker process (its body model is built once)."""
+    meter = _anthropometer(density_kg_m3)
     return meter.measure(meter.model.rest_bodies(params))
 
 

@@ -9,6 +9,7 @@ import numpy as np
 import pandas as pd
 
 from wbsa.io import read_table
+from wbsa.parallel import keep_large_allocations, single_threaded_math
 from wbsa.population.anthropometry import DEFAULT_DENSITY_KG_M3, MEASURE_COLUMNS, Anthropometer
 from wbsa.population.body_model import PHENOTYPE_COLUMNS, BodyModel, phenotype_array
 from wbsa.progress import progress
@@ -52,9 +53,10 @@ def measure_population(params: pd.DataFrame, *, density_kg_m3: float = DEFAULT_D
         # starting workers costs each a model load (~5 s): below PARALLEL_MIN_BODIES one process is faster
         if scheduler is None and (workers <= 1 or len(params) < PARALLEL_MIN_BODIES):
             meter = Anthropometer(model, density_kg_m3) if model is not None else _anthropometer(density_kg_m3)
-            for i, (chunk, _) in enumerate(chunks):
-                parts[i] = meter.measure(meter.model.rest_bodies(chunk))
-                bar.update(len(chunk))
+            with single_threaded_math():
+                for i, (chunk, _) in enumerate(chunks):
+                    parts[i] = meter.measure(meter.model.rest_bodies(chunk))
+                    bar.update(len(chunk))
         else:
             with dask_client(workers, scheduler) as client:
                 for i, rows in map_unordered(client, _measure_chunk, chunks, tag="population"):
@@ -76,8 +78,10 @@ def _anthropometer(density_kg_m3: float) -> Anthropometer:
 
 def _measure_chunk(params: pd.DataFrame, density_kg_m3: float) -> pd.DataFrame:
     """Measures of one chunk of bodies in a worker process (its body model is built once)."""
+    keep_large_allocations()
     meter = _anthropometer(density_kg_m3)
-    return meter.measure(meter.model.rest_bodies(params))
+    with single_threaded_math():
+        return meter.measure(meter.model.rest_bodies(params))
 
 
 def read_population(path: str | os.PathLike) -> pd.DataFrame:

@@ -16,6 +16,7 @@ import numpy as np
 import pandas as pd
 
 from wbsa.errors import WbsaError
+from wbsa.parallel import keep_large_allocations, single_threaded_math
 from wbsa.scan.settings import ScanSettings
 
 _BODY_MODEL = None
@@ -88,54 +89,6 @@ def scan_chunk(subjects: pd.DataFrame, settings: ScanSettings) -> pd.DataFrame:
         for subject_id, mesh in zip(subjects["subject_id"].to_numpy(), meshes):
             rows.extend(scan_subject(mesh, int(subject_id), settings, nthreads=nthreads))
     return pd.DataFrame(rows)
-
-
-_MALLOC_TUNED = False
-
-
-def keep_large_allocations() -> None:
-    """Let glibc serve the per-view arrays (a few MB) from the heap instead of fresh ``mmap`` pages.
-
-    dask starts its workers with ``MALLOC_TRIM_THRESHOLD_=65536``, which also switches off glibc's
-    adaptive mmap threshold: every array over 128 kB then comes from new zeroed pages and goes back to
-    the system when freed, about 300-600 page faults and 10 % more CPU per view. Raising the mmap and
-    trim thresholds (32 MB, 128 MB) once per process restores reuse. No effect off glibc.
-    """
-    global _MALLOC_TUNED
-    if _MALLOC_TUNED:
-        return
-    _MALLOC_TUNED = True
-    import ctypes
-    import ctypes.util
-
-    try:
-        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
-        mallopt = libc.mallopt
-    except (OSError, AttributeError):
-        return
-    m_trim_threshold, m_mmap_threshold = -1, -3
-    mallopt(m_mmap_threshold, 32 << 20)  # glibc caps it at 32 MB on 64-bit
-    mallopt(m_trim_threshold, 128 << 20)
-
-
-@contextmanager
-def single_threaded_math() -> Iterator[None]:
-    """One torch thread and one BLAS thread inside the block, as in a dask worker.
-
-    Multi-threaded torch and BLAS kernels add in another order than single-threaded ones, so the last
-    bit of a vertex or an area would depend on whether a chunk ran in a worker (one thread each, dask's
-    default) or in this process. The scan's speed lies in the ray casting, which this does not touch.
-    """
-    import torch
-    from threadpoolctl import threadpool_limits
-
-    before = torch.get_num_threads()
-    torch.set_num_threads(1)
-    try:
-        with threadpool_limits(limits=1, user_api="blas"):
-            yield
-    finally:
-        torch.set_num_threads(before)
 
 
 def scan_subject(mesh, subject_id: int, settings: ScanSettings, *, nthreads: int = 0) -> list[dict[str, Any]]:

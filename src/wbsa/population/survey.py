@@ -29,7 +29,7 @@ import pandas as pd
 from wbsa.errors import WbsaError
 from wbsa.population.age import years_to_param
 from wbsa.population.anthropometry import DEFAULT_DENSITY_KG_M3
-from wbsa.population.survey_match import MatchSettings
+from wbsa.population.survey_match import MatchSettings, torch_threads
 
 #: Columns a survey population has beyond the random population's.
 SURVEY_COLUMNS = (
@@ -141,7 +141,8 @@ def build_survey_population(n: int, variations: int = 0, seed: int = 0, *,
     meter = Anthropometer(model, density_kg_m3)
     measurer = TorchMeasurer(model, meter)
     clock.lap("model")
-    table = StartTable.build(measurer, s.match.start)
+    with torch_threads(s.match.threads):
+        table = StartTable.build(measurer, s.match.start)
     clock.lap("start_table")
     fit = match_bodies(survey_targets(people), measurer, s.match, table=table, show_progress=show_progress)
     clock.lap("match")
@@ -225,23 +226,20 @@ def _add_match_columns(table: pd.DataFrame, m: MatchSettings) -> pd.DataFrame:
 
     out = table.copy()
     first = out["variation"].to_numpy() == 0
-    ok = np.ones(len(out), dtype=bool)
     tol = dict(zip(("stature_m", "mass_kg", "waist_circ_m", "hip_circ_m"), m.tolerances))
+    within = {}
     for measure, survey, err in _MATCHED:
         e = out[measure].to_numpy() - out[survey].to_numpy()
-        within = np.abs(e) <= tol[measure]
         # a girth the survey lacks is not matched and cannot fail; a body whose own girth is
         # undefined (NaN) where the survey has one fails
-        within = np.where(np.isnan(out[survey].to_numpy()), True, within)
-        ok &= within
+        within[measure] = np.isnan(out[survey].to_numpy()) | (np.abs(e) <= tol[measure])
         out[err] = np.where(first, e, np.nan)
-        if measure == "mass_kg":
-            stature_mass = ok.copy()
+    stature_mass = within["stature_m"] & within["mass_kg"]
+    everything = stature_mass & within["waist_circ_m"] & within["hip_circ_m"]
     person = out["survey_id"].to_numpy()
-    matched = pd.Series(np.where(first, ok, True)).groupby(person).transform("all").to_numpy()
-    stature_mass_ok = pd.Series(np.where(first, stature_mass, True)).groupby(person).transform("all").to_numpy()
-    out["matched"] = matched
-    out["matched_stature_mass"] = stature_mass_ok
+    for column, ok in (("matched", everything), ("matched_stature_mass", stature_mass)):
+        # the matched body's flag, on all of its person's rows
+        out[column] = pd.Series(np.where(first, ok, True)).groupby(person).transform("all").to_numpy()
     return out[[*POPULATION_COLUMNS, *SURVEY_COLUMNS]]
 
 

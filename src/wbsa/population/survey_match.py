@@ -6,25 +6,30 @@ body's stature, mass, waist and hip (as :class:`~wbsa.population.anthropometry.A
 defines them) equal the person's. The fit is a damped Gauss–Newton (Levenberg–Marquardt)
 least-squares problem per person, solved for a whole batch at once:
 
-* unknowns: ``u`` with ``parameter = low + (high − low) · sigmoid(u)``, so every step stays
-  inside the parameter bounds;
+* unknowns: the free phenotypes themselves, kept inside ``bounds`` by projection: a step is
+  clipped to the box, and a parameter on a bound that the gradient pushes outwards sits out
+  the step (a sigmoid map would do the same job but traps parameters that reach a bound,
+  where its slope vanishes);
 * residuals: ``(measure − target) / tolerance`` for every measure the person has (a missing
-  waist or hip simply drops out; girths weigh ``girth_weight``, so stature and mass come first), plus a weak pull of each free parameter towards 0.5
-  (``prior_weight``) that picks the most neutral body when several fit equally well;
+  waist or hip simply drops out), weighted by ``weights`` so that stature and mass come
+  first, plus a weak pull of each free parameter towards 0.5 (``prior_weight``) that picks
+  the most neutral body when several fit equally well;
 * Jacobian: exact, from :class:`~wbsa.population.survey_measures.TorchMeasurer` (measure
   gradients in blendshape space) chained through anny's phenotype → coefficient map;
 * start: a tabulated inverse (:class:`~wbsa.population.survey_start.StartTable`), which puts
   every person in the right basin (anny's mass and waist are not monotone in muscle).
 
 A person leaves the batch once every measure it has is within ``converge_fraction`` of its
-tolerance, or after ``max_iterations``. Each person's steps depend on that person only, so
-results do not depend on the batch size or on who else is in the batch (up to floating-point
-rounding of the batched products).
+tolerance, after ``_STALL`` iterations without progress, or after ``max_iterations``. Each
+person's steps depend on that person only, so results do not depend on the batch size or on
+who else is in the batch (up to floating-point rounding of the batched products).
 """
 
 from __future__ import annotations
 
+from contextlib import contextmanager
 from dataclasses import dataclass, field
+from typing import Iterator
 
 import numpy as np
 import pandas as pd
@@ -45,7 +50,7 @@ FREE_PHENOTYPES = ("p_muscle", "p_weight", "p_height", "p_proportions", "p_cupsi
 _INDEX = {name: i for i, name in enumerate(PHENOTYPE_COLUMNS)}
 _STALL = 5
 _DAMPING_FLOOR = 1e-3
-_MAX_STEP = 3.0
+_KINK_HOP = 1e-5
 
 
 @dataclass(frozen=True)
@@ -61,11 +66,13 @@ class MatchSettings:
         ``(low, high)`` range of every free phenotype.
     free_cupsize
         Fit cup size for women (men keep 0.5, where it has almost no effect).
-    girth_weight
-        Weight of the waist and hip residuals relative to stature and mass (in tolerance
-        units). Below 1, stature and mass are met first and the girths are fitted as well
-        as the body model allows with them held (anny cannot reach every real waist-hip
-        combination at a given stature and mass).
+    weights
+        Weights of the stature, mass, waist and hip residuals (each in units of its
+        tolerance). Stature and mass are met first and the girths fitted as well as the body
+        model allows with them held (anny cannot reach every real waist–hip combination at a
+        given stature and mass); where even the mass is out of reach (BMI beyond anny's range)
+        stature weighs more, so the body keeps the person's stature and falls short in mass
+        rather than growing taller to gain it.
     prior_weight
         Weight of the pull of each free phenotype towards 0.5 (in tolerance units per unit
         of phenotype).
@@ -77,6 +84,11 @@ class MatchSettings:
         People fitted together.
     start
         The bodies of the tabulated inverse that starts every fit.
+    threads
+        torch intra-op threads while fitting (None: leave torch's setting). The fit is many
+        small operations, for which one thread is fastest (on the 2-core build machine two
+        threads took 2.4 times the CPU time and twice the wall time); a fixed count also
+        makes the results bitwise independent of the machine's core count.
     """
 
     stature_tol_m: float = 0.01
@@ -84,12 +96,13 @@ class MatchSettings:
     girth_tol_m: float = 0.03
     bounds: tuple[float, float] = (0.0, 1.0)
     free_cupsize: bool = True
-    girth_weight: float = 0.1
+    weights: tuple[float, float, float, float] = (3.0, 1.0, 0.1, 0.1)
     prior_weight: float = 0.05
     max_iterations: int = 40
     converge_fraction: float = 0.25
     batch_size: int = 256
     start: StartGrid = field(default_factory=StartGrid)
+    threads: int | None = 1
 
     def __post_init__(self) -> None:
         lo, hi = self.bounds
@@ -98,6 +111,10 @@ class MatchSettings:
         for name in ("stature_tol_m", "mass_tol_kg", "girth_tol_m"):
             if not getattr(self, name) > 0:
                 raise WbsaError(f"match tolerance {name} = {getattr(self, name)} must be positive")
+        if len(self.weights) != 4 or not all(w > 0 for w in self.weights):
+            raise WbsaError(f"match weights {self.weights} must be four positive numbers (stature, mass, waist, hip)")
+        if self.threads is not None and self.threads < 1:
+            raise WbsaError(f"match threads = {self.threads} must be >= 1 (or None for torch's default)")
         if self.max_iterations < 0 or self.batch_size < 1:
             raise WbsaError("match max_iterations must be >= 0 and batch_size >= 1")
 
@@ -143,18 +160,34 @@ def match_bodies(targets: pd.DataFrame, measurer: TorchMeasurer, settings: Match
     fit = np.full((n, 4), np.nan)
     iters = np.zeros(n, dtype=np.int64)
     done = np.zeros(n, dtype=bool)
-    table = table if table is not None else StartTable.build(measurer, settings.start)
-    with progress(total=n, desc="matching", unit="person", enabled=show_progress) as bar:
-        for start in range(0, n, settings.batch_size):
-            sl = slice(start, start + settings.batch_size)
-            phen[sl], fit[sl], iters[sl], done[sl] = _match_batch(fixed[sl], goal[sl], measurer, settings, table)
-            bar.update(len(fixed[sl]))
+    with torch_threads(settings.threads):
+        table = table if table is not None else StartTable.build(measurer, settings.start)
+        with progress(total=n, desc="matching", unit="person", enabled=show_progress) as bar:
+            for start in range(0, n, settings.batch_size):
+                sl = slice(start, start + settings.batch_size)
+                phen[sl], fit[sl], iters[sl], done[sl] = _match_batch(fixed[sl], goal[sl], measurer, settings,
+                                                                      table)
+                bar.update(len(fixed[sl]))
     out = pd.DataFrame(phen, columns=list(PHENOTYPE_COLUMNS), index=targets.index)
     for j, name in enumerate(FIT_MEASURES):
         out[f"fit_{name}"] = fit[:, j]
     out["fit_iterations"] = iters
     out["fit_converged"] = done
     return out
+
+
+@contextmanager
+def torch_threads(n: int | None) -> Iterator[None]:
+    """Run the body with ``n`` torch intra-op threads (None: unchanged), then restore."""
+    import torch
+
+    previous = torch.get_num_threads()
+    if n is not None:
+        torch.set_num_threads(n)
+    try:
+        yield
+    finally:
+        torch.set_num_threads(previous)
 
 
 # -- the fit ---------------------------------------------------------------------------------
@@ -180,22 +213,22 @@ class _Problem:
         else:
             mask[:, -1] = fixed[:, 0] >= 0.5
         self.free_mask = torch.as_tensor(mask)
-        # (unknown index, unknown value) of every inner interpolation anchor of a free phenotype
+        # (unknown index, value) of every inner interpolation anchor of a free phenotype
         lo, hi = settings.bounds
         self.kinks = []
         for j, name in enumerate(FREE_PHENOTYPES):
             for a in measurer.model.anny.anchors[name[2:]][1:-1].tolist():
                 if lo < a < hi:
-                    self.kinks.append((j, float(_logit(np.array(a), settings.bounds))))
+                    self.kinks.append((j, float(a)))
         self.goal = torch.as_tensor(np.nan_to_num(goal, nan=0.0), dtype=measurer.dtype)
         self.has = torch.as_tensor(np.isfinite(goal))
         self.tol = torch.as_tensor(settings.tolerances, dtype=measurer.dtype)
-        weight = np.array([1.0, 1.0, settings.girth_weight, settings.girth_weight])
+        weight = np.asarray(settings.weights, dtype=np.float64)
         #: residual unit of each measure: its tolerance over its weight
         self.unit = self.tol / torch.as_tensor(weight, dtype=measurer.dtype)
 
     def phenotypes(self, u):
-        """(b, 11) phenotypes and (b, d) free values of unknowns ``u`` (b, d) (differentiable)."""
+        """(b, 11) phenotypes and (b, d) free values for free phenotypes ``u`` (b, d) (differentiable)."""
         return _SubProblem(self, slice(None)).phenotypes(u)
 
     def stop_at_kinks(self, u, step):
@@ -208,18 +241,19 @@ class _Problem:
         """
         torch = self.torch
         alpha = torch.ones(len(u), dtype=u.dtype)
-        for j, u_kink in self.kinks:
-            crossing = (u[:, j] - u_kink) * (u[:, j] + step[:, j] - u_kink) < 0
-            frac = (u_kink - u[:, j]) / torch.where(crossing, step[:, j], torch.ones_like(step[:, j]))
+        for j, kink in self.kinks:
+            crossing = (u[:, j] - kink) * (u[:, j] + step[:, j] - kink) < 0
+            frac = (kink - u[:, j]) / torch.where(crossing, step[:, j], torch.ones_like(step[:, j]))
             alpha = torch.where(crossing & (frac < alpha), frac, alpha)
         trial = u + alpha[:, None] * step
-        for j, u_kink in self.kinks:
-            landed = (alpha < 1) & ((trial[:, j] - u_kink).abs() <= 1e-9 + 1e-9 * alpha * step[:, j].abs())
-            trial[:, j] = torch.where(landed, u_kink + 1e-4 * torch.sign(step[:, j]), trial[:, j])
-        return trial
+        for j, kink in self.kinks:
+            landed = (alpha < 1) & ((trial[:, j] - kink).abs() <= 1e-12 + 1e-9 * step[:, j].abs())
+            trial[:, j] = torch.where(landed, kink + _KINK_HOP * torch.sign(step[:, j]), trial[:, j])
+        lo, hi = self.s.bounds
+        return trial.clamp(lo, hi)
 
     def residuals(self, u, rows, jacobian: bool):
-        """Residuals ``(b, 4 + d)``, measures ``(b, 4)`` and Jacobian ``(b, 4 + d, d)`` of ``u[rows]``."""
+        """Residuals ``(b, 4 + d)``, measures ``(b, 4)``, Jacobian ``(b, 4 + d, d)`` at free values ``u`` of ``rows``."""
         torch = self.torch
         sub = _SubProblem(self, rows)
         uu = u.detach().clone().requires_grad_(jacobian)
@@ -240,9 +274,7 @@ class _Problem:
             weight = torch.where(has[:, k:k + 1], ev.grad[:, k] / self.unit[k], torch.zeros_like(ev.grad[:, k]))
             (g,) = torch.autograd.grad(coeffs, uu, grad_outputs=weight, retain_graph=True)
             jac[:, k] = g
-        lo, hi = self.s.bounds
-        dfree = (hi - lo) * torch.sigmoid(uu.detach()) * (1 - torch.sigmoid(uu.detach()))
-        jac[:, 4:] = torch.diag_embed(self.s.prior_weight * dfree * sub.free_mask)
+        jac[:, 4:] = torch.diag_embed(self.s.prior_weight * sub.free_mask.to(u.dtype))
         jac = jac * sub.free_mask[:, None, :]
         return r, values, jac
 
@@ -259,46 +291,106 @@ class _SubProblem:
 
     def phenotypes(self, u):
         torch = self.p.torch
-        lo, hi = self.p.s.bounds
-        free = lo + (hi - lo) * torch.sigmoid(u)
-        free = torch.where(self.free_mask, free, torch.full_like(free, 0.5))
+        free = torch.where(self.free_mask, u, torch.full_like(u, 0.5))
         ph = self.base.clone()
         ph[:, self.p.free_index] = free
         return ph, free
 
 
-def _logit(p: np.ndarray, bounds: tuple[float, float]) -> np.ndarray:
-    lo, hi = bounds
-    q = np.clip((np.asarray(p, dtype=np.float64) - lo) / (hi - lo), 1e-4, 1 - 1e-4)
-    return np.log(q / (1 - q))
-
-
-def _start(problem: _Problem, table: StartTable, fixed: np.ndarray, goal: np.ndarray) -> np.ndarray:
-    """Starting unknowns ``(b, d)`` from the tabulated inverse (cup size starts at 0.5)."""
+def _start(problem: _Problem, table: StartTable, fixed: np.ndarray, goal: np.ndarray,
+           muscle_side: str = "any") -> np.ndarray:
+    """Starting free phenotypes ``(b, d)`` from the tabulated inverse (cup size starts at 0.5)."""
     free = np.full((len(fixed), len(FREE_PHENOTYPES)), 0.5)
-    free[:, :4] = table.start(fixed, goal, problem.s.tolerances)
-    lo, hi = problem.s.bounds
-    margin = 0.02 * (hi - lo)
-    return _logit(np.clip(free, lo + margin, hi - margin), problem.s.bounds)
+    free[:, :4] = table.start(fixed, goal, problem.s.tolerances, muscle_side)
+    return np.clip(free, *problem.s.bounds)
+
+
+def _box_step(r, jac, u, mu, free, bounds):
+    """Damped Gauss–Newton step ``(b, d)`` that keeps ``u + step`` inside ``bounds``.
+
+    An active-set loop: a parameter on a bound that the descent direction pushes outwards,
+    or one whose step would leave the box, is held at the bound and the step is solved again
+    for the others, with the held parameters' moves taken into account. Marquardt damping
+    ``mu``, with a floor so that a flat direction (cup size for men) gets no step.
+    """
+    import torch
+
+    lo, hi = bounds
+    jtr = (jac.transpose(1, 2) @ r[..., None])[..., 0]
+    held = ~free | ((u <= lo) & (jtr > 0)) | ((u >= hi) & (jtr < 0))
+    held_step = torch.zeros_like(u)
+    step = held_step
+    for _ in range(u.shape[1] + 1):
+        moving = ~held
+        r_adj = r + (jac @ held_step[..., None])[..., 0]
+        jm = jac * moving[:, None, :]
+        jtj = jm.transpose(1, 2) @ jm
+        g = (jm.transpose(1, 2) @ r_adj[..., None])[..., 0]
+        diag = torch.diagonal(jtj, dim1=1, dim2=2) + _DAMPING_FLOOR
+        a = jtj + torch.diag_embed(mu[:, None] * diag + _DAMPING_FLOOR)
+        step = -torch.linalg.solve(a, g) * moving + held_step
+        new = u + step
+        out = moving & ((new < lo) | (new > hi))
+        if not out.any():
+            break
+        held_step = torch.where(out, new.clamp(lo, hi) - u, held_step)
+        held = held | out
+    return step
 
 
 def _match_batch(fixed: np.ndarray, goal: np.ndarray, measurer: TorchMeasurer, s: MatchSettings,
                  table: StartTable):
-    """Fit one batch; returns phenotypes (b, 11), fit measures (b, 4), iterations (b,), converged (b,)."""
+    """Fit one batch; returns phenotypes (b, 11), fit measures (b, 4), iterations (b,), converged (b,).
+
+    People whose stature or mass is still off after the first fit are fitted again from the
+    best start on the other side of muscle 0.5 (anny's mass has a separate basin on each
+    side), and keep the better of the two fits.
+    """
     torch = measurer.torch
     problem = _Problem(fixed, goal, measurer, s)
-    b = len(fixed)
-    u = torch.as_tensor(_start(problem, table, fixed, goal), dtype=measurer.dtype)
-    all_rows = torch.arange(b)
-    r, values, jac = problem.residuals(u, all_rows, jacobian=True)
+    u0 = torch.as_tensor(_start(problem, table, fixed, goal), dtype=measurer.dtype)
+    u, r, values, iters = _fit(problem, u0, torch.arange(len(fixed)))
+    err = (values - problem.goal).abs() / problem.tol
+    retry = torch.nonzero((err[:, :2] > 1.0).any(dim=1)).flatten()
+    if len(retry):
+        rows = retry.numpy()
+        low = (u0[retry, FREE_PHENOTYPES.index("p_muscle")] > 0.5).numpy()
+        start = np.where(low[:, None],
+                         _start(problem, table, fixed[rows], goal[rows], "low"),
+                         _start(problem, table, fixed[rows], goal[rows], "high"))
+        u2, r2, values2, iters2 = _fit(problem, torch.as_tensor(start, dtype=measurer.dtype), retry)
+        better = (r2**2).sum(dim=1) < (r[retry] ** 2).sum(dim=1)
+        keep = retry[better]
+        u[keep], r[keep], values[keep] = u2[better], r2[better], values2[better]
+        iters[retry] += iters2
+    ph, _ = problem.phenotypes(u)
+    return ph.detach().numpy(), values.numpy(), iters.numpy(), _converged(problem, values).numpy()
+
+
+def _converged(problem: _Problem, values):
+    """(b,) bool: every measure the person has within ``converge_fraction`` of its tolerance."""
+    err = (values - problem.goal).abs() / problem.tol
+    return ((err <= problem.s.converge_fraction) | ~problem.has).all(dim=1)
+
+
+def _fit(problem: _Problem, u, rows):
+    """Levenberg–Marquardt from free phenotypes ``u`` (b, d) of the people ``rows`` (b,).
+
+    Returns the final free phenotypes, residuals, measures and iteration counts.
+    """
+    torch = problem.torch
+    s = problem.s
+    sub = _SubProblem(problem, rows)
+    u = u.clone()
+    b = len(rows)
+    r, values, jac = problem.residuals(u, rows, jacobian=True)
     mu = torch.full((b,), 1e-2, dtype=u.dtype)
     iters = torch.zeros(b, dtype=torch.long)
     stall = torch.zeros(b, dtype=torch.long)
-    tol_frac = s.converge_fraction
 
     def converged():
-        err = (values - problem.goal).abs() / problem.tol
-        return ((err <= tol_frac) | ~problem.has).all(dim=1)
+        err = (values - sub.goal).abs() / problem.tol
+        return ((err <= s.converge_fraction) | ~sub.has).all(dim=1)
 
     done = converged()
     for _ in range(s.max_iterations):
@@ -306,31 +398,19 @@ def _match_batch(fixed: np.ndarray, goal: np.ndarray, measurer: TorchMeasurer, s
         if len(active) == 0:
             break
         ra, ja, ua, mua = r[active], jac[active], u[active], mu[active]
-        jtj = ja.transpose(1, 2) @ ja
-        jtr = (ja.transpose(1, 2) @ ra[..., None])[..., 0]
-        # Marquardt damping, with a floor so that a flat direction (a saturated sigmoid, or
-        # cup size for men) gets a small step rather than a huge one
-        diag = torch.diagonal(jtj, dim1=1, dim2=2) + _DAMPING_FLOOR
-        a = jtj + torch.diag_embed(mua[:, None] * diag + _DAMPING_FLOOR)
-        step = -torch.linalg.solve(a, jtr)
-        step = step * problem.free_mask[active]
-        norm = step.norm(dim=1, keepdim=True)
-        step = step * torch.clamp(_MAX_STEP / torch.clamp(norm, min=1e-12), max=1.0)
+        step = _box_step(ra, ja, ua, mua, sub.free_mask[active], s.bounds)
         trial = problem.stop_at_kinks(ua, step)
-        rt, vt, jt = problem.residuals(trial, active, jacobian=True)
+        rt, vt, jt = problem.residuals(trial, rows[active], jacobian=True)
         old, new = (ra**2).sum(dim=1), (rt**2).sum(dim=1)
         better = new < old
         mu[active] = torch.where(better, mua / 3.0, mua * 4.0)
         iters[active] += 1
         # a person is at its optimum when for `_STALL` iterations no step has lowered the cost
-        # by 0.1 % while moving some measure by 1 % of its tolerance (creeping towards a bound
-        # of the sigmoid lowers the cost forever, but by nothing that matters)
+        # by 0.1 % while moving some measure by 1 % of its tolerance
         moved = ((vt - values[active]).abs() / problem.tol > 0.01).any(dim=1)
         progress_made = better & moved & (old - new > 1e-3 * old + 1e-9)
         stall[active] = torch.where(progress_made, torch.zeros_like(stall[active]), stall[active] + 1)
         acc = active[better]
         u[acc], r[acc], values[acc], jac[acc] = trial[better], rt[better], vt[better], jt[better]
         done = converged() | (stall >= _STALL)
-    ph, _ = problem.phenotypes(u)
-    ok = converged()
-    return ph.detach().numpy(), values.numpy(), iters.numpy(), ok.numpy()
+    return u, r, values, iters

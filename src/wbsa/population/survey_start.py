@@ -14,12 +14,14 @@ For a person, both tables are interpolated linearly in anny's age parameter betw
 nearest age nodes; the shape cell nearest to the person's BMI and girth ratios (distances in
 units of the match tolerances at the person's stature) gives muscle, weight and proportions,
 and the stature table, scaled by that cell's stature relative to the neutral body and inverted
-by linear interpolation, gives height.
+by linear interpolation, gives height. A start can be restricted to one side of muscle 0.5, so
+that a fit that ends in the wrong basin can be tried again from the other.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 
@@ -112,7 +114,8 @@ class StartTable:
         shape[..., 3] /= neutral[:, :, None]
         return cls(grid=grid, age_nodes=ages, shape_params=cells, shape=shape, stature=stature)
 
-    def start(self, fixed: np.ndarray, goal: np.ndarray, tolerances: np.ndarray) -> np.ndarray:
+    def start(self, fixed: np.ndarray, goal: np.ndarray, tolerances: np.ndarray,
+              muscle_side: Literal["any", "low", "high"] = "any") -> np.ndarray:
         """Starting (muscle, weight, height, proportions) ``(b, 4)`` of each person.
 
         Parameters
@@ -123,6 +126,9 @@ class StartTable:
             Target stature (m), mass (kg), waist and hip (m); NaN girths are ignored.
         tolerances : (4,) float64
             Match tolerances, the units of the table distance.
+        muscle_side
+            Only cells with muscle <= 0.5 (``low``) or >= 0.5 (``high``): the two basins of
+            anny's muscle, for a second start on the other side.
         """
         sex = (fixed[:, 0] >= 0.5).astype(int)
         lo, w = _age_weights(self.age_nodes, fixed[:, 1])
@@ -134,7 +140,11 @@ class StartTable:
         scale = np.stack([tolerances[1] / h**2, tolerances[2] / h, tolerances[3] / h], axis=1)
         diff = (shape[..., :3] - target[:, None, :]) / scale[:, None, :]
         diff = np.where(np.isfinite(target)[:, None, :], diff, 0.0)
-        best = np.argmin((diff**2).sum(axis=2), axis=1)
+        cost = (diff**2).sum(axis=2)
+        if muscle_side != "any":
+            m = self.shape_params[:, 0]
+            cost = np.where((m <= 0.5) if muscle_side == "low" else (m >= 0.5), cost, np.inf)
+        best = np.argmin(cost, axis=1)
         muscle, weight, proportions = self.shape_params[best].T
         # the chosen cell is taller or shorter than the neutral body by a factor; heights scale with it
         factor = shape[np.arange(len(h)), best, 3]

@@ -7,6 +7,10 @@ to the baseline measured in the same run: measuring the same bodies exactly (the
 ``measure_population``).
 
     .venv/bin/python benchmarks/bench_survey_match.py --n 500 --seed 0 [--threads 1] [--out matches.parquet]
+        [--phenotypes-only]
+
+``--phenotypes-only`` keeps the body model's local changes at 0 (the matcher before they were
+fitted), for comparison.
 """
 
 from __future__ import annotations
@@ -26,6 +30,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--weighted", action="store_true", help="draw by exam weight")
     parser.add_argument("--threads", type=int, default=1,
                         help="torch threads while matching (default 1, the library default; 0 = torch's own)")
+    parser.add_argument("--phenotypes-only", action="store_true",
+                        help="fit phenotypes only (local changes stay 0), for comparison")
     parser.add_argument("--out", help="write the matched table here (.parquet)")
     args = parser.parse_args(argv)
 
@@ -34,7 +40,8 @@ def main(argv: list[str] | None = None) -> int:
     from wbsa.population.survey import SurveyMatchWarning, SurveyPopulationSettings, build_survey_population
     from wbsa.population.survey_match import MatchSettings
 
-    settings = SurveyPopulationSettings(match=MatchSettings(threads=args.threads or None))
+    settings = SurveyPopulationSettings(match=MatchSettings(threads=args.threads or None,
+                                                                    free_local_changes=not args.phenotypes_only))
     threads = args.threads or torch.get_num_threads()
     load0 = os.getloadavg()[0]
     t0, c0 = time.perf_counter(), time.process_time()
@@ -48,6 +55,7 @@ def main(argv: list[str] | None = None) -> int:
         table.to_parquet(args.out, index=False)
 
     print(f"survey match benchmark: n={args.n} seed={args.seed} weighted={args.weighted} "
+          f"local changes {'fixed at 0' if args.phenotypes_only else 'fitted'} "
           f"torch threads while matching={threads} cpus={os.cpu_count()} "
           f"load average {load0:.1f} -> {os.getloadavg()[0]:.1f}")
     print(f"{'stage':<12} {'wall s':>8} {'cpu s':>8}")
@@ -72,6 +80,12 @@ def main(argv: list[str] | None = None) -> int:
                 print(f"  {key[:-4] + ' ' + unit:<8} {g[key + '_within']:7.1%} {g[f'{key}_{unit}_p50']:7.2f} "
                       f"{g[f'{key}_{unit}_p95']:7.2f} {g[f'{key}_{unit}_max']:7.2f} "
                       f"{g[f'{key}_{unit}_mean_signed']:12.2f}")
+    from wbsa.population.body_model import LOCAL_CHANGE_COLUMNS
+
+    print("\nlocal changes of the matched bodies (quantiles 0 / 5 / 50 / 95 / 100 %):")
+    for name in LOCAL_CHANGE_COLUMNS:
+        q = table[name].quantile([0, 0.05, 0.5, 0.95, 1]).to_numpy()
+        print(f"  {name:<20} " + " ".join(f"{x:6.2f}" for x in q))
     print("\nskipped survey rows:", json.dumps(s["skipped"]), " dropped values:", json.dumps(s["dropped"]))
     return 0
 

@@ -80,6 +80,45 @@ def test_phenotypes_outside_unit_interval_are_rejected(body_model):
         body_model.rest_bodies(bad)
 
 
+def test_local_changes_default_to_none_and_move_their_own_girth(anthropometer, body_model):
+    """l_* absent = l_* 0 (the phenotype-only body); the waist change moves the waist, the hip change the hip."""
+    from wbsa.population.body_model import LOCAL_CHANGE_COLUMNS
+
+    adult = reference_adult(1.0)
+    plain = body_model.rest_bodies(adult).vertices
+    zeros = adult.assign(**{c: 0.0 for c in LOCAL_CHANGE_COLUMNS})
+    np.testing.assert_array_equal(body_model.rest_bodies(zeros).vertices, plain)
+    adult = adult.assign(l_waist_circ=0.0, l_hips_circ=0.0)
+    rows = pd.concat([adult, adult.assign(l_waist_circ=1.0), adult.assign(l_waist_circ=-1.0),
+                      adult.assign(l_hips_circ=1.0), adult.assign(l_hips_circ=-1.0)], ignore_index=True)
+    m = anthropometer.measure(body_model.rest_bodies(rows))
+    waist, hip = m["waist_circ_m"].to_numpy(), m["hip_circ_m"].to_numpy()
+    assert waist[1] > waist[0] + 0.02 and waist[2] < waist[0] - 0.02
+    assert hip[3] > hip[0] + 0.02 and hip[4] < hip[0] - 0.01
+    assert abs(hip[1] - hip[0]) < abs(waist[1] - waist[0])  # the waist change is local
+    assert abs(waist[3] - waist[0]) < abs(hip[3] - hip[0])
+
+
+def test_local_changes_outside_their_range_are_rejected(body_model):
+    from wbsa.errors import WbsaError
+
+    with pytest.raises(WbsaError, match="l_buttocks_volume"):
+        body_model.rest_bodies(_neutral().assign(l_buttocks_volume=-1.5))
+
+
+def test_old_tables_without_local_changes_are_read_as_zero(tmp_path, body_model):
+    from wbsa.population.body_model import LOCAL_CHANGE_COLUMNS
+    from wbsa.population.table import TABLE_COLUMNS, measure_population, read_population
+
+    params = reference_adult(0.0).assign(subject_id=0, sex="male", age_years=35.0)
+    table = measure_population(params, model=body_model)
+    assert set(TABLE_COLUMNS) <= set(table.columns) and (table[list(LOCAL_CHANGE_COLUMNS)] == 0).all(axis=None)
+    table.drop(columns=list(LOCAL_CHANGE_COLUMNS)).to_parquet(tmp_path / "old.parquet")
+    back = read_population(tmp_path / "old.parquet")
+    assert (back[list(LOCAL_CHANGE_COLUMNS)] == 0).all(axis=None)
+    assert body_model.skin_meshes(back)[0].area_m2 == pytest.approx(table["wbsa_m2"].iloc[0], rel=1e-12)
+
+
 # -- tape measures ---------------------------------------------------------------------------
 def _cylinder(radius: float, height: float, n: int = 256) -> TriangleMesh:
     t = np.linspace(0, 2 * np.pi, n, endpoint=False)

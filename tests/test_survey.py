@@ -9,6 +9,7 @@ import pandas as pd
 import pytest
 
 from wbsa.errors import WbsaError
+from wbsa.population.body_model import LOCAL_CHANGE_COLUMNS, body_parameter_array
 from wbsa.population.survey_data import (
     ETHNIC_MIX,
     PEOPLE_COLUMNS,
@@ -117,13 +118,15 @@ def _bodies() -> pd.DataFrame:
 
     rows = [
         dict(p_gender=0.0, p_age=years_to_param(35), p_muscle=0.3, p_weight=0.7, p_height=0.4, p_proportions=0.6,
-             p_african=0.0, p_asian=0.0, p_caucasian=1.0),
+             p_african=0.0, p_asian=0.0, p_caucasian=1.0, l_stomach_pregnant=0.4, l_hips_circ=-0.3),
         dict(p_gender=1.0, p_age=years_to_param(52), p_muscle=0.6, p_weight=0.35, p_height=0.55,
-             p_proportions=0.4, p_cupsize=0.7, p_african=0.75, p_asian=0.0, p_caucasian=0.25),
+             p_proportions=0.4, p_cupsize=0.7, p_african=0.75, p_asian=0.0, p_caucasian=0.25,
+             l_waist_circ=0.5, l_buttocks_volume=-0.4),
         dict(p_gender=0.0, p_age=years_to_param(9), p_muscle=0.45, p_weight=0.6, p_height=0.5, p_proportions=0.5,
              p_african=0.05, p_asian=0.4, p_caucasian=0.55),
     ]
-    return pd.DataFrame(rows).fillna({"p_cupsize": 0.5})
+    return pd.DataFrame(rows).fillna({"p_cupsize": 0.5, "l_waist_circ": 0.0, "l_hips_circ": 0.0,
+                                      "l_stomach_pregnant": 0.0, "l_buttocks_volume": 0.0})
 
 
 def test_torch_measures_equal_the_anthropometer(tools):
@@ -132,7 +135,7 @@ def test_torch_measures_equal_the_anthropometer(tools):
 
     params = _bodies()
     exact = meter.measure(model.rest_bodies(params))
-    ph = torch.as_tensor(model.phenotype_array(params))
+    ph = torch.as_tensor(body_parameter_array(params))  # with local changes
     values = measurer.evaluate(measurer.vertices(measurer.coefficients(ph))).values.numpy()
     cols = ["stature_m", "mass_kg", "waist_circ_m", "hip_circ_m"]
     np.testing.assert_allclose(values, exact[cols].to_numpy(), rtol=1e-9, atol=1e-9)
@@ -142,7 +145,7 @@ def test_torch_measure_gradients_match_finite_differences(tools):
     model, _, measurer = tools
     import torch
 
-    ph = torch.as_tensor(model.phenotype_array(_bodies()))
+    ph = torch.as_tensor(body_parameter_array(_bodies()))
     c = measurer.coefficients(ph).detach()
     grad = measurer.evaluate(measurer.vertices(c), gradient=True).grad
     direction = torch.as_tensor(np.random.default_rng(0).normal(size=c.shape)) * 1e-6
@@ -177,12 +180,30 @@ def test_known_bodies_are_matched_back_within_tolerance(tools):
     for col in ("p_gender", "p_age", "p_african", "p_asian", "p_caucasian"):
         np.testing.assert_allclose(fit[col], params[col])
     assert fit.loc[0, "p_cupsize"] == 0.5  # men keep the neutral cup size
+    assert fit[list(LOCAL_CHANGE_COLUMNS)].abs().max(axis=None) <= 1.0
     back = meter.measure(model.rest_bodies(fit))
     assert np.all(np.abs(back["stature_m"] - own["stature_m"]) <= 0.01)
     assert np.all(np.abs(back["mass_kg"] - own["mass_kg"]) <= 1.0)
     assert np.all(np.abs(back["waist_circ_m"] - own["waist_circ_m"]) <= 0.03)
     assert np.all(np.abs(back["hip_circ_m"] - own["hip_circ_m"])[:2] <= 0.03)
     assert fit["fit_converged"].all()
+
+
+def test_phenotype_only_match_keeps_local_changes_at_zero(tools):
+    from wbsa.population.survey_match import match_bodies
+
+    model, meter, measurer = tools
+    params = _bodies().iloc[:1].assign(l_stomach_pregnant=0.0, l_hips_circ=0.0)
+    own = meter.measure(model.rest_bodies(params))
+    targets = params[["p_gender", "p_age", "p_african", "p_asian", "p_caucasian"]].copy()
+    for name in ("stature_m", "mass_kg", "waist_circ_m", "hip_circ_m"):
+        targets[f"target_{name}"] = own[name].to_numpy()
+    fit = match_bodies(targets, measurer, _small_settings(max_iterations=25, free_local_changes=False),
+                       show_progress=False)
+    assert (fit[list(LOCAL_CHANGE_COLUMNS)] == 0.0).all(axis=None)
+    back = meter.measure(model.rest_bodies(fit))
+    assert abs(back["stature_m"].iloc[0] - own["stature_m"].iloc[0]) <= 0.01
+    assert abs(back["mass_kg"].iloc[0] - own["mass_kg"].iloc[0]) <= 1.0
 
 
 def test_match_rejects_targets_without_stature(tools):
@@ -200,7 +221,8 @@ def test_match_rejects_targets_without_stature(tools):
 def test_survey_population_end_to_end(tmp_path):
     from wbsa.population.survey import SURVEY_COLUMNS as EXTRA
     from wbsa.population.survey import SurveyMatchWarning, SurveyPopulationSettings, build_survey_population
-    from wbsa.population.table import POPULATION_COLUMNS
+    from wbsa.population.export import subject_mesh
+    from wbsa.population.table import TABLE_COLUMNS
 
     # a small survey file with one bad row, so the run also counts what it skips
     with _packaged() as fh:
@@ -214,7 +236,7 @@ def test_survey_population_end_to_end(tmp_path):
         warnings.simplefilter("ignore", SurveyMatchWarning)
         table = build_survey_population(2, variations=2, seed=5, settings=settings, show_progress=False)
         again = build_survey_population(2, variations=2, seed=5, settings=settings, show_progress=False)
-    assert list(table.columns) == [*POPULATION_COLUMNS, *EXTRA]
+    assert list(table.columns) == [*TABLE_COLUMNS, *EXTRA]
     assert len(table) == 6 and table["subject_id"].tolist() == list(range(6))
     assert table["variation"].tolist() == [0, 1, 2, 0, 1, 2]
     summary = table.attrs["survey"]
@@ -222,7 +244,8 @@ def test_survey_population_end_to_end(tmp_path):
     for _, person in table.groupby("survey_id"):
         base = person.iloc[0]
         # variations change weight and muscle only, and keep the survey's values
-        for col in ("p_gender", "p_age", "p_height", "p_proportions", "p_cupsize", "p_african", "survey_mass_kg"):
+        for col in ("p_gender", "p_age", "p_height", "p_proportions", "p_cupsize", "p_african", "survey_mass_kg",
+                    *LOCAL_CHANGE_COLUMNS):
             assert (person[col] == base[col]).all()
         assert (person["p_weight"] - base["p_weight"]).abs().max() <= 0.2 + 1e-12
         assert (person["p_muscle"] - base["p_muscle"]).abs().max() <= 0.3 + 1e-12
@@ -233,6 +256,14 @@ def test_survey_population_end_to_end(tmp_path):
               and not abs(base["match_waist_err_m"]) > 0.03 and not abs(base["match_hip_err_m"]) > 0.03)
         assert (person["matched"] == ok).all()
     pd.testing.assert_frame_equal(table, again)
+    assert table[list(LOCAL_CHANGE_COLUMNS)].abs().max(axis=None) <= 1.0
+    # later stages rebuild a subject from the table's columns: same skin area as measured
+    path = tmp_path / "survey.parquet"
+    table.to_parquet(path)
+    from wbsa.population.table import read_population
+
+    for sid in (0, 4):
+        assert subject_mesh(read_population(path), sid).area_m2 == pytest.approx(table.loc[sid, "wbsa_m2"], rel=1e-12)
 
 
 def _packaged():

@@ -12,8 +12,17 @@ WBSA is the *skin* area, so :class:`BodyModel` exposes two face masks:
 * ``closed_face_mask``: skin plus cavities, a closed surface whose enclosed volume
   gives the body volume (and mass).
 
-The first ``anny.Anny()`` in a fresh cache builds its data (about 60 s, cached in
-``ANNY_CACHE_DIR``, default ``~/.cache/anny``); later builds take about 0.3 s.
+Besides the phenotypes, a body has four anny *local changes* (MakeHuman's measure and
+shape modifiers, :data:`LOCAL_CHANGES`), stored in tables as the ``l_*`` columns
+(:data:`LOCAL_CHANGE_COLUMNS`), each in [−1, 1] with 0 = no change (anny applies the
+modifier's ``incr`` target for positive values and its ``decr`` target for negative ones).
+The phenotypes alone cannot give real people's waist and hip at their stature and mass (the
+survey matcher matched 31 % of adults with BMI <= 40 within all four tolerances); with these
+four extra unknowns it matches 94.9 % (see ``docs/survey.md``). With every local change 0 a body is
+exactly the phenotype-only body.
+
+The first ``anny.Anny()`` with this configuration in a fresh cache builds its data (60–120 s,
+about 0.8 GB cached in ``ANNY_CACHE_DIR``, default ``~/.cache/anny``); later builds are fast.
 """
 
 from __future__ import annotations
@@ -44,13 +53,24 @@ PHENOTYPE_COLUMNS = (
 )
 #: Columns that may be absent from a table; they default to 0.5 (anny's neutral value).
 OPTIONAL_PHENOTYPES = ("p_cupsize", "p_firmness")
+#: anny local changes the model is built with (MakeHuman modifiers, ``incr``/``decr`` target pairs).
+LOCAL_CHANGES = ("measure-waist-circ-incr", "measure-hips-circ-incr", "stomach-pregnant-incr",
+                 "buttocks-volume-incr")
+#: Table columns of :data:`LOCAL_CHANGES`, same order; optional, in [-1, 1], default 0 (no change).
+LOCAL_CHANGE_COLUMNS = ("l_waist_circ", "l_hips_circ", "l_stomach_pregnant", "l_buttocks_volume")
+#: Every body parameter: phenotypes then local changes (the columns of :func:`body_parameter_array`).
+BODY_PARAMETER_COLUMNS = (*PHENOTYPE_COLUMNS, *LOCAL_CHANGE_COLUMNS)
 _EYES_AND_TONGUE = ("eye_front.L", "eye_front.R", "eye_back.L", "eye_back.R", "tongue")
 _ARM_BONE_PREFIXES = ("shoulder01", "upperarm", "lowerarm", "wrist", "finger", "metacarpal")
 
 
 @functools.lru_cache(maxsize=1)
 def load_anny():
-    """The anny full-body model with all phenotypes, built once per process.
+    """The anny full-body model with all phenotypes and :data:`LOCAL_CHANGES`, built once per process.
+
+    The local changes let a body's waist, hip, belly and buttocks differ from what the
+    phenotypes give (the survey matcher needs them to reach real waist–hip combinations);
+    they add 8 blendshapes and cost nothing when 0.
 
     Returns
     -------
@@ -63,7 +83,7 @@ def load_anny():
         import anny
 
         # plain LBS: wbsa uses only rest shapes, and this keeps NVIDIA Warp (and its banner) out
-        return anny.Anny(phenotypes="all", skinning_method="lbs")
+        return anny.Anny(phenotypes="all", skinning_method="lbs", local_changes=list(LOCAL_CHANGES))
 
 
 def phenotype_array(params: pd.DataFrame | dict) -> np.ndarray:
@@ -95,6 +115,39 @@ def phenotype_array(params: pd.DataFrame | dict) -> np.ndarray:
             "anny parameters are normalised to [0, 1]"
         )
     return arr
+
+
+def local_change_array(params: pd.DataFrame | dict) -> np.ndarray:
+    """Local changes as a ``(b, 4)`` float64 array in :data:`LOCAL_CHANGE_COLUMNS` order.
+
+    Missing columns take 0 (no change), so tables written before the local changes existed
+    still give the same bodies.
+
+    Raises
+    ------
+    WbsaError
+        If a value is outside [-1, 1] or not finite.
+    """
+    df = pd.DataFrame(params) if not isinstance(params, pd.DataFrame) else params
+    cols = [df[name].to_numpy(dtype=np.float64) if name in df.columns else np.zeros(len(df))
+            for name in LOCAL_CHANGE_COLUMNS]
+    arr = np.stack(cols, axis=1) if cols else np.zeros((len(df), 0))
+    bad = ~np.isfinite(arr) | (arr < -1.0) | (arr > 1.0)
+    if bad.any():
+        row, col = np.argwhere(bad)[0]
+        raise WbsaError(
+            f"local change {LOCAL_CHANGE_COLUMNS[col]} = {float(arr[row, col])!r} in row {row} is outside [-1, 1]; "
+            "local changes are -1 (decrease) to 1 (increase), 0 = no change"
+        )
+    return arr
+
+
+def body_parameter_array(params: pd.DataFrame | dict) -> np.ndarray:
+    """Phenotypes and local changes, ``(b, 15)`` float64 in :data:`BODY_PARAMETER_COLUMNS` order.
+
+    See :func:`phenotype_array` and :func:`local_change_array` (defaults and validation).
+    """
+    return np.concatenate([phenotype_array(params), local_change_array(params)], axis=1)
 
 
 @dataclass(frozen=True)
@@ -136,6 +189,11 @@ class BodyModel:
         expected = tuple(c[2:] for c in PHENOTYPE_COLUMNS)
         if self.phenotype_labels != expected:
             raise WbsaError(f"unsupported anny phenotypes {self.phenotype_labels}; install anny==0.6.2")
+        labels = tuple(self.anny.local_change_labels)
+        if sorted(labels) != sorted(LOCAL_CHANGES):
+            raise WbsaError(f"unsupported anny local changes {labels}; install anny==0.6.2")
+        #: anny's local-change order as indices into :data:`LOCAL_CHANGE_COLUMNS`
+        self._local_order = [LOCAL_CHANGES.index(label) for label in labels]
         self.bone_labels = tuple(self.anny.bone_labels)
         self.skin_face_mask, self.closed_face_mask = _face_masks(self.anny, self.faces)
         self.skin_faces = self.faces[self.skin_face_mask]
@@ -148,6 +206,25 @@ class BodyModel:
     #: see :func:`phenotype_array`
     phenotype_array = staticmethod(phenotype_array)
 
+    def coefficients(self, params):
+        """anny blendshape coefficients ``(b, k)`` of body parameters (torch, differentiable).
+
+        Parameters
+        ----------
+        params : (b, 11) or (b, 15) torch tensor
+            Phenotypes in :data:`PHENOTYPE_COLUMNS` order, optionally followed by the local
+            changes in :data:`LOCAL_CHANGE_COLUMNS` order (absent: 0).
+        """
+        torch = self._torch
+        model = self.anny
+        ph = params[:, :len(PHENOTYPE_COLUMNS)]
+        if params.shape[1] > len(PHENOTYPE_COLUMNS):
+            local = params[:, len(PHENOTYPE_COLUMNS):][:, self._local_order]
+        else:
+            local = torch.zeros((params.shape[0], len(LOCAL_CHANGES)), dtype=params.dtype)
+        empty = torch.empty((params.shape[0], 0), dtype=params.dtype)
+        return model._get_phenotype_blendshape_coefficients(ph, local, empty)
+
     # -- geometry -----------------------------------------------------------------------
     def rest_bodies(self, params: pd.DataFrame | dict) -> RestBodies:
         """Rest-pose vertices and joints of every body, standing on z = 0.
@@ -155,9 +232,10 @@ class BodyModel:
         Parameters
         ----------
         params
-            Table with the ``p_*`` phenotype columns, one row per body.
+            Table with the ``p_*`` phenotype columns and optionally the ``l_*`` local
+            changes (:data:`LOCAL_CHANGE_COLUMNS`, default 0), one row per body.
         """
-        arr = phenotype_array(params)
+        arr = body_parameter_array(params)
         torch = self._torch
         model = self.anny
         import anny.skinning.skinning as skinning
@@ -165,9 +243,7 @@ class BodyModel:
         verts, heads = [], []
         with torch.no_grad():
             for start in range(0, len(arr), self.batch_size):
-                ph = torch.as_tensor(arr[start:start + self.batch_size], dtype=model.dtype)
-                empty = torch.empty((len(ph), 0), dtype=model.dtype)
-                coeffs = model._get_phenotype_blendshape_coefficients(ph, empty, empty)
+                coeffs = self.coefficients(torch.as_tensor(arr[start:start + self.batch_size], dtype=model.dtype))
                 verts.append(model.get_rest_vertices(coeffs).numpy())
                 heads.append(skinning.apply_linear_blendshape(
                     model.template_bone_heads, model.bone_heads_blendshapes, coeffs).numpy())

@@ -14,7 +14,7 @@ and the match is checked on those final measures:
 * ``match_*_err_*`` = table measure − survey measure, on the matched body's row (variation 0);
   NaN on variations.
 
-Extra columns beyond :data:`~wbsa.population.table.POPULATION_COLUMNS`: see :data:`SURVEY_COLUMNS`.
+Extra columns beyond :data:`~wbsa.population.table.TABLE_COLUMNS`: see :data:`SURVEY_COLUMNS`.
 """
 
 from __future__ import annotations
@@ -116,7 +116,7 @@ def build_survey_population(n: int, variations: int = 0, seed: int = 0, *,
     Returns
     -------
     pandas.DataFrame
-        ``n × (variations + 1)`` rows: :data:`~wbsa.population.table.POPULATION_COLUMNS` then
+        ``n × (variations + 1)`` rows: :data:`~wbsa.population.table.TABLE_COLUMNS` then
         :data:`SURVEY_COLUMNS`. ``subject_id = person × (variations + 1) + variation``. The
         frame's ``attrs["survey"]`` holds the cleaning counts, the match summary
         (:func:`match_rates`) and the wall and CPU seconds of each stage.
@@ -185,14 +185,17 @@ def survey_targets(people: pd.DataFrame) -> pd.DataFrame:
 
 def _with_variations(people: pd.DataFrame, fit: pd.DataFrame, k: int, seed: int,
                      s: SurveyPopulationSettings) -> pd.DataFrame:
-    """Phenotype rows of every matched body and its ``k`` variations, with the survey columns."""
-    from wbsa.population.body_model import PHENOTYPE_COLUMNS
+    """Body-parameter rows of every matched body and its ``k`` variations, with the survey columns.
+
+    Variations change weight and muscle only; they keep the person's local changes.
+    """
+    from wbsa.population.body_model import BODY_PARAMETER_COLUMNS
 
     n = len(people)
     rep = np.repeat(np.arange(n), k + 1)
     variation = np.tile(np.arange(k + 1), n)
-    phen = fit[list(PHENOTYPE_COLUMNS)].to_numpy()[rep].copy()
-    iw, im = PHENOTYPE_COLUMNS.index("p_weight"), PHENOTYPE_COLUMNS.index("p_muscle")
+    phen = fit[list(BODY_PARAMETER_COLUMNS)].to_numpy()[rep].copy()
+    iw, im = BODY_PARAMETER_COLUMNS.index("p_weight"), BODY_PARAMETER_COLUMNS.index("p_muscle")
     ids = people["survey_id"].to_numpy()
     for row in np.flatnonzero(variation > 0):
         # the stream depends on the person and the variation only, not on who else was drawn
@@ -207,7 +210,7 @@ def _with_variations(people: pd.DataFrame, fit: pd.DataFrame, k: int, seed: int,
         "sex": people["sex"].to_numpy()[rep],
         "age_years": people["age_years"].to_numpy()[rep],
     })
-    for j, name in enumerate(PHENOTYPE_COLUMNS):
+    for j, name in enumerate(BODY_PARAMETER_COLUMNS):
         out[name] = phen[:, j]
     out["survey_id"] = ids[rep].astype(np.int64)
     out["variation"] = variation.astype(np.int64)
@@ -222,7 +225,7 @@ def _with_variations(people: pd.DataFrame, fit: pd.DataFrame, k: int, seed: int,
 
 def _add_match_columns(table: pd.DataFrame, m: MatchSettings) -> pd.DataFrame:
     """Match errors on each matched body's row and the ``matched`` flags on every row."""
-    from wbsa.population.table import POPULATION_COLUMNS
+    from wbsa.population.table import TABLE_COLUMNS
 
     out = table.copy()
     first = out["variation"].to_numpy() == 0
@@ -240,7 +243,7 @@ def _add_match_columns(table: pd.DataFrame, m: MatchSettings) -> pd.DataFrame:
     for column, ok in (("matched", everything), ("matched_stature_mass", stature_mass)):
         # the matched body's flag, on all of its person's rows
         out[column] = pd.Series(np.where(first, ok, True)).groupby(person).transform("all").to_numpy()
-    return out[[*POPULATION_COLUMNS, *SURVEY_COLUMNS]]
+    return out[[*TABLE_COLUMNS, *SURVEY_COLUMNS]]
 
 
 def match_rates(table: pd.DataFrame) -> dict[str, object]:

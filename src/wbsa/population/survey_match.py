@@ -1,12 +1,15 @@
 """Fit anny phenotypes to body measures: stature, mass, waist and hip of real people.
 
 Each person keeps the fixed parameters it is given (gender, age, ethnic mix) and the free
-ones (muscle, weight, height, proportions, and cup size for women) are fitted so that the
+ones (muscle, weight, height, proportions, the four local changes of the body model —
+waist, hips, belly, buttocks — and cup size for women) are fitted so that the
 body's stature, mass, waist and hip (as :class:`~wbsa.population.anthropometry.Anthropometer`
 defines them) equal the person's. The fit is a damped Gauss–Newton (Levenberg–Marquardt)
 least-squares problem per person, solved for a whole batch at once:
 
-* unknowns: the free phenotypes themselves, kept inside ``bounds`` by projection: a step is
+* unknowns: the free phenotypes themselves, and each local change ``l`` as ``(l + 1) / 2``
+  (so that every unknown lives in [0, 1] and 0.5 is the neutral value), kept inside
+  ``bounds`` by projection: a step is
   clipped to the box, and a parameter on a bound that the gradient pushes outwards sits out
   the step (a sigmoid map would do the same job but traps parameters that reach a bound,
   where its slope vanishes);
@@ -35,7 +38,7 @@ import numpy as np
 import pandas as pd
 
 from wbsa.errors import WbsaError
-from wbsa.population.body_model import PHENOTYPE_COLUMNS
+from wbsa.population.body_model import BODY_PARAMETER_COLUMNS, LOCAL_CHANGE_COLUMNS
 from wbsa.population.survey_measures import FIT_MEASURES, TorchMeasurer
 from wbsa.population.survey_start import StartGrid, StartTable
 from wbsa.progress import progress
@@ -44,10 +47,13 @@ from wbsa.progress import progress
 TARGET_COLUMNS = ("target_stature_m", "target_mass_kg", "target_waist_circ_m", "target_hip_circ_m")
 #: Fixed phenotype columns :func:`match_bodies` reads.
 FIXED_COLUMNS = ("p_gender", "p_age", "p_african", "p_asian", "p_caucasian")
-#: Free phenotypes, in fit order (``p_cupsize`` only for women, see :class:`MatchSettings`).
-FREE_PHENOTYPES = ("p_muscle", "p_weight", "p_height", "p_proportions", "p_cupsize")
+#: Free body parameters, in fit order (``p_cupsize`` only for women, the ``l_*`` local changes
+#: unless switched off, see :class:`MatchSettings`). The first four come from the start table.
+FREE_PHENOTYPES = ("p_muscle", "p_weight", "p_height", "p_proportions", *LOCAL_CHANGE_COLUMNS, "p_cupsize")
 
-_INDEX = {name: i for i, name in enumerate(PHENOTYPE_COLUMNS)}
+_INDEX = {name: i for i, name in enumerate(BODY_PARAMETER_COLUMNS)}
+#: positions in FREE_PHENOTYPES of the local changes (their unknown is (l + 1) / 2)
+_LOCAL = [FREE_PHENOTYPES.index(c) for c in LOCAL_CHANGE_COLUMNS]
 _STALL = 5
 _DAMPING_FLOOR = 1e-3
 _KINK_HOP = 1e-5
@@ -66,6 +72,9 @@ class MatchSettings:
         ``(low, high)`` range of every free phenotype.
     free_cupsize
         Fit cup size for women (men keep 0.5, where it has almost no effect).
+    free_local_changes
+        Fit the body model's local changes (waist, hips, belly, buttocks; otherwise they stay
+        0). With phenotypes alone anny cannot reach most real waist–hip combinations.
     weights
         Weights of the stature, mass, waist and hip residuals (each in units of its
         tolerance). Stature and mass are met first and the girths fitted as well as the body
@@ -96,6 +105,7 @@ class MatchSettings:
     girth_tol_m: float = 0.03
     bounds: tuple[float, float] = (0.0, 1.0)
     free_cupsize: bool = True
+    free_local_changes: bool = True
     weights: tuple[float, float, float, float] = (3.0, 1.0, 0.1, 0.1)
     prior_weight: float = 0.05
     max_iterations: int = 40
@@ -126,7 +136,7 @@ class MatchSettings:
 
 def match_bodies(targets: pd.DataFrame, measurer: TorchMeasurer, settings: MatchSettings = MatchSettings(), *,
                  table: StartTable | None = None, show_progress: bool | None = None) -> pd.DataFrame:
-    """Fit the free phenotypes of every row of ``targets`` to its measures.
+    """Fit the free body parameters of every row of ``targets`` to its measures.
 
     Parameters
     ----------
@@ -144,7 +154,8 @@ def match_bodies(targets: pd.DataFrame, measurer: TorchMeasurer, settings: Match
     Returns
     -------
     pandas.DataFrame
-        One row per target, same index order: every ``p_*`` column, ``fit_<measure>`` (the
+        One row per target, same index order: every ``p_*`` and ``l_*`` column
+        (:data:`~wbsa.population.body_model.BODY_PARAMETER_COLUMNS`), ``fit_<measure>`` (the
         fitted body's measures as the fit saw them, SI), ``fit_iterations`` and
         ``fit_converged`` (every measured quantity within ``converge_fraction`` of its tolerance).
     """
@@ -156,7 +167,7 @@ def match_bodies(targets: pd.DataFrame, measurer: TorchMeasurer, settings: Match
     if not (np.isfinite(goal[:, :2]).all() and (goal[:, :2] > 0).all()):
         raise WbsaError("every match target needs a finite, positive stature and mass")
     n = len(targets)
-    phen = np.zeros((n, len(PHENOTYPE_COLUMNS)))
+    phen = np.zeros((n, len(BODY_PARAMETER_COLUMNS)))
     fit = np.full((n, 4), np.nan)
     iters = np.zeros(n, dtype=np.int64)
     done = np.zeros(n, dtype=bool)
@@ -168,7 +179,7 @@ def match_bodies(targets: pd.DataFrame, measurer: TorchMeasurer, settings: Match
                 phen[sl], fit[sl], iters[sl], done[sl] = _match_batch(fixed[sl], goal[sl], measurer, settings,
                                                                       table)
                 bar.update(len(fixed[sl]))
-    out = pd.DataFrame(phen, columns=list(PHENOTYPE_COLUMNS), index=targets.index)
+    out = pd.DataFrame(phen, columns=list(BODY_PARAMETER_COLUMNS), index=targets.index)
     for j, name in enumerate(FIT_MEASURES):
         out[f"fit_{name}"] = fit[:, j]
     out["fit_iterations"] = iters
@@ -201,13 +212,14 @@ class _Problem:
         self.m = measurer
         self.s = settings
         b = len(fixed)
-        base = np.full((b, len(PHENOTYPE_COLUMNS)), 0.5)
+        base = np.full((b, len(BODY_PARAMETER_COLUMNS)), 0.5)
         for j, name in enumerate(FIXED_COLUMNS):
             base[:, _INDEX[name]] = fixed[:, j]
         self.base = torch.as_tensor(base, dtype=measurer.dtype)
         self.free_index = [_INDEX[c] for c in FREE_PHENOTYPES]
         # (b, d) mask of the unknowns each person really has (cup size: women only)
         mask = np.ones((b, len(FREE_PHENOTYPES)), dtype=bool)
+        mask[:, _LOCAL] = settings.free_local_changes
         if not settings.free_cupsize:
             mask[:, -1] = False
         else:
@@ -217,7 +229,9 @@ class _Problem:
         lo, hi = settings.bounds
         self.kinks = []
         for j, name in enumerate(FREE_PHENOTYPES):
-            for a in measurer.model.anny.anchors[name[2:]][1:-1].tolist():
+            # a local change switches from its decr to its incr target at 0 (unknown 0.5)
+            anchors = [0.5] if j in _LOCAL else measurer.model.anny.anchors[name[2:]][1:-1].tolist()
+            for a in anchors:
                 if lo < a < hi:
                     self.kinks.append((j, float(a)))
         self.goal = torch.as_tensor(np.nan_to_num(goal, nan=0.0), dtype=measurer.dtype)
@@ -228,7 +242,7 @@ class _Problem:
         self.unit = self.tol / torch.as_tensor(weight, dtype=measurer.dtype)
 
     def phenotypes(self, u):
-        """(b, 11) phenotypes and (b, d) free values for free phenotypes ``u`` (b, d) (differentiable)."""
+        """(b, 15) body parameters and (b, d) free values for unknowns ``u`` (b, d) (differentiable)."""
         return _SubProblem(self, slice(None)).phenotypes(u)
 
     def stop_at_kinks(self, u, step):
@@ -251,6 +265,22 @@ class _Problem:
             trial[:, j] = torch.where(landed, kink + _KINK_HOP * torch.sign(step[:, j]), trial[:, j])
         lo, hi = self.s.bounds
         return trial.clamp(lo, hi)
+
+    def pinned_at_kinks(self, u, step):
+        """(b, d) bool: unknowns sitting at an interpolation anchor that ``step`` would carry across.
+
+        A parameter at the bottom of a kink (anny's mass is lowest at muscle 0.5) gets steps
+        that cross the anchor back and forth; cutting every
+        such step at the anchor would freeze all the other unknowns too. Such a parameter is
+        held at the anchor for the step instead, and the others move.
+        """
+        torch = self.torch
+        pinned = torch.zeros_like(u, dtype=torch.bool)
+        for j, kink in self.kinks:
+            near = (u[:, j] - kink).abs() <= 2 * _KINK_HOP
+            crossing = (u[:, j] - kink) * (u[:, j] + step[:, j] - kink) < 0
+            pinned[:, j] |= near & crossing
+        return pinned
 
     def residuals(self, u, rows, jacobian: bool):
         """Residuals ``(b, 4 + d)``, measures ``(b, 4)``, Jacobian ``(b, 4 + d, d)`` at free values ``u`` of ``rows``."""
@@ -292,14 +322,16 @@ class _SubProblem:
     def phenotypes(self, u):
         torch = self.p.torch
         free = torch.where(self.free_mask, u, torch.full_like(u, 0.5))
+        value = free.clone()
+        value[:, _LOCAL] = 2.0 * free[:, _LOCAL] - 1.0
         ph = self.base.clone()
-        ph[:, self.p.free_index] = free
+        ph[:, self.p.free_index] = value
         return ph, free
 
 
 def _start(problem: _Problem, table: StartTable, fixed: np.ndarray, goal: np.ndarray,
            muscle_side: str = "any") -> np.ndarray:
-    """Starting free phenotypes ``(b, d)`` from the tabulated inverse (cup size starts at 0.5)."""
+    """Starting unknowns ``(b, d)`` from the tabulated inverse (cup size at 0.5, no local change)."""
     free = np.full((len(fixed), len(FREE_PHENOTYPES)), 0.5)
     free[:, :4] = table.start(fixed, goal, problem.s.tolerances, muscle_side)
     return np.clip(free, *problem.s.bounds)
@@ -340,7 +372,7 @@ def _box_step(r, jac, u, mu, free, bounds):
 
 def _match_batch(fixed: np.ndarray, goal: np.ndarray, measurer: TorchMeasurer, s: MatchSettings,
                  table: StartTable):
-    """Fit one batch; returns phenotypes (b, 11), fit measures (b, 4), iterations (b,), converged (b,).
+    """Fit one batch; returns body parameters (b, 15), fit measures (b, 4), iterations (b,), converged (b,).
 
     People whose stature or mass is still off after the first fit are fitted again from the
     best start on the other side of muscle 0.5 (anny's mass has a separate basin on each
@@ -398,7 +430,14 @@ def _fit(problem: _Problem, u, rows):
         if len(active) == 0:
             break
         ra, ja, ua, mua = r[active], jac[active], u[active], mu[active]
-        step = _box_step(ra, ja, ua, mua, sub.free_mask[active], s.bounds)
+        free = sub.free_mask[active]
+        step = _box_step(ra, ja, ua, mua, free, s.bounds)
+        for _ in range(3):
+            pinned = problem.pinned_at_kinks(ua, step) & free
+            if not pinned.any():
+                break
+            free = free & ~pinned
+            step = _box_step(ra, ja, ua, mua, free, s.bounds)
         trial = problem.stop_at_kinks(ua, step)
         rt, vt, jt = problem.residuals(trial, rows[active], jacobian=True)
         old, new = (ra**2).sum(dim=1), (rt**2).sum(dim=1)

@@ -87,10 +87,12 @@ class TorchMeasurer:
         self.hip_ring = torch.as_tensor([int(lm.hip)], dtype=torch.long)
 
     # -- body model ---------------------------------------------------------------------
-    def coefficients(self, phenotypes):
-        """Blendshape coefficients ``(b, k)`` of phenotypes ``(b, 11)`` (differentiable)."""
-        empty = self.torch.empty((phenotypes.shape[0], 0), dtype=self.dtype)
-        return self.model.anny._get_phenotype_blendshape_coefficients(phenotypes, empty, empty)
+    def coefficients(self, params):
+        """Blendshape coefficients ``(b, k)`` of body parameters ``(b, 11)`` or ``(b, 15)`` (differentiable).
+
+        Phenotypes, optionally followed by the local changes (see :meth:`BodyModel.coefficients`).
+        """
+        return self.model.coefficients(params)
 
     def vertices(self, coefficients):
         """Rest vertices, coordinate-major ``(3, n, b)``, of coefficients ``(b, k)`` (no gradient)."""

@@ -11,14 +11,18 @@ import pandas as pd
 from wbsa.io import read_table
 from wbsa.parallel import keep_large_allocations, single_threaded_math
 from wbsa.population.anthropometry import DEFAULT_DENSITY_KG_M3, MEASURE_COLUMNS, Anthropometer
-from wbsa.population.body_model import PHENOTYPE_COLUMNS, BodyModel, phenotype_array
+from wbsa.population.body_model import (LOCAL_CHANGE_COLUMNS, PHENOTYPE_COLUMNS, BodyModel,
+                                        body_parameter_array)
 from wbsa.progress import progress
 
 #: Smallest local population worth starting worker processes for.
 PARALLEL_MIN_BODIES = 2000
 
-#: Columns every population table has.
+#: Columns every population table has (:func:`read_population` requires them).
 POPULATION_COLUMNS = ("subject_id", "sex", "age_years", *PHENOTYPE_COLUMNS, *MEASURE_COLUMNS)
+#: Columns a population table is written with: :data:`POPULATION_COLUMNS`, then the local changes
+#: (0 unless fitted, see :data:`~wbsa.population.body_model.LOCAL_CHANGE_COLUMNS`).
+TABLE_COLUMNS = (*POPULATION_COLUMNS, *LOCAL_CHANGE_COLUMNS)
 
 
 def measure_population(params: pd.DataFrame, *, density_kg_m3: float = DEFAULT_DENSITY_KG_M3,
@@ -30,7 +34,8 @@ def measure_population(params: pd.DataFrame, *, density_kg_m3: float = DEFAULT_D
     Parameters
     ----------
     params
-        ``subject_id``, ``sex``, ``age_years`` and the ``p_*`` columns (extra columns are kept).
+        ``subject_id``, ``sex``, ``age_years``, the ``p_*`` columns and optionally the ``l_*``
+        local changes (extra columns are kept).
     density_kg_m3
         Body density for mass = volume × density.
     workers, scheduler
@@ -40,11 +45,13 @@ def measure_population(params: pd.DataFrame, *, density_kg_m3: float = DEFAULT_D
     Returns
     -------
     pandas.DataFrame
-        ``params`` followed by :data:`~wbsa.population.anthropometry.MEASURE_COLUMNS`.
+        ``params`` (missing optional ``p_*`` columns filled with 0.5) followed by
+        :data:`~wbsa.population.anthropometry.MEASURE_COLUMNS` and the ``l_*`` local changes
+        (missing ones 0).
     """
     from wbsa.parallel import dask_client, map_unordered, resolve_scheduler
 
-    phenotype_array(params)  # validate every row before any work
+    body_parameter_array(params)  # validate every row before any work
     starts = list(range(0, len(params), batch_size))
     chunks = [(params.iloc[s:s + batch_size], density_kg_m3) for s in starts]
     parts: list[pd.DataFrame | None] = [None] * len(chunks)
@@ -67,7 +74,9 @@ def measure_population(params: pd.DataFrame, *, density_kg_m3: float = DEFAULT_D
     for name in PHENOTYPE_COLUMNS:
         if name not in out.columns:
             out[name] = 0.5
-    return pd.concat([out, measures], axis=1)
+    local = pd.DataFrame({name: out.pop(name) if name in out.columns else np.zeros(len(out))
+                          for name in LOCAL_CHANGE_COLUMNS})
+    return pd.concat([out, measures, local], axis=1)
 
 
 @functools.lru_cache(maxsize=4)
@@ -87,6 +96,9 @@ def _measure_chunk(params: pd.DataFrame, density_kg_m3: float) -> pd.DataFrame:
 def read_population(path: str | os.PathLike) -> pd.DataFrame:
     """Read and validate a population table written by ``wbsa population``.
 
+    Tables without the local-change columns (written before they existed) get them as 0,
+    which rebuilds the same bodies.
+
     Raises
     ------
     WbsaError
@@ -98,4 +110,7 @@ def read_population(path: str | os.PathLike) -> pd.DataFrame:
 
         raise WbsaError(f"{path} has duplicate subject_id values; regenerate it with wbsa population")
     df["subject_id"] = df["subject_id"].astype(np.int64)
+    for name in LOCAL_CHANGE_COLUMNS:
+        if name not in df.columns:
+            df[name] = 0.0
     return df

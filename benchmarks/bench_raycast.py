@@ -7,7 +7,9 @@ Usage::
 For every path the 65 paper views are timed ``--repeat`` times and the fastest pass is reported
 (the build machine is shared; the minimum is the least disturbed estimate), as wall time and as CPU
 time of this process (all threads). Ratios are against the bare ``RaycastingScene.cast_rays`` call on
-exactly the rays the default (silhouette) ROI casts, the floor for one closest-hit ray per pixel.
+exactly the rays the default (silhouette) ROI casts, the floor for one closest-hit ray per pixel, and
+against that floor plus the bare ``test_occlusions`` call on the visibility rays ``measure_view`` casts
+for the grazing triangles (recorded from a ``measure_view`` pass).
 ``--anny`` adds a real body from ``wbsa.population.body_model`` when that module exists.
 ``--accuracy`` also prints the visible-area checks quoted in docs/camera.md: sphere caps against
 2πr²(1 − r/d), and both VBSA estimates of the bodies at 1×, 2×, 4× and 8× the camera's resolution.
@@ -26,8 +28,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
 from wbsa.camera import (MeshScene, measure_view, paper_views, pose_from_view,  # noqa: E402
                          render, resolve_camera)
-from wbsa.camera.raycast import block_rays, cast, rect_rays  # noqa: E402
-from wbsa.camera.roi import projected_roi, silhouette_blocks  # noqa: E402
+from wbsa.camera.raycast import cast, grid_rays, rect_rays  # noqa: E402
+from wbsa.camera.roi import projected_roi, silhouette_pixels  # noqa: E402
 from wbsa.camera.shapes import body_like  # noqa: E402
 
 
@@ -54,10 +56,21 @@ def bench(name: str, mesh, intrinsics, repeat: int, threads: int) -> None:
     poses = {v: pose_from_view(v, scene.center) for v in views}
     sil_rays, bbox_rays, full_rays = {}, {}, {}
     for v in views:
-        blocks = silhouette_blocks(scene, k, poses[v])
+        grid = silhouette_pixels(scene, k, poses[v])
         bbox_rays[v] = rect_rays(k, poses[v], projected_roi(scene, k, poses[v]))
-        sil_rays[v] = bbox_rays[v] if blocks is None else block_rays(k, poses[v], blocks)[0]
+        sil_rays[v] = bbox_rays[v] if grid is None else grid_rays(k, poses[v], grid)[0]
         full_rays[v] = rect_rays(k, poses[v], (0, k.height, 0, k.width))
+    # The visibility rays of the grazing triangles, as measure_view casts them.
+    vis_rays = {v: [] for v in views}
+    bare_occluded = scene.occluded
+    for v in views:
+        def recording(rays, t_far, batches=vis_rays[v]):
+            batches.append((rays.copy(), t_far))
+            return bare_occluded(rays, t_far)
+
+        scene.occluded = recording
+        measure_view(scene, k, v, return_frame=False)
+    del scene.occluded  # back to the class's method
 
     # Same result first: every ROI must hit the same triangles at every pixel as the full frame.
     for v in views:
@@ -69,6 +82,8 @@ def bench(name: str, mesh, intrinsics, repeat: int, threads: int) -> None:
         "bare cast_rays, silhouette rays (floor)": best_pass(lambda v: scene.cast_rays(sil_rays[v]), views, repeat),
         "bare cast_rays, bbox rays": best_pass(lambda v: scene.cast_rays(bbox_rays[v]), views, repeat),
         "bare cast_rays, full-frame rays": best_pass(lambda v: scene.cast_rays(full_rays[v]), views, repeat),
+        "bare test_occlusions, visibility rays": best_pass(
+            lambda v: [scene.occluded(r, t) for r, t in vis_rays[v]], views, repeat),
         "cast(roi='silhouette')": best_pass(lambda v: cast(scene, k, poses[v], roi="silhouette"), views, repeat),
         "cast(roi='bbox')": best_pass(lambda v: cast(scene, k, poses[v], roi="bbox"), views, repeat),
         "measure_view(return_frame=False)": best_pass(
@@ -79,14 +94,18 @@ def bench(name: str, mesh, intrinsics, repeat: int, threads: int) -> None:
     }
     n = {key: np.mean([len(r) for r in rays.values()]) for key, rays in
          (("silhouette", sil_rays), ("bbox", bbox_rays))}
+    n_vis = np.mean([sum(len(r) for r, _ in b) for b in vis_rays.values()])
     floor_wall, floor_cpu = timings["bare cast_rays, silhouette rays (floor)"]
+    vis_cpu = timings["bare test_occlusions, visibility rays"][1]
     print(f"\n{name}: {len(mesh.faces):,} triangles, camera {k.name} {k.width}x{k.height}, "
           f"{threads or 'all'} Open3D thread(s), scene build {build_s * 1e3:.1f} ms")
     print(f"mean rays per view: silhouette {n['silhouette']:,.0f}, bbox {n['bbox']:,.0f}, "
-          f"full {k.width * k.height:,}")
-    print(f"{'path':42s} {'wall ms':>8s} {'cpu ms':>8s} {'views/cpu-s':>11s} {'x floor (cpu)':>13s}")
+          f"full {k.width * k.height:,}; visibility rays {n_vis:,.0f}")
+    print(f"{'path':42s} {'wall ms':>8s} {'cpu ms':>8s} {'views/cpu-s':>11s} {'x floor (cpu)':>13s} "
+          f"{'x floor+vis':>11s}")
     for label, (wall, cpu) in timings.items():
-        print(f"{label:42s} {wall * 1e3:8.2f} {cpu * 1e3:8.2f} {1 / cpu:11.0f} {cpu / floor_cpu:13.2f}")
+        print(f"{label:42s} {wall * 1e3:8.2f} {cpu * 1e3:8.2f} {1 / cpu:11.0f} {cpu / floor_cpu:13.2f} "
+              f"{cpu / (floor_cpu + vis_cpu):11.2f}")
     full = timings["render(roi=False) -> DepthFrame"]
     roi_render = timings["render(roi=True) -> DepthFrame"]
     print(f"render speed-up of the ROI over the full frame: {full[0] / roi_render[0]:.2f}x wall, "

@@ -9,13 +9,17 @@
     A resolution-independent estimate of the area truly visible. Each hit pixel adds the area of its
     footprint on the surface: a pixel at off-axis angle α spans the solid angle ``cos³α / (fx·fy)``; at
     range ``r = z / cos α`` on a surface whose normal makes the angle θ with the ray that is
-    ``cos³α / (fx·fy) · r² / cos θ = z² · cos α / (fx · fy · cos θ)``.
+    ``cos³α / (fx·fy) · r² / cos θ = z² · cos α / (fx · fy · cos θ) = z³ / (fx · fy · h)``, h being the
+    distance from the camera centre to the hit triangle's plane (one number per triangle and view).
     Near a silhouette 1/cos θ diverges: a pixel centre that lands just inside the limb counts a huge
     area and the pixels just outside count none, so point sampling of that band is unbiased only on
     average and in practice falls short by 1–5 % (more for small or thin objects). Given the scene, the
     band of grazing triangles (cos θ < ``GRAZING_COS`` seen from the camera) is therefore measured in
     object space instead: each such front-facing triangle whose centroid lies in the image and is not
-    occluded (one ray to the centroid) counts whole, and pixels that hit a grazing triangle add nothing.
+    occluded counts whole, and pixels that hit a grazing triangle add nothing. Whether a centroid is
+    occluded is read from the depth already cast where the 2 × 2 pixels around it agree (all of them see
+    nothing in front of it: visible; all of them see something well in front of it: hidden); only the
+    others cast one any-hit ray to the centroid.
 """
 
 from __future__ import annotations
@@ -27,6 +31,7 @@ import numpy as np
 from wbsa.camera.extrinsics import Pose
 from wbsa.camera.frame import DepthFrame
 from wbsa.camera.intrinsics import Intrinsics, pixel_rays
+from wbsa.camera.roi import PixelGrid, homogeneous_pixels
 
 #: Triangles seen at cos θ below this (θ > 72.5°) are measured in object space, not by pixel footprints.
 GRAZING_COS = 0.3
@@ -35,6 +40,11 @@ GRAZING_COS = 0.3
 FOOTPRINT_COS_MIN = 0.02
 #: A grazing triangle is visible when nothing lies on the ray to its centroid before this fraction of the way.
 _CENTROID_T_TOL = 1e-4
+#: Depth-buffer decisions about a grazing triangle's centroid at depth Z, in pixel footprints Z / √(fx·fy):
+#: visible when none of the 4 pixels around it has a return nearer than Z − CLEAR; hidden when all of
+#: them have one nearer than Z − HIDDEN; otherwise a ray decides.
+CENTROID_CLEAR_PX = 1.0
+CENTROID_HIDDEN_PX = 10.0
 
 
 def pixel_footprint_m2(z_m: np.ndarray, n_dot_d: np.ndarray, d_dot_d: np.ndarray, intrinsics: Intrinsics,
@@ -81,38 +91,104 @@ def hit_mask(triangle_ids: np.ndarray, n_triangles: int) -> np.ndarray:
     return seen
 
 
+def triangle_view_terms(scene, camera_center: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per triangle: the camera's height above its plane and the cosine of the view angle.
+
+    Returns
+    -------
+    height : (m,) float32
+        ``n · (C − c)``: signed distance of the camera centre C from the triangle's plane (c its centroid).
+    cos : (m,) float32
+        ``n · (C − c) / |C − c|``: cosine between the face normal and the direction to the camera.
+        Both are positive for triangles that face the camera, negative for back faces (normals made
+        outward for a one-sided scene, by vertex order otherwise).
+    """
+    # Float32 passes over the scene's per-triangle columns (relative to its centre, n outward):
+    # n·(C − c) = n·C − n·c and |C − c|² = |c|² − 2 C·c + |C|² (numpy.einsum, its own loops: a matrix
+    # product would wake the BLAS thread pool).
+    C = np.asarray(camera_center, dtype=np.float64) - scene.center
+    soa = scene._soa
+    height = np.einsum("j,jk->k", C.astype(np.float32), soa[:3])
+    height -= soa[6]
+    dist = np.einsum("j,jk->k", (-2.0 * C).astype(np.float32), soa[3:6])
+    dist += soa[7]
+    dist += np.float32(C @ C)
+    np.maximum(dist, np.float32(1e-30), out=dist)
+    np.sqrt(dist, out=dist)
+    return height, np.divide(height, dist, out=dist)
+
+
 def triangle_view_cosines(scene, camera_center: np.ndarray) -> np.ndarray:
     """(m,) float32 cosine between each face normal and the direction from its centroid to the camera.
 
     Positive for triangles that face the camera, negative for back faces (normals made outward for a
     one-sided scene, by vertex order otherwise).
     """
-    C = np.asarray(camera_center, dtype=np.float64) - scene.center
-    nx, ny, nz, cx, cy, cz, n_dot_c, c_sq = scene._soa
-    dot = nx * np.float32(C[0])
-    dot += ny * np.float32(C[1])
-    dot += nz * np.float32(C[2])
-    dot -= n_dot_c
-    dist = cx * np.float32(-2.0 * C[0])
-    dist += cy * np.float32(-2.0 * C[1])
-    dist += cz * np.float32(-2.0 * C[2])
-    dist += c_sq
-    dist += np.float32(C @ C)
-    np.maximum(dist, np.float32(1e-30), out=dist)
-    np.sqrt(dist, out=dist)
-    dot /= dist
-    return dot
+    return triangle_view_terms(scene, camera_center)[1]
 
 
-def grazing_area_m2(scene, intrinsics: Intrinsics, pose: Pose, cos_t: np.ndarray,
-                    grazing_cos: float = GRAZING_COS) -> float:
+def depth_lookup(grid: PixelGrid, depth_m: np.ndarray, u: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Nearest and farthest return among the 2 × 2 pixels around image points.
+
+    Parameters
+    ----------
+    grid : PixelGrid
+        The cast pixels (:class:`wbsa.camera.roi.PixelGrid`); its rectangle must hold the points' 2 × 2
+        pixels or their empty border (true for points inside the image and inside the mesh's projection).
+    depth_m : (grid.n_rows · grid.stride,) float32
+        z-depth per grid cell, inf where a pixel has no return or was not cast (the border included).
+    u, v : (k,) float
+        Image coordinates (pixel centres at integers).
+
+    Returns
+    -------
+    nearest, farthest : (k,) float32
+        inf where the pixels see nothing.
+    """
+    cell = np.floor(v).astype(np.intp)
+    cell -= grid.v0
+    cell *= grid.stride
+    cell += np.floor(u).astype(np.intp)
+    cell -= grid.u0
+    d = [depth_m.take(cell)]
+    for step in (1, grid.stride - 1, 1):
+        cell += step
+        d.append(depth_m.take(cell))
+    near = np.minimum(d[0], d[1])
+    np.minimum(near, d[2], out=near)
+    np.minimum(near, d[3], out=near)
+    far = np.maximum(d[0], d[1])
+    np.maximum(far, d[2], out=far)
+    np.maximum(far, d[3], out=far)
+    return near, far
+
+
+def grazing_area_m2(scene, intrinsics: Intrinsics, pose: Pose, cos_t: np.ndarray, grid: PixelGrid,
+                    depth_m: np.ndarray, grazing_cos: float = GRAZING_COS) -> float:
     """Area of the grazing triangles (``|cos θ| < grazing_cos``) that the camera sees.
 
     A triangle counts when its centroid projects into the image and nothing lies on the ray from the
-    camera centre to the centroid (one any-hit query per candidate). In a one-sided scene (closed,
-    outward-oriented surface) only front faces (cos θ > 0) are candidates; back faces are hidden anyway.
-    (Whether a pixel happened to hit the triangle is deliberately not used: that would make the result grow
-    with the resolution.)
+    camera centre to the centroid. The depth already cast decides where the 2 × 2 pixels around the
+    centroid agree: none of them has a return nearer than ``CENTROID_CLEAR_PX`` pixel footprints in front
+    of it (visible), or all of them have one more than ``CENTROID_HIDDEN_PX`` footprints in front (hidden);
+    the others (about two thirds on a body, mostly where the surface next to the centroid turns towards
+    the camera) cast one any-hit ray to the centroid. In a one-sided scene (closed, outward-oriented
+    surface) only front faces (cos θ > 0) are candidates; back faces are hidden anyway. (Whether a pixel
+    happened to hit the triangle is deliberately not used: that would make the result grow with the
+    resolution.)
+
+    Parameters
+    ----------
+    scene : MeshScene
+    intrinsics : Intrinsics
+    pose : Pose
+    cos_t : (m,) float
+        :func:`triangle_view_cosines` of the view.
+    grid : PixelGrid
+        The cast pixels.
+    depth_m : (grid.n_rows · grid.stride,) float32
+        Their z-depth, inf for no return (and on the grid's border).
+    grazing_cos : float
     """
     if scene.one_sided:
         cand = np.flatnonzero((cos_t > 0.0) & (cos_t < grazing_cos))
@@ -120,59 +196,70 @@ def grazing_area_m2(scene, intrinsics: Intrinsics, pose: Pose, cos_t: np.ndarray
         cand = np.flatnonzero(np.abs(cos_t) < grazing_cos)
     if cand.size == 0:
         return 0.0
-    # Camera coordinates of the candidates' centroids from the stored float32 columns (relative to the centre).
-    cx, cy, cz = (col[cand] for col in scene._soa[3:6])
-    R = pose.R
-    t = R @ scene.center + pose.T
-    X = [cx * np.float32(R[j, 0]) + cy * np.float32(R[j, 1]) + cz * np.float32(R[j, 2]) + np.float32(t[j])
-         for j in range(3)]
+    # Homogeneous image coordinates K (R c + T) of the centroids, from the float32 columns relative to the centre.
     k = intrinsics
-    z = X[2]
+    cols = np.take(scene._soa[3:6], cand, axis=1)
+    u, v, z = homogeneous_pixels(k, pose, scene.center, cols)
     with np.errstate(divide="ignore", invalid="ignore"):
-        u = (X[0] * np.float32(k.fx) + X[1] * np.float32(k.skew)) / z
-        v = X[1] * np.float32(k.fy) / z
-    inside = ((z > 0) & (u >= -0.5 - k.cx) & (u < k.width - 0.5 - k.cx)
-              & (v >= -0.5 - k.cy) & (v < k.height - 0.5 - k.cy))
-    idx = np.flatnonzero(inside)
-    if idx.size == 0:
-        return 0.0
-    # Rays from the camera centre C to the centroids c: direction c − C = c_local − (C − centre), so t = 1 at c.
-    offset = pose.camera_center - scene.center
-    rays = np.empty((idx.size, 6), dtype=np.float32)
-    for j, col in enumerate((cx, cy, cz)):
-        rays[:, j] = pose.camera_center[j]
-        np.subtract(col[idx], np.float32(offset[j]), out=rays[:, 3 + j])
-    # Any hit strictly before the centroid (t < 1) hides it: an any-hit query, cheaper than a closest hit.
-    occluded = scene.occluded(rays, 1.0 - _CENTROID_T_TOL)
-    return float(scene.triangle_areas_m2[cand[idx[~occluded]]].sum())
+        u /= z
+        v /= z
+    if not grid.mesh_in_image:
+        inside = (z > 0) & (u >= -0.5) & (u < k.width - 0.5) & (v >= -0.5) & (v < k.height - 0.5)
+        if not inside.all():
+            keep = np.flatnonzero(inside)
+            if keep.size == 0:
+                return 0.0
+            cand, cols, z, u, v = cand[keep], cols[:, keep], z[keep], u[keep], v[keep]
+    near, far = depth_lookup(grid, depth_m, u, v)
+    footprint = z / np.float32(math.sqrt(k.fx * k.fy))
+    visible = near >= z - np.float32(CENTROID_CLEAR_PX) * footprint
+    ask = np.flatnonzero(~visible & (far >= z - np.float32(CENTROID_HIDDEN_PX) * footprint))
+    if ask.size:
+        # Rays from the camera centre C to the centroids c: direction c − C = c_local − (C − centre), t = 1 at c.
+        offset = pose.camera_center - scene.center
+        rays = np.empty((ask.size, 6), dtype=np.float32)
+        for j in range(3):
+            rays[:, j] = pose.camera_center[j]
+            np.subtract(cols[j].take(ask), np.float32(offset[j]), out=rays[:, 3 + j])
+        # Any hit strictly before the centroid (t < 1) hides it: an any-hit query, cheaper than a closest hit.
+        visible[ask] = ~scene.occluded(rays, 1.0 - _CENTROID_T_TOL)
+    return float(np.einsum("i,i->", scene.triangle_areas_m2.take(cand), visible.astype(np.float64)))
 
 
-def visible_area_m2(z_m: np.ndarray, n_dot_d: np.ndarray, d_dot_d: np.ndarray, triangle_ids: np.ndarray,
-                    scene, intrinsics: Intrinsics, pose: Pose, grazing_cos: float = GRAZING_COS) -> float:
+def visible_area_m2(z_m: np.ndarray, triangle_ids: np.ndarray, scene, intrinsics: Intrinsics, pose: Pose,
+                    grid: PixelGrid, depth_m: np.ndarray, grazing_cos: float = GRAZING_COS) -> float:
     """Visible area of one view: pixel footprints on non-grazing triangles + visible grazing triangles.
 
     Parameters
     ----------
-    z_m, n_dot_d, d_dot_d : (k,) float
-        Per hit pixel, as in :func:`pixel_footprint_m2` (``d_dot_d`` is used only with ``grazing_cos`` 0).
+    z_m : (k,) float
+        z-depth of every hit pixel.
     triangle_ids : (k,) int
         Hit triangle of each pixel.
     scene : MeshScene
     intrinsics : Intrinsics
     pose : Pose
+    grid, depth_m : PixelGrid, (grid cells,) float32
+        The cast pixels and their depth (inf = no return), for the grazing triangles' occlusion
+        (:func:`grazing_area_m2`).
     grazing_cos : float
-        Triangles with cos θ below it are measured in object space (0 = pixels only).
+        Triangles with |cos θ| below it are measured in object space (> 0; see
+        :func:`pixel_footprint_m2` for the plain pixel sum).
     """
-    if grazing_cos <= 0:
-        return float(pixel_footprint_m2(z_m, n_dot_d, d_dot_d, intrinsics).sum())
-    cos_t = triangle_view_cosines(scene, pose.camera_center)
-    keep = np.abs(cos_t[np.asarray(triangle_ids, dtype=np.int64)]) >= grazing_cos
-    # On these triangles cos θ ≥ grazing_cos, far from the clip, and the footprint z² cos α / (fx fy cos θ)
-    # equals z² / (fx fy |n·d|) (d has unit z, so |n·d| = cos θ / cos α).
-    z = np.asarray(z_m, dtype=np.float64)
-    per_pixel = z * z / np.maximum(np.asarray(n_dot_d, dtype=np.float64), 1e-6)
-    pixels = float(np.einsum("i,i->", per_pixel, keep.astype(np.float64))) / (intrinsics.fx * intrinsics.fy)
-    return pixels + grazing_area_m2(scene, intrinsics, pose, cos_t, grazing_cos)
+    height, cos_t = triangle_view_terms(scene, pose.camera_center)
+    # Footprint z² cos α / (fx fy cos θ) = z³ / (fx fy h) with h the camera's height above the hit triangle's
+    # plane (the hit lies on it at z-depth z along d, d of unit z: h = z |n·d| and |n·d| = cos θ / cos α).
+    # Weight 1 / h on the non-grazing triangles (cos θ ≥ grazing_cos, so h is far from zero), 0 on the others.
+    h = np.abs(height)
+    np.maximum(h, np.float32(1e-30), out=h)  # a triangle edge-on to the camera (h = 0) is grazing: weight 0
+    weight = np.divide(np.abs(cos_t) >= grazing_cos, h, dtype=np.float32)
+    z = np.asarray(z_m).astype(np.float64)
+    z3 = z * z
+    z3 *= z
+    # (einsum rather than np.dot: OpenBLAS may thread a long dot product.)
+    pixels = float(np.einsum("i,i->", z3, weight.take(np.asarray(triangle_ids, dtype=np.intp)).astype(np.float64)))
+    pixels /= intrinsics.fx * intrinsics.fy
+    return pixels + grazing_area_m2(scene, intrinsics, pose, cos_t, grid, depth_m, grazing_cos)
 
 
 def vbsa_hit_m2(frame: DepthFrame, scene) -> float:
@@ -202,20 +289,22 @@ def vbsa_visible_m2(frame: DepthFrame, scene=None, grazing_cos: float = GRAZING_
     grazing_cos : float
         See :func:`visible_area_m2`.
     """
-    valid = (frame.depth_m > 0) & np.all(np.isfinite(frame.normals_cam), axis=-1)
-    if scene is not None:
-        valid &= frame.triangle_id >= 0
     k = frame.intrinsics
+    valid = (frame.depth_m > 0) & np.all(np.isfinite(frame.normals_cam), axis=-1)
+    if scene is not None and grazing_cos > 0:
+        valid &= frame.triangle_id >= 0
+        grid = PixelGrid.from_rect((0, k.height, 0, k.width))
+        depth = np.full((grid.n_rows, grid.stride), np.inf, dtype=np.float32)
+        depth[1:-1, 1:-1][valid] = frame.depth_m[valid]
+        return visible_area_m2(frame.depth_m[valid], frame.triangle_id[valid], scene, k, frame.pose, grid,
+                               depth.reshape(-1), grazing_cos)
     dirs, _ = pixel_rays(k)
     d = dirs[valid].astype(np.float64)
     n = frame.normals_cam[valid].astype(np.float64)
     n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
     nd = np.abs(np.einsum("ij,ij->i", n, d))
     dd = np.einsum("ij,ij->i", d, d)
-    z = frame.depth_m[valid]
-    if scene is None:
-        return float(pixel_footprint_m2(z, nd, dd, k).sum())
-    return visible_area_m2(z, nd, dd, frame.triangle_id[valid], scene, k, frame.pose, grazing_cos)
+    return float(pixel_footprint_m2(frame.depth_m[valid], nd, dd, k).sum())
 
 
 def sphere_cap_area_m2(radius_m: float, distance_m: float) -> float:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -96,11 +97,19 @@ def look_at_rotation(azimuth_deg: float, elevation_deg: float) -> np.ndarray:
     gives the limit of φ → ±90° at that azimuth: looking down from above at θ = 0 the image's up is +Y
     (towards the subject's back), the subject's left (+X) is on the image's right.
     """
+    return _rotation(float(azimuth_deg), float(elevation_deg)).copy()
+
+
+@lru_cache(maxsize=4096)
+def _rotation(azimuth_deg: float, elevation_deg: float) -> np.ndarray:
+    """Read-only :func:`look_at_rotation` (cached: a scan uses the same views for every body)."""
     th = math.radians(azimuth_deg)
     x_axis = np.array([math.cos(th), math.sin(th), 0.0])
     z_axis = -view_direction(azimuth_deg, elevation_deg)
     y_axis = np.cross(z_axis, x_axis)
-    return np.stack([x_axis, y_axis, z_axis])
+    R = np.stack([x_axis, y_axis, z_axis])
+    R.setflags(write=False)
+    return R
 
 
 def pose_from_view(view: View, target: np.ndarray) -> Pose:
@@ -119,6 +128,6 @@ def pose_from_view(view: View, target: np.ndarray) -> Pose:
         With camera centre ``target + D · (sin θ cos φ, −cos θ cos φ, sin φ)``.
     """
     target = np.asarray(target, dtype=np.float64).reshape(3)
-    R = look_at_rotation(view.azimuth_deg, view.elevation_deg)
-    center = target + view.distance_m * view_direction(view.azimuth_deg, view.elevation_deg)
+    R = _rotation(view.azimuth_deg, view.elevation_deg)
+    center = target - view.distance_m * R[2]  # R[2], the forward axis, points from the camera to the target
     return Pose(R, -R @ center)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from wbsa.camera.area import GRAZING_COS, hit_mask
+from wbsa.camera.area import GRAZING_COS
 from wbsa.camera.extrinsics import pose_from_view
 from wbsa.camera.frame import DepthFrame
 from wbsa.camera.intrinsics import Intrinsics
@@ -44,7 +44,8 @@ def measure_view(scene: MeshScene, intrinsics: Intrinsics, view: View, target: n
     target = scene.center if target is None else np.asarray(target, dtype=np.float64)
     pose = pose_from_view(view, target)
     hits = cast(scene, intrinsics, pose, roi=roi)
-    seen = hit_mask(hits.primitive_ids[hits.hit_index], scene.n_triangles)
+    seen = np.zeros(scene.n_triangles, dtype=bool)
+    seen[hits.hit_ids] = True
     row = {
         "azimuth_deg": view.azimuth_deg,
         "elevation_deg": view.elevation_deg,

@@ -17,7 +17,7 @@ import numpy as np
 from wbsa.camera.extrinsics import Pose
 from wbsa.camera.frame import DepthFrame
 from wbsa.camera.intrinsics import Intrinsics, pixel_axes, pixel_rays
-from wbsa.camera.roi import BLOCK_PX, projected_roi, silhouette_blocks
+from wbsa.camera.roi import PixelGrid, projected_roi, silhouette_pixels
 from wbsa.camera.scene import MeshScene
 from wbsa.errors import WbsaError
 
@@ -50,6 +50,9 @@ class RayHits:
         Hit triangle; 0xFFFFFFFF = no hit.
     normals_world : (n, 3) float32
         Unit normal of the hit triangle (vertex-order orientation), world frame.
+    grid : PixelGrid or None
+        The cast pixels on a grid (:class:`~wbsa.camera.roi.PixelGrid`); None when they are the ``roi``
+        rectangle.
     """
 
     intrinsics: Intrinsics
@@ -60,6 +63,7 @@ class RayHits:
     t_hit: np.ndarray
     primitive_ids: np.ndarray
     normals_world: np.ndarray
+    grid: PixelGrid | None = None
 
     @property
     def n_rays(self) -> int:
@@ -69,17 +73,49 @@ class RayHits:
     @cached_property
     def hit_index(self) -> np.ndarray:
         """(k,) int64 positions (into the cast rays) of the rays that hit."""
-        return np.flatnonzero(self.primitive_ids != _INVALID_ID)
+        return np.flatnonzero(self._hit)
 
     @property
     def n_pixels(self) -> int:
         """Number of pixels with a return."""
-        return int(self.hit_index.size)
+        return int(self.hit_ids.size)
 
     @property
     def hit_triangles(self) -> np.ndarray:
         """(k,) int64 triangle id of every hit pixel (with repeats)."""
-        return self.primitive_ids[self.hit_index].astype(np.int64)
+        return self.hit_ids.astype(np.int64, copy=False)
+
+    @cached_property
+    def _hit(self) -> np.ndarray:
+        """(n,) bool: which cast rays hit."""
+        return self.primitive_ids != _INVALID_ID
+
+    @cached_property
+    def hit_ids(self) -> np.ndarray:
+        """(k,) intp triangle id of every hit pixel (with repeats; read-only, cached)."""
+        ids = self.primitive_ids[self._hit].astype(np.intp)
+        ids.setflags(write=False)
+        return ids
+
+    @cached_property
+    def hit_t(self) -> np.ndarray:
+        """(k,) float32 z-depth of every hit pixel (read-only, cached)."""
+        t = self.t_hit[self._hit]
+        t.setflags(write=False)
+        return t
+
+    def depth_grid(self) -> tuple[PixelGrid, np.ndarray]:
+        """The cast pixels on a grid and their z-depth per grid cell (float32, inf = no return)."""
+        if self.grid is not None:
+            grid = self.grid
+        elif self.n_rays:
+            grid = PixelGrid.from_rect(self.roi)
+        else:  # nothing cast: an empty grid over the whole image
+            k = self.intrinsics
+            grid = PixelGrid(np.zeros(0, dtype=np.intp), -1, -1, k.width + 2, k.height + 2)
+        depth = np.full(grid.n_rows * grid.stride, np.inf, dtype=np.float32)
+        depth[grid.index] = self.t_hit
+        return grid, depth
 
     def hit_pixels(self) -> tuple[np.ndarray, np.ndarray]:
         """(rows, cols) int64 image coordinates of the hit pixels."""
@@ -104,13 +140,17 @@ class RayHits:
         return pixel_footprint_m2(*self._footprint_terms(), self.intrinsics)
 
     def visible_area_m2(self, scene: MeshScene, grazing_cos: float | None = None) -> float:
-        """Visible skin area of this view (m²); see :func:`wbsa.camera.area.visible_area_m2`."""
+        """Visible skin area of this view (m²); see :func:`wbsa.camera.area.visible_area_m2`.
+
+        ``grazing_cos`` 0 gives the plain sum of the pixel footprints (:meth:`pixel_areas_m2`).
+        """
         from wbsa.camera.area import GRAZING_COS, visible_area_m2
 
         grazing_cos = GRAZING_COS if grazing_cos is None else grazing_cos
-        z, nd, dd = self._footprint_terms(with_dd=grazing_cos <= 0)
-        return visible_area_m2(z, nd, dd, self.primitive_ids[self.hit_index], scene, self.intrinsics, self.pose,
-                               grazing_cos)
+        if grazing_cos <= 0:
+            return float(self.pixel_areas_m2().sum())
+        grid, depth = self.depth_grid()
+        return visible_area_m2(self.hit_t, self.hit_ids, scene, self.intrinsics, self.pose, grid, depth, grazing_cos)
 
     @property
     def touches_border(self) -> bool:
@@ -133,9 +173,9 @@ class RayHits:
         if self.n_pixels:
             i = self.hit_index
             rows, cols = self.hit_pixels()
-            z = self.t_hit[i]
+            z = self.hit_t
             depth[rows, cols] = z
-            tri[rows, cols] = self.primitive_ids[i]
+            tri[rows, cols] = self.hit_ids
             dirs_cam, _ = pixel_rays(k)
             d_cam = dirs_cam[rows, cols]
             points[rows, cols] = z[:, None] * d_cam
@@ -153,12 +193,20 @@ def _ray_terms(intrinsics: Intrinsics, pose: Pose, v0: int, v1: int, u0: int, u1
     """Per-row and per-column float32 terms of the ray directions: ``d_j = row_j[v] + col_j[u]``.
 
     With ``x = xu[u] + shear·yv[v]`` and ``y = yv[v]``, ``Rᵀ (x, y, 1)`` splits into a column part
-    ``xu·R[0] + R[2]`` and a row part ``yv·(R[1] + shear·R[0])``, each rounded to float32 element by element.
+    ``xu·R[0] + R[2]`` and a row part ``yv·(R[1] + shear·R[0])``, each rounded to float32 element by element
+    (rows v0..v1-1 and columns u0..u1-1, which may reach outside the image; a pixel's terms do not depend
+    on the range).
     """
     xu, yv, shear = pixel_axes(intrinsics)
+    if 0 <= u0 <= u1 <= xu.size and 0 <= v0 <= v1 <= yv.size:
+        xu, yv = xu[u0:u1], yv[v0:v1]
+    else:
+        k = intrinsics
+        xu = (np.arange(u0, u1, dtype=np.float64) - k.cx) / k.fx
+        yv = (np.arange(v0, v1, dtype=np.float64) - k.cy) / k.fy
     R = pose.R
-    cols = [(xu[u0:u1] * R[0, j] + R[2, j]).astype(np.float32) for j in range(3)]
-    rows = [(yv[v0:v1] * (R[1, j] + shear * R[0, j])).astype(np.float32) for j in range(3)]
+    cols = [(xu * R[0, j] + R[2, j]).astype(np.float32) for j in range(3)]
+    rows = [(yv * (R[1, j] + shear * R[0, j])).astype(np.float32) for j in range(3)]
     return rows, cols
 
 
@@ -176,13 +224,11 @@ def rect_rays(intrinsics: Intrinsics, pose: Pose, rect: tuple[int, int, int, int
     return rays
 
 
-def block_rays(intrinsics: Intrinsics, pose: Pose, blocks: tuple[np.ndarray, np.ndarray],
-               block_px: int = BLOCK_PX) -> tuple[np.ndarray, np.ndarray]:
-    """Rays of the pixels in square ``blocks`` (see :func:`~wbsa.camera.roi.silhouette_blocks`), in raster order.
+def grid_rays(intrinsics: Intrinsics, pose: Pose, grid: PixelGrid) -> tuple[np.ndarray, np.ndarray]:
+    """Rays of the pixels of ``grid`` (:func:`~wbsa.camera.roi.silhouette_pixels`), in raster order.
 
-    Raster order (row by row) keeps neighbouring rays together, which Open3D casts about 15 % faster
-    than block by block. Blocks must be sorted row-major, as ``numpy.nonzero`` returns them; pixels of
-    blocks that stick out of the image are left out.
+    Bit-identical to :func:`rect_rays` for the same pixel: the same float32 row and column terms, added
+    (the y and z terms as the two halves of one complex64 number, the same float32 additions).
 
     Returns
     -------
@@ -191,31 +237,21 @@ def block_rays(intrinsics: Intrinsics, pose: Pose, blocks: tuple[np.ndarray, np.
         ``row · width + col`` of each ray, increasing.
     """
     k = intrinsics
-    B = int(block_px)
-    by, bx = blocks
-    # Block rows present, their first block and block count (blocks are sorted by row, then column).
-    starts = np.flatnonzero(np.concatenate(([True], by[1:] != by[:-1])))
-    counts = np.diff(np.append(starts, by.size))
-    # One segment per pixel row: B segments per block row, each the columns of that block row's blocks.
-    seg_len = np.repeat(counts * B, B)
-    seg_src = np.repeat(starts * B, B)  # where the segment's columns start in the block-ordered column list
-    seg_row = (by[starts][:, None] * B + np.arange(B)).reshape(-1)
-    n = int(seg_len.sum())
-    out_start = np.cumsum(seg_len) - seg_len
-    src = np.repeat(seg_src - out_start, seg_len) + np.arange(n)
-    cols = (bx[:, None] * B + np.arange(B)).reshape(-1)[src]
-    rows = np.repeat(seg_row, seg_len)
-    if k.height % B or k.width % B:  # blocks on the last row or column stick out of the image
-        inside = (rows < k.height) & (cols < k.width)
-        rows, cols = rows[inside], cols[inside]
-        n = rows.size
-    row_terms, col_terms = _ray_terms(k, pose, 0, k.height, 0, k.width)
-    center = pose.camera_center
-    rays = np.empty((n, 6), dtype=np.float32)
-    for j in range(3):
-        rays[:, j] = center[j]
-        np.add(row_terms[j][rows], col_terms[j][cols], out=rays[:, 3 + j])
-    return rays, rows * k.width + cols
+    rows, cols = np.divmod(grid.index, grid.stride)  # grid rows and columns
+    row_terms, col_terms = _ray_terms(k, pose, grid.v0, grid.v0 + grid.n_rows, grid.u0, grid.u0 + grid.stride)
+    row_yz = np.empty(grid.n_rows, dtype=np.complex64)
+    row_yz.real, row_yz.imag = row_terms[1], row_terms[2]
+    col_yz = np.empty(grid.stride, dtype=np.complex64)
+    col_yz.real, col_yz.imag = col_terms[1], col_terms[2]
+    rays = np.empty((rows.size, 6), dtype=np.float32)
+    for j in range(3):  # column by column: a broadcast of the (3,) centre is several times slower
+        rays[:, j] = pose.camera_center[j]
+    np.add(row_terms[0].take(rows), col_terms[0].take(cols), out=rays[:, 3])
+    np.add(row_yz.take(rows), col_yz.take(cols), out=rays.view(np.complex64)[:, 2])
+    rows *= k.width
+    rows += cols
+    rows += grid.v0 * k.width + grid.u0
+    return rays, rows
 
 
 def cast(scene: MeshScene, intrinsics: Intrinsics, pose: Pose, *, roi: bool | RoiMode = True) -> RayHits:
@@ -228,10 +264,10 @@ def cast(scene: MeshScene, intrinsics: Intrinsics, pose: Pose, *, roi: bool | Ro
     pose : Pose
         World-to-camera transform.
     roi : bool or {'silhouette', 'bbox', 'full'}
-        ``True``/``'silhouette'``: blocks around the projected mesh (falls back to ``'bbox'`` when the
-        mesh is close or huge on screen);
-        ``'bbox'``: the rectangle of the projected bounding box; ``False``/``'full'``: every pixel.
-        All give the same hits.
+        ``True``/``'silhouette'``: the pixels inside the projected bounding boxes of small patches of
+        triangles (:func:`~wbsa.camera.roi.silhouette_pixels`; falls back to ``'bbox'`` when a vertex is
+        at or behind the camera plane); ``'bbox'``: the rectangle of the projected bounding box;
+        ``False``/``'full'``: every pixel. All give the same hits.
 
     Raises
     ------
@@ -246,17 +282,12 @@ def cast(scene: MeshScene, intrinsics: Intrinsics, pose: Pose, *, roi: bool | Ro
         raise WbsaError(f"the camera (at {np.round(center, 3).tolist()} m) is inside the body; "
                         f"use a larger --distance")
     k = intrinsics
-    blocks = silhouette_blocks(scene, k, pose) if mode == "silhouette" else None
-    if blocks is not None:
-        by, bx = blocks
-        if by.size == 0:
+    grid = silhouette_pixels(scene, k, pose) if mode == "silhouette" else None
+    if grid is not None:
+        if grid.index.size == 0:
             return _empty(k, pose)
-        B = BLOCK_PX
-        rect = (int(by.min()) * B, min(k.height, (int(by.max()) + 1) * B),
-                int(bx.min()) * B, min(k.width, (int(bx.max()) + 1) * B))
-        rays, pixels = block_rays(k, pose, blocks)
-        if pixels.size == 0:
-            return _empty(k, pose)
+        rays, pixels = grid_rays(k, pose, grid)
+        rect = grid.rect
     else:
         pixels = None
         rect = projected_roi(scene, k, pose) if mode != "full" else (0, k.height, 0, k.width)
@@ -265,7 +296,7 @@ def cast(scene: MeshScene, intrinsics: Intrinsics, pose: Pose, *, roi: bool | Ro
             return _empty(k, pose)
         rays = rect_rays(k, pose, rect)
     ans = scene.cast_rays(rays)
-    return RayHits(k, pose, rect, pixels, rays, ans["t_hit"], ans["primitive_ids"], ans["primitive_normals"])
+    return RayHits(k, pose, rect, pixels, rays, ans["t_hit"], ans["primitive_ids"], ans["primitive_normals"], grid)
 
 
 def _empty(intrinsics: Intrinsics, pose: Pose) -> RayHits:

@@ -1,31 +1,188 @@
 """Which pixels need a ray: conservative regions of interest of a mesh in an image.
 
-Both regions are exact in the sense that matters: every pixel whose ray can hit the mesh is inside,
+Every region is exact in the sense that matters: every pixel whose ray can hit the mesh is inside,
 so casting only them gives the same hits as casting the full frame.
 
+``silhouette_pixels``
+    The pixels whose centre lies in the projected bounding box of a small patch of adjacent triangles
+    (a ray through a pixel centre can only hit a triangle whose projection contains that centre). On an
+    anny body at 4.3 m this casts 12 % more rays than the body has pixels (the 8 × 8 blocks it replaced
+    cast 2.4 times as many).
 ``projected_roi``
     The pixel rectangle around the 8 projected corners of the mesh's bounding box.
 ``silhouette_blocks``
-    Square blocks of pixels around the projected vertices: a triangle's image lies within its
-    longest projected edge of each of its vertices, so marking the vertices' blocks and growing the
-    marks by one block covers every triangle whose projected edges are shorter than a block; the
-    few longer triangles mark the blocks of their whole bounding box. On a body in an A-pose this
-    casts about half as many rays as the rectangle.
+    The ``block_px`` × ``block_px`` blocks that hold a pixel of ``silhouette_pixels``.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
 from wbsa.camera.extrinsics import Pose
 from wbsa.camera.intrinsics import Intrinsics
 
-#: Block edge (pixels) of the silhouette mask.
+#: Block edge (pixels) of :func:`silhouette_blocks`.
 BLOCK_PX = 8
-#: Give up the block mask (use the rectangle) when more triangles than this fraction are longer than a block.
-_MAX_LONG_FRACTION = 0.25
+#: Slack (pixels) added to every projected patch's bounding box: covers the float32 rounding of the
+#: projected vertices (~1e-4 px) and of Open3D's rays and intersection test (~1e-3 px) many times over.
+BOX_SLACK_PX = 0.05
+
+
+@dataclass(frozen=True, eq=False)
+class PixelGrid:
+    """A set of pixels on a rectangular grid with an empty one-cell border (raster order).
+
+    Pixel (row, col) is grid cell ``(row − v0) · stride + (col − u0)``. The first and last grid rows
+    and columns hold no pixel, so the 2 × 2 pixels around any point inside both the image and the grid's
+    rectangle are grid cells: pixels of the set, or empty.
+
+    Attributes
+    ----------
+    index : (n,) intp
+        Grid cells of the pixels, increasing (raster order of the image).
+    v0, u0 : int
+        Image row and column of grid cell 0 (one above and left of the first pixel row and column).
+    stride, n_rows : int
+        Grid row length and number of grid rows.
+    mesh_in_image : bool
+        True when the whole mesh is known to project into the image (u in [−0.5, width − 0.5), v
+        likewise) in front of the camera.
+    """
+
+    index: np.ndarray
+    v0: int
+    u0: int
+    stride: int
+    n_rows: int
+    mesh_in_image: bool = False
+
+    @property
+    def rect(self) -> tuple[int, int, int, int]:
+        """(v0, v1, u0, u1): the image rectangle inside the border (rows v0..v1-1, columns u0..u1-1)."""
+        return self.v0 + 1, self.v0 + self.n_rows - 1, self.u0 + 1, self.u0 + self.stride - 1
+
+    def rows_cols(self) -> tuple[np.ndarray, np.ndarray]:
+        """(n,) intp image rows and columns of the pixels."""
+        rows, cols = np.divmod(self.index, self.stride)
+        rows += self.v0
+        cols += self.u0
+        return rows, cols
+
+    def image_index(self, width: int) -> np.ndarray:
+        """(n,) int64 flat image index ``row · width + col`` of the pixels."""
+        rows, cols = self.rows_cols()
+        rows *= width
+        rows += cols
+        return rows
+
+    @classmethod
+    def from_rect(cls, rect: tuple[int, int, int, int]) -> "PixelGrid":
+        """All pixels of the rectangle (v0, v1, u0, u1), row-major."""
+        v0, v1, u0, u1 = rect
+        h, w = max(0, v1 - v0), max(0, u1 - u0)
+        stride = w + 2
+        index = (np.arange(1, h + 1, dtype=np.intp)[:, None] * stride + np.arange(1, w + 1, dtype=np.intp)).ravel()
+        return cls(index, v0 - 1, u0 - 1, stride, h + 2)
+
+
+def homogeneous_pixels(intrinsics: Intrinsics, pose: Pose, origin: np.ndarray, points_t: np.ndarray) -> np.ndarray:
+    """(3, n) float32 ``K (R (p + origin) + T)`` of points p given relative to ``origin`` as (3, n) float32 columns.
+
+    Rows: u·z, v·z and the z-depth z. ``numpy.einsum`` (its own loops) rather than a matrix product, so
+    that no BLAS thread pool is woken for a (3, 3) × (3, n) product (its idle threads spin on the CPU).
+    """
+    A = (intrinsics.K @ pose.R).astype(np.float32)
+    b = (intrinsics.K @ (pose.R @ origin + pose.T)).astype(np.float32)
+    out = np.einsum("ij,jk->ik", A, points_t)
+    out += b[:, None]
+    return out
+
+
+def silhouette_pixels(scene, intrinsics: Intrinsics, pose: Pose,
+                      slack_px: float = BOX_SLACK_PX) -> PixelGrid | None:
+    """Pixels whose centre lies in the projected bounding box of a patch of adjacent triangles.
+
+    A pixel's ray goes through its centre, so it can hit a triangle only if the triangle's projection
+    contains that centre, which then lies in the projected bounding box of the triangle's vertices and of
+    any patch that holds the triangle (widened by ``slack_px`` for rounding). The boxes are painted with a
+    two-dimensional difference array (four ±1 corners per box, two ``bincount`` calls and two cumulative
+    sums), so the cost does not depend on their size.
+
+    Parameters
+    ----------
+    scene : MeshScene
+    intrinsics : Intrinsics
+    pose : Pose
+    slack_px : float
+        Widening of every box, pixels.
+
+    Returns
+    -------
+    PixelGrid or None
+        None when a vertex lies at or behind the camera plane (then use :func:`projected_roi`).
+    """
+    k = intrinsics
+    # Image coordinates of the vertices, float32 (≈ 1e-4 px).
+    u, v, z = homogeneous_pixels(k, pose, scene.center, scene._local_vertices_f32)
+    if not float(z.min()) > 1e-6:
+        return None
+    u /= z
+    v /= z
+    # The grid: the pixel centres within the vertices' range, cut to the image, plus a margin of two cells
+    # where not cut (an empty border and room for float32 rounding of the boxes below) or one (the border).
+    u_min, u_max, v_min, v_max = float(u.min()), float(u.max()), float(v.min()), float(v.max())
+    in_image = u_min >= -0.5 and u_max < k.width - 0.5 and v_min >= -0.5 and v_max < k.height - 0.5
+    lo_u, hi_u = math.ceil(u_min - slack_px) - 2, math.floor(u_max + slack_px) + 3
+    lo_v, hi_v = math.ceil(v_min - slack_px) - 2, math.floor(v_max + slack_px) + 3
+    gu0, gu1 = max(-1, lo_u), min(k.width + 1, hi_u)
+    gv0, gv1 = max(-1, lo_v), min(k.height + 1, hi_v)
+    if gu1 - gu0 <= 2 or gv1 - gv0 <= 2:
+        return PixelGrid(np.zeros(0, np.intp), gv0, gu0, max(gu1 - gu0, 2), max(gv1 - gv0, 2))
+    stride, n_rows = gu1 - gu0, gv1 - gv0
+    clipped = lo_u < gu0 or hi_u > gu1 or lo_v < gv0 or hi_v > gv1
+    # Each patch's box of pixel centres [c0, c1) x [r0, r1) in grid cells (exact integers in float32),
+    # clipped to the grid's inside where the image cut the rectangle. A box without a pixel centre has
+    # c1 = c0 or r1 = r0, and its four corners cancel. Patches of a few adjacent faces
+    # (:attr:`MeshScene._patches`) cost about half as much as single faces and add ~4 % of rays.
+    patches = scene._patches
+    p, n = patches.shape
+    uv = np.empty(u.size, dtype=np.complex64)  # u and v gathered together: one take instead of two
+    uv.real, uv.imag = u, v
+    corners = np.take(uv, patches.reshape(-1)).reshape(p, n)
+    bounds = []
+    for corner, origin, size in ((corners.real, gu0, stride), (corners.imag, gv0, n_rows)):
+        lo = np.minimum(corner[0], corner[1])
+        hi = np.maximum(corner[0], corner[1])
+        for i in range(2, p):
+            np.minimum(lo, corner[i], out=lo)
+            np.maximum(hi, corner[i], out=hi)
+        lo -= np.float32(slack_px + origin)
+        np.ceil(lo, out=lo)
+        hi += np.float32(slack_px - origin + 1.0)
+        np.floor(hi, out=hi)
+        if clipped:
+            np.clip(lo, 1.0, size - 1.0, out=lo)
+            np.clip(hi, 1.0, size - 1.0, out=hi)
+        bounds += [lo, hi]
+    c0, c1, r0, r1 = bounds
+    r0 *= np.float32(stride)
+    r1 *= np.float32(stride)
+    # Difference array: +1 at the top-left and bottom-right corners, −1 at the other two; its 2-D prefix
+    # sum counts the boxes over each cell.
+    cells = np.empty((4, n), dtype=np.intp)
+    np.add(r0, c0, out=cells[0], casting="unsafe")
+    np.add(r1, c1, out=cells[1], casting="unsafe")
+    np.add(r0, c1, out=cells[2], casting="unsafe")
+    np.add(r1, c0, out=cells[3], casting="unsafe")
+    cover = np.bincount(cells[:2].reshape(-1), minlength=n_rows * stride)
+    cover -= np.bincount(cells[2:].reshape(-1), minlength=n_rows * stride)
+    cover = cover.reshape(n_rows, stride)
+    np.cumsum(cover, axis=0, out=cover)
+    np.cumsum(cover, axis=1, out=cover)
+    return PixelGrid(np.flatnonzero(cover != 0), gv0, gu0, stride, n_rows, in_image)
 
 
 def projected_roi(scene, intrinsics: Intrinsics, pose: Pose) -> tuple[int, int, int, int]:
@@ -70,74 +227,15 @@ def silhouette_blocks(scene, intrinsics: Intrinsics, pose: Pose,
     Returns
     -------
     (block_rows, block_cols) : (nb,) int64 each, or None
-        Block coordinates (pixel row ``block_rows · block_px``, column ``block_cols · block_px``); None when
-        the mask cannot be built cheaply (a vertex at or behind the camera plane, or too many triangles
-        longer than a block on screen): then use :func:`projected_roi`.
+        Block coordinates (pixel row ``block_rows · block_px``, column ``block_cols · block_px``), sorted
+        row-major: the blocks that hold a pixel of :func:`silhouette_pixels`; None when a vertex lies at or
+        behind the camera plane (then use :func:`projected_roi`).
     """
-    k = intrinsics
+    grid = silhouette_pixels(scene, intrinsics, pose)
+    if grid is None:
+        return None
     B = int(block_px)
-    # Homogeneous image coordinates of the vertices, K (R (x_local + centre) + T), from the stored columns.
-    P = pose.R
-    t = P @ scene.center + pose.T
-    Lx, Ly, Lz = scene._local_vertices_t
-    z = Lx * P[2, 0]
-    z += Ly * P[2, 1]
-    z += Lz * P[2, 2]
-    z += t[2]
-    z_min = float(z.min())
-    if z_min <= 1e-6:
-        return None
-    x = Lx * P[0, 0]
-    x += Ly * P[0, 1]
-    x += Lz * P[0, 2]
-    x += t[0]
-    x /= z
-    y = Lx * P[1, 0]
-    y += Ly * P[1, 1]
-    y += Lz * P[1, 2]
-    y += t[1]
-    y /= z
-    # Longest possible projected edge per metre of 3D edge: |Δ(X/Z)| ≤ √(1 + t²)·L / z_min with t = max |X/Z|.
-    sx = math.sqrt(1.0 + max(float(x.max()), -float(x.min())) ** 2)
-    sy = math.sqrt(1.0 + max(float(y.max()), -float(y.min())) ** 2)
-    px_per_m = max(k.fx * sx + abs(k.skew) * sy, k.fy * sy) / z_min
-    long_tris = np.flatnonzero(scene._max_edge > (B - 1) / px_per_m)
-    if long_tris.size > _MAX_LONG_FRACTION * scene._max_edge.size:
-        return None
-    nbu, nbv = -(-k.width // B), -(-k.height // B)
-    # Block grid with a ring of one block around the image; vertices further out are clamped onto the ring
-    # (a triangle reaching into the image has all its vertices within one block of it, or is "long").
-    # Clipping to [0, nb + 1] before the cast makes truncation equal to floor.
-    u = x * (k.fx / B)
-    u += y * (k.skew / B)
-    u += k.cx / B + 1.0
-    v = y * (k.fy / B)
-    v += k.cy / B + 1.0
-    bu = np.clip(u, 0.0, nbu + 1.0, out=u).astype(np.intp)
-    bv = np.clip(v, 0.0, nbv + 1.0, out=v).astype(np.intp)
-    stride = nbu + 2
-    grid = np.zeros((nbv + 2) * stride, dtype=bool)
-    grid[bv * stride + bu] = True
-    grid = grid.reshape(nbv + 2, stride)
-    if long_tris.size:
-        f0, f1, f2 = (f[long_tris] for f in scene._faces_t)
-        a, b, c = bu[f0], bu[f1], bu[f2]
-        u0, u1 = np.minimum(np.minimum(a, b), c), np.maximum(np.maximum(a, b), c)
-        a, b, c = bv[f0], bv[f1], bv[f2]
-        v0, v1 = np.minimum(np.minimum(a, b), c), np.maximum(np.maximum(a, b), c)
-        span_u, span_v = int((u1 - u0).max()), int((v1 - v0).max())
-        if (span_u + 1) * (span_v + 1) > 64:  # huge triangles on screen: the rectangle is as good and cheaper
-            return None
-        for i in range(span_v + 1):
-            rows = np.minimum(v0 + i, v1)
-            for j in range(span_u + 1):
-                grid[rows, np.minimum(u0 + j, u1)] = True
-    # Grow by one block (8-neighbourhood), then drop the ring.
-    grown = grid.copy()
-    grown[1:] |= grid[:-1]
-    grown[:-1] |= grid[1:]
-    grid = grown.copy()
-    grid[:, 1:] |= grown[:, :-1]
-    grid[:, :-1] |= grown[:, 1:]
-    by, bx = np.nonzero(grid[1:-1, 1:-1])
-    return by, bx
+    rows, cols = grid.rows_cols()
+    nbu = -(-intrinsics.width // B)
+    blocks = np.unique((rows // B) * nbu + cols // B)
+    return np.divmod(blocks.astype(np.int64), nbu)

@@ -106,15 +106,8 @@ def phenotype_array(params: pd.DataFrame | dict) -> np.ndarray:
         else:
             raise WbsaError(f"phenotype column {name} is missing; a population table needs "
                             f"{', '.join(PHENOTYPE_COLUMNS[:6])}, ...")
-    arr = np.stack(cols, axis=1)
-    bad = ~np.isfinite(arr) | (arr < 0.0) | (arr > 1.0)
-    if bad.any():
-        row, col = np.argwhere(bad)[0]
-        raise WbsaError(
-            f"phenotype {PHENOTYPE_COLUMNS[col]} = {arr[row, col]!r} in row {row} is outside [0, 1]; "
-            "anny parameters are normalised to [0, 1]"
-        )
-    return arr
+    return _checked_range(np.stack(cols, axis=1), PHENOTYPE_COLUMNS, 0.0, "phenotype",
+                          "anny parameters are normalised to [0, 1]")
 
 
 def local_change_array(params: pd.DataFrame | dict) -> np.ndarray:
@@ -131,14 +124,17 @@ def local_change_array(params: pd.DataFrame | dict) -> np.ndarray:
     df = pd.DataFrame(params) if not isinstance(params, pd.DataFrame) else params
     cols = [df[name].to_numpy(dtype=np.float64) if name in df.columns else np.zeros(len(df))
             for name in LOCAL_CHANGE_COLUMNS]
-    arr = np.stack(cols, axis=1) if cols else np.zeros((len(df), 0))
-    bad = ~np.isfinite(arr) | (arr < -1.0) | (arr > 1.0)
+    return _checked_range(np.stack(cols, axis=1), LOCAL_CHANGE_COLUMNS, -1.0, "local change",
+                          "local changes are -1 (decrease) to 1 (increase), 0 = no change")
+
+
+def _checked_range(arr: np.ndarray, names: tuple[str, ...], low: float, what: str, why: str) -> np.ndarray:
+    """``arr`` (b, k) unchanged if every value is finite and in [low, 1], else a one-line WbsaError."""
+    bad = ~np.isfinite(arr) | (arr < low) | (arr > 1.0)
     if bad.any():
         row, col = np.argwhere(bad)[0]
-        raise WbsaError(
-            f"local change {LOCAL_CHANGE_COLUMNS[col]} = {float(arr[row, col])!r} in row {row} is outside [-1, 1]; "
-            "local changes are -1 (decrease) to 1 (increase), 0 = no change"
-        )
+        raise WbsaError(f"{what} {names[col]} = {float(arr[row, col])!r} in row {row} is outside "
+                        f"[{low:g}, 1]; {why}")
     return arr
 
 

@@ -4,30 +4,14 @@ from __future__ import annotations
 
 import argparse
 
-import numpy as np
 
+from wbsa.cli_types import number_in
 from wbsa.errors import WbsaError
 from wbsa.sensor.model import NOISE_MODELS, SensorModel
 
 
-def _fraction(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a fraction in [0, 1], got {text!r}") from None
-    if not (0.0 <= value <= 1.0):
-        raise argparse.ArgumentTypeError(f"expected a fraction in [0, 1], got {text}")
-    return value
-
-
-def _grazing_deg(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected degrees in [0, 90), got {text!r}") from None
-    if not (0.0 <= value < 90.0):
-        raise argparse.ArgumentTypeError(f"expected degrees in [0, 90), got {text}")
-    return value
+_fraction = number_in(0.0, 1.0, what="a fraction")
+_grazing_deg = number_in(0.0, 90.0, high_open=True, what="degrees")
 
 
 def add_sensor_arguments(parser: argparse.ArgumentParser, *, seed: bool = False) -> None:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from wbsa.cli_types import number_in
 from wbsa.surface.settings import BOUNDARY_MODELS, DENOISE_METHODS, METHODS, ReconstructionSettings
 
 
@@ -18,24 +19,8 @@ def _methods(text: str) -> tuple[str, ...]:
     return names
 
 
-def _positive(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}") from None
-    if not value > 0:
-        raise argparse.ArgumentTypeError(f"expected a positive number, got {text}")
-    return value
-
-
-def _non_negative(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}") from None
-    if not value >= 0:
-        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text}")
-    return value
+_positive = number_in(0.0, low_open=True, what="a number")
+_non_negative = number_in(0.0, what="a number")
 
 
 def add_reconstruct_arguments(parser: argparse.ArgumentParser) -> None:

@@ -35,7 +35,12 @@ test: $(STAMP)
 	$(VENV)/bin/python -m pytest -q
 
 bench: $(STAMP)
-	$(VENV)/bin/python benchmarks/run_all.py
+	$(VENV)/bin/python benchmarks/bench_population.py
+	OPENBLAS_NUM_THREADS=1 $(VENV)/bin/python benchmarks/bench_raycast.py --anny --accuracy
+	$(VENV)/bin/python benchmarks/bench_scan.py --subjects 24 --chunk-size 6
+	$(VENV)/bin/python benchmarks/bench_reconstruction.py
+	$(VENV)/bin/python benchmarks/bench_fit.py 20000 65
+	$(VENV)/bin/python benchmarks/bench_survey_match.py --n 500 --seed 0
 
 clean:
 	rm -rf $(VENV) build src/*.egg-info

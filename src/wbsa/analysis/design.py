@@ -42,12 +42,9 @@ MODEL_DESCRIPTIONS: dict[str, str] = {
 
 def check_model_kinds(names: tuple[str, ...] | list[str]) -> tuple[str, ...]:
     """Validate model kind names; raise :class:`WbsaError` naming the valid ones."""
-    bad = [m for m in names if m not in MODEL_KINDS]
-    if bad:
-        raise WbsaError(f"unknown model(s) {', '.join(bad)}; choose from {', '.join(MODEL_KINDS)}")
-    if not names:
-        raise WbsaError(f"no model given; choose from {', '.join(MODEL_KINDS)}")
-    return tuple(dict.fromkeys(names))
+    from wbsa.analysis.groups import check_names
+
+    return check_names(names, tuple(MODEL_KINDS), "model")
 
 
 def term_names(model: str, predictors: tuple[str, ...] | list[str]) -> tuple[str, ...]:

@@ -71,14 +71,19 @@ class GroupSpec:
         }
 
 
+def check_names(names: tuple[str, ...] | list[str], valid: tuple[str, ...], what: str) -> tuple[str, ...]:
+    """``names`` without repeats, in order, if all are in ``valid``; else a WbsaError naming the valid ones."""
+    bad = [n for n in names if n not in valid]
+    if bad:
+        raise WbsaError(f"unknown {what}(s) {', '.join(bad)}; choose from {', '.join(valid)}")
+    if not names:
+        raise WbsaError(f"no {what} given; choose from {', '.join(valid)}")
+    return tuple(dict.fromkeys(names))
+
+
 def check_group_names(names: tuple[str, ...] | list[str]) -> tuple[str, ...]:
     """Validate group names; raise :class:`WbsaError` naming the valid ones."""
-    bad = [g for g in names if g not in GROUP_NAMES]
-    if bad:
-        raise WbsaError(f"unknown group(s) {', '.join(bad)}; choose from {', '.join(GROUP_NAMES)}")
-    if not names:
-        raise WbsaError(f"no group given; choose from {', '.join(GROUP_NAMES)}")
-    return tuple(dict.fromkeys(names))
+    return check_names(names, GROUP_NAMES, "group")
 
 
 def assign_groups(population: pd.DataFrame, spec: GroupSpec = GroupSpec()) -> pd.DataFrame:

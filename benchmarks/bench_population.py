@@ -23,9 +23,9 @@ def main() -> None:
     parser.add_argument("--workers", type=int, default=None, help="worker processes (default: all cores)")
     args = parser.parse_args()
 
-    from wbsa.population.body_model import BodyModel
-    from wbsa.population.random_population import RandomPopulationSettings, sample_random_parameters
-    from wbsa.population.table import measure_population
+    from wbsa.bodies.body_model import BodyModel
+    from wbsa.bodies.random_population import RandomPopulationSettings, sample_random_parameters
+    from wbsa.bodies.table import measure_population
 
     model = BodyModel()
     params = sample_random_parameters(RandomPopulationSettings(n=args.n, seed=0))

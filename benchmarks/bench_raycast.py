@@ -10,7 +10,7 @@ time of this process (all threads). Ratios are against the bare ``RaycastingScen
 exactly the rays the default (silhouette) ROI casts, the floor for one closest-hit ray per pixel, and
 against that floor plus the bare ``test_occlusions`` call on the visibility rays ``measure_view`` casts
 for the grazing triangles (recorded from a ``measure_view`` pass).
-``--anny`` adds a real body from ``wbsa.population.body_model`` when that module exists.
+``--anny`` adds a real body from ``wbsa.bodies.body_model`` when that module exists.
 ``--accuracy`` also prints the visible-area checks quoted in docs/camera.md: sphere caps against
 2πr²(1 − r/d), and both VBSA estimates of the bodies at 1×, 2×, 4× and 8× the camera's resolution.
 """
@@ -162,7 +162,7 @@ def main() -> None:
         try:
             import pandas as pd
 
-            from wbsa.population.body_model import BodyModel
+            from wbsa.bodies.body_model import BodyModel
         except ImportError as exc:
             print(f"anny body skipped: {exc}")
         else:

@@ -56,7 +56,7 @@ def main(argv: list[str] | None = None) -> int:
 
     from wbsa.camera import MeshScene, View, measure_view, paper_views, preset, render
     from wbsa.camera.extrinsics import pose_from_view
-    from wbsa.population.body_model import BodyModel
+    from wbsa.bodies.body_model import BodyModel
     from wbsa.sensor import SensorModel, apply_sensor
     from wbsa.surface import ReconstructionSettings, vbsa_recon_m2
 
@@ -173,7 +173,7 @@ def print_sweep(sweep: pd.DataFrame, sigmas, camera) -> None:
     import math
 
     from wbsa.camera import MeshScene, Pose, render
-    from wbsa.population.mesh import TriangleMesh
+    from wbsa.core.mesh import TriangleMesh
     from wbsa.sensor import SensorModel, apply_sensor
     from wbsa.surface import ReconstructionSettings, vbsa_recon_m2
 

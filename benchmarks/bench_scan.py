@@ -4,7 +4,7 @@ Usage::
 
     python benchmarks/bench_scan.py [--subjects 24] [--workers N] [--chunk-size 6] [--views paper] [--repeat 3]
 
-Real anny bodies (``wbsa.population.body_model``), the camera stage's ``measure_view`` and the scan
+Real anny bodies (``wbsa.bodies.body_model``), the camera stage's ``measure_view`` and the scan
 engine, as ``wbsa scan`` runs them. In the same run:
 
 * **floor**: every pixel ray that the scan casts is recorded, then cast again with bare
@@ -77,7 +77,7 @@ def main() -> None:
     from wbsa.camera.raycast import MeshScene
     from wbsa.camera.views import parse_views
     from wbsa.parallel import dask_client, default_workers
-    from wbsa.population.random_population import RandomPopulationSettings, sample_random_parameters
+    from wbsa.bodies.random_population import RandomPopulationSettings, sample_random_parameters
     from wbsa.scan.engine import scan_population
     from wbsa.scan.settings import ScanSettings
     from wbsa.scan.worker import body_model, keep_large_allocations, single_threaded_math
@@ -245,7 +245,7 @@ class Clock:
 def _warm_worker() -> None:
     """Build the body model and import Open3D in a worker before the timed run."""
     from wbsa.camera import MeshScene
-    from wbsa.population.mesh import TriangleMesh
+    from wbsa.core.mesh import TriangleMesh
     from wbsa.scan.worker import body_model
 
     body_model()

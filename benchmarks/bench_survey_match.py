@@ -37,8 +37,8 @@ def main(argv: list[str] | None = None) -> int:
 
     import torch
 
-    from wbsa.population.survey import SurveyMatchWarning, SurveyPopulationSettings, build_survey_population
-    from wbsa.population.survey_match import MatchSettings
+    from wbsa.bodies.survey import SurveyMatchWarning, SurveyPopulationSettings, build_survey_population
+    from wbsa.bodies.survey_match import MatchSettings
 
     settings = SurveyPopulationSettings(match=MatchSettings(threads=args.threads or None,
                                                                     free_local_changes=not args.phenotypes_only))
@@ -80,7 +80,7 @@ def main(argv: list[str] | None = None) -> int:
                 print(f"  {key[:-4] + ' ' + unit:<8} {g[key + '_within']:7.1%} {g[f'{key}_{unit}_p50']:7.2f} "
                       f"{g[f'{key}_{unit}_p95']:7.2f} {g[f'{key}_{unit}_max']:7.2f} "
                       f"{g[f'{key}_{unit}_mean_signed']:12.2f}")
-    from wbsa.population.body_model import LOCAL_CHANGE_COLUMNS
+    from wbsa.bodies.body_model import LOCAL_CHANGE_COLUMNS
 
     print("\nlocal changes of the matched bodies (quantiles 0 / 5 / 50 / 95 / 100 %):")
     for name in LOCAL_CHANGE_COLUMNS:

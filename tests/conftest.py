@@ -11,15 +11,15 @@ os.environ.setdefault("WBSA_PROGRESS", "0")
 
 @pytest.fixture(scope="session")
 def body_model():
-    """One :class:`wbsa.population.body_model.BodyModel` for the whole run."""
-    from wbsa.population.body_model import BodyModel
+    """One :class:`wbsa.bodies.body_model.BodyModel` for the whole run."""
+    from wbsa.bodies.body_model import BodyModel
 
     return BodyModel()
 
 
 @pytest.fixture(scope="session")
 def anthropometer(body_model):
-    """One :class:`wbsa.population.anthropometry.Anthropometer` for the whole run."""
-    from wbsa.population.anthropometry import Anthropometer
+    """One :class:`wbsa.bodies.anthropometry.Anthropometer` for the whole run."""
+    from wbsa.bodies.anthropometry import Anthropometer
 
     return Anthropometer(body_model)

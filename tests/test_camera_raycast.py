@@ -12,7 +12,7 @@ from wbsa.camera import (Intrinsics, MeshScene, View, cast, distance_to_fit, mea
 from wbsa.camera.area import triangle_view_cosines  # noqa: E402
 from wbsa.camera.shapes import body_like, box, icosphere  # noqa: E402
 from wbsa.errors import WbsaError  # noqa: E402
-from wbsa.population.mesh import TriangleMesh  # noqa: E402
+from wbsa.core.mesh import TriangleMesh  # noqa: E402
 
 KINECT = preset("kinect-v1")
 

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from wbsa.cli import main
-from wbsa.population.anthropometry import reference_adult
-from wbsa.population.mesh import TriangleMesh
+from wbsa.bodies.anthropometry import reference_adult
+from wbsa.core.mesh import TriangleMesh
 
 
 def _quad(corners: np.ndarray) -> TriangleMesh:
@@ -54,7 +54,7 @@ def model_file(tmp_path_factory):
 
 
 def test_segmentation_removes_floor_and_wall(room_views):
-    from wbsa.estimate import segment_subject
+    from wbsa.estimation import segment_subject
 
     intr, alone, room = room_views
     assert room.n_pixels > 3 * alone.n_pixels  # the room fills most of the frame
@@ -67,7 +67,7 @@ def test_segmentation_removes_floor_and_wall(room_views):
 def test_estimate_measures_the_visible_area_and_predicts_through_the_model(room_views, model_file):
     from wbsa.analysis.model_file import WbsaModel
     from wbsa.camera import vbsa_visible_m2
-    from wbsa.estimate import estimate_wbsa
+    from wbsa.estimation import estimate_wbsa
 
     intr, alone, room = room_views
     model = WbsaModel.load(model_file)
@@ -82,7 +82,7 @@ def test_estimate_measures_the_visible_area_and_predicts_through_the_model(room_
 
 
 def test_estimate_command_from_png(tmp_path, room_views, model_file, capsys):
-    from wbsa.sensor import write_depth_png
+    from wbsa.core import write_depth_png
 
     intr, alone, room = room_views
     png = tmp_path / "depth.png"

@@ -7,10 +7,10 @@ import pandas as pd
 import pytest
 
 from wbsa.cli import main
-from wbsa.population.anthropometry import closed_volume_m3, reference_adult
-from wbsa.population.body_model import PHENOTYPE_COLUMNS
-from wbsa.population.mesh import TriangleMesh, triangle_areas_m2
-from wbsa.population.sections import plane_section_points, tape_perimeter_m
+from wbsa.bodies.anthropometry import closed_volume_m3, reference_adult
+from wbsa.bodies.body_model import PHENOTYPE_COLUMNS
+from wbsa.core.mesh import TriangleMesh, triangle_areas_m2
+from wbsa.bodies.sections import plane_section_points, tape_perimeter_m
 
 
 def _neutral() -> pd.DataFrame:
@@ -82,7 +82,7 @@ def test_phenotypes_outside_unit_interval_are_rejected(body_model):
 
 def test_local_changes_default_to_none_and_move_their_own_girth(anthropometer, body_model):
     """l_* absent = l_* 0 (the phenotype-only body); the waist change moves the waist, the hip change the hip."""
-    from wbsa.population.body_model import LOCAL_CHANGE_COLUMNS
+    from wbsa.bodies.body_model import LOCAL_CHANGE_COLUMNS
 
     adult = reference_adult(1.0)
     plain = body_model.rest_bodies(adult).vertices
@@ -107,8 +107,8 @@ def test_local_changes_outside_their_range_are_rejected(body_model):
 
 
 def test_old_tables_without_local_changes_are_read_as_zero(tmp_path, body_model):
-    from wbsa.population.body_model import LOCAL_CHANGE_COLUMNS
-    from wbsa.population.table import TABLE_COLUMNS, measure_population, read_population
+    from wbsa.bodies.body_model import LOCAL_CHANGE_COLUMNS
+    from wbsa.bodies.table import TABLE_COLUMNS, measure_population, read_population
 
     params = reference_adult(0.0).assign(subject_id=0, sex="male", age_years=35.0)
     table = measure_population(params, model=body_model)
@@ -177,7 +177,7 @@ def test_heavier_body_has_larger_girths_and_area(anthropometer, body_model):
 
 
 def test_age_mapping_follows_anny_anchors():
-    from wbsa.population.age import param_to_years, years_to_param
+    from wbsa.bodies.age import param_to_years, years_to_param
 
     assert param_to_years(0.5) == pytest.approx(12.67, abs=0.01)  # facts.md: 0.5 ≈ 12.7 y
     assert param_to_years(0.77) == pytest.approx(18.0)
@@ -187,7 +187,7 @@ def test_age_mapping_follows_anny_anchors():
 
 # -- random population -------------------------------------------------------------------------
 def test_random_population_is_deterministic_and_prefix_stable():
-    from wbsa.population.random_population import RandomPopulationSettings, sample_random_parameters
+    from wbsa.bodies.random_population import RandomPopulationSettings, sample_random_parameters
 
     a = sample_random_parameters(RandomPopulationSettings(n=20, seed=3))
     b = sample_random_parameters(RandomPopulationSettings(n=20, seed=3))
@@ -208,7 +208,7 @@ def test_population_cli_writes_identical_tables_for_same_seed(tmp_path, body_mod
     assert main(["population", "--kind", "random", "--n", "6", "--seed", "7", "--out", str(out2)]) == 0
     a, b = pd.read_parquet(out1), pd.read_parquet(out2)
     pd.testing.assert_frame_equal(a, b)
-    from wbsa.population.table import POPULATION_COLUMNS, read_population
+    from wbsa.bodies.table import POPULATION_COLUMNS, read_population
 
     assert list(read_population(out1).columns[: len(POPULATION_COLUMNS)]) == list(POPULATION_COLUMNS)
     assert (a["bmi"] - a["mass_kg"] / a["stature_m"] ** 2).abs().max() < 1e-9

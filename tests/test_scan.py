@@ -19,8 +19,8 @@ PINNED_COLUMNS = ("subject_id", "azimuth_deg", "elevation_deg", "distance_m", "c
 @pytest.fixture(scope="module")
 def population(body_model, tmp_path_factory):
     """A 3-subject population table, rows shuffled, written as Parquet."""
-    from wbsa.population.random_population import RandomPopulationSettings, sample_random_parameters
-    from wbsa.population.table import measure_population
+    from wbsa.bodies.random_population import RandomPopulationSettings, sample_random_parameters
+    from wbsa.bodies.table import measure_population
 
     params = sample_random_parameters(RandomPopulationSettings(n=3, seed=11))
     table = measure_population(params, model=body_model).iloc[[2, 0, 1]]
@@ -124,7 +124,7 @@ def test_view_noise_does_not_depend_on_the_view_list(population, tmp_path):
 
 
 def test_body_model_is_built_once_per_process(population, monkeypatch, tmp_path):
-    import wbsa.population.body_model as bm
+    import wbsa.bodies.body_model as bm
 
     built = []
 

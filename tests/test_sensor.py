@@ -12,12 +12,12 @@ import pytest
 from wbsa.camera import MeshScene, Pose, preset, render
 from wbsa.camera.shapes import box, icosphere
 from wbsa.errors import WbsaError
-from wbsa.population.mesh import TriangleMesh
-from wbsa.sensor import (SensorModel, apply_sensor, axial_sigma_m, depth_to_png_mm, lateral_sigma_px,
-                         png_mm_to_depth, read_depth_png, write_depth_png)
+from wbsa.core.mesh import TriangleMesh
+from wbsa.core import frame_from_depth_image
+from wbsa.core.depth_image import depth_to_png_mm, png_mm_to_depth, read_depth_png, write_depth_png
+from wbsa.sensor import SensorModel, apply_sensor, axial_sigma_m, lateral_sigma_px
 from wbsa.sensor.cli import add_sensor_arguments, sensor_model_from_args
 from wbsa.sensor.measure import view_rng
-from wbsa.surface import frame_from_depth_image
 
 K = preset("kinect-v1")
 CAMERA = Pose(np.eye(3), np.zeros(3))  # camera at the origin looking along +Z

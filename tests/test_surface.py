@@ -11,11 +11,11 @@ import pytest
 from wbsa.camera import MeshScene, Pose, preset, render, sphere_cap_area_m2
 from wbsa.camera.shapes import icosphere
 from wbsa.errors import WbsaError
-from wbsa.population.mesh import TriangleMesh
+from wbsa.core.mesh import TriangleMesh
 from wbsa.sensor import SensorModel, apply_sensor
-from wbsa.surface import (ReconstructionSettings, denoise_depth, frame_from_depth_image,
-                          grid_mesh, reconstruct, recon_column, vbsa_recon_m2)
-from wbsa.surface.backproject import backproject_depth, organised_normals
+from wbsa.core import frame_from_depth_image
+from wbsa.surface import ReconstructionSettings, denoise_depth, grid_mesh, reconstruct, recon_column, vbsa_recon_m2
+from wbsa.core.backproject import backproject_depth, organised_normals
 from wbsa.surface.cli import add_reconstruct_arguments, reconstruct_methods_from_args, reconstruction_settings_from_args
 from wbsa.surface.grid import contour_arc_pitches
 

@@ -9,8 +9,8 @@ import pandas as pd
 import pytest
 
 from wbsa.errors import WbsaError
-from wbsa.population.body_model import LOCAL_CHANGE_COLUMNS, body_parameter_array
-from wbsa.population.survey_data import (
+from wbsa.bodies.body_model import LOCAL_CHANGE_COLUMNS, body_parameter_array
+from wbsa.bodies.survey_data import (
     ETHNIC_MIX,
     PEOPLE_COLUMNS,
     SURVEY_COLUMNS,
@@ -104,9 +104,9 @@ def test_select_people_is_seeded_and_weighted():
 
 @pytest.fixture(scope="module")
 def tools():
-    from wbsa.population.anthropometry import Anthropometer
-    from wbsa.population.body_model import BodyModel
-    from wbsa.population.survey_measures import TorchMeasurer
+    from wbsa.bodies.anthropometry import Anthropometer
+    from wbsa.bodies.body_model import BodyModel
+    from wbsa.bodies.survey_measures import TorchMeasurer
 
     model = BodyModel()
     meter = Anthropometer(model)
@@ -114,7 +114,7 @@ def tools():
 
 
 def _bodies() -> pd.DataFrame:
-    from wbsa.population.age import years_to_param
+    from wbsa.bodies.age import years_to_param
 
     rows = [
         dict(p_gender=0.0, p_age=years_to_param(35), p_muscle=0.3, p_weight=0.7, p_height=0.4, p_proportions=0.6,
@@ -157,8 +157,8 @@ def test_torch_measure_gradients_match_finite_differences(tools):
 
 
 def _small_settings(**kw):
-    from wbsa.population.survey_match import MatchSettings
-    from wbsa.population.survey_start import StartGrid
+    from wbsa.bodies.survey_match import MatchSettings
+    from wbsa.bodies.survey_start import StartGrid
 
     grid = StartGrid(age_nodes_years=(6.0, 12.0, 30.0, 60.0), muscle=(0.0, 0.5, 1.0), weight=(0.2, 0.5, 0.8),
                      proportions=(0.5,), heights=(0.0, 0.5, 1.0))
@@ -166,7 +166,7 @@ def _small_settings(**kw):
 
 
 def test_known_bodies_are_matched_back_within_tolerance(tools):
-    from wbsa.population.survey_match import match_bodies
+    from wbsa.bodies.survey_match import match_bodies
 
     model, meter, measurer = tools
     params = _bodies()
@@ -190,7 +190,7 @@ def test_known_bodies_are_matched_back_within_tolerance(tools):
 
 
 def test_phenotype_only_match_keeps_local_changes_at_zero(tools):
-    from wbsa.population.survey_match import match_bodies
+    from wbsa.bodies.survey_match import match_bodies
 
     model, meter, measurer = tools
     params = _bodies().iloc[:1].assign(l_stomach_pregnant=0.0, l_hips_circ=0.0)
@@ -207,7 +207,7 @@ def test_phenotype_only_match_keeps_local_changes_at_zero(tools):
 
 
 def test_match_rejects_targets_without_stature(tools):
-    from wbsa.population.survey_match import match_bodies
+    from wbsa.bodies.survey_match import match_bodies
 
     _, _, measurer = tools
     bad = pd.DataFrame([dict(p_gender=0.0, p_age=0.8, p_african=0.0, p_asian=0.0, p_caucasian=1.0,
@@ -219,10 +219,10 @@ def test_match_rejects_targets_without_stature(tools):
 
 @pytest.mark.slow
 def test_survey_population_end_to_end(tmp_path):
-    from wbsa.population.survey import SURVEY_COLUMNS as EXTRA
-    from wbsa.population.survey import SurveyMatchWarning, SurveyPopulationSettings, build_survey_population
-    from wbsa.population.export import subject_mesh
-    from wbsa.population.table import TABLE_COLUMNS
+    from wbsa.bodies.survey import SURVEY_COLUMNS as EXTRA
+    from wbsa.bodies.survey import SurveyMatchWarning, SurveyPopulationSettings, build_survey_population
+    from wbsa.bodies.subject import subject_mesh
+    from wbsa.bodies.table import TABLE_COLUMNS
 
     # a small survey file with one bad row, so the run also counts what it skips
     with _packaged() as fh:
@@ -260,7 +260,7 @@ def test_survey_population_end_to_end(tmp_path):
     # later stages rebuild a subject from the table's columns: same skin area as measured
     path = tmp_path / "survey.parquet"
     table.to_parquet(path)
-    from wbsa.population.table import read_population
+    from wbsa.bodies.table import read_population
 
     for sid in (0, 4):
         assert subject_mesh(read_population(path), sid).area_m2 == pytest.approx(table.loc[sid, "wbsa_m2"], rel=1e-12)

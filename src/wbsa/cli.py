@@ -18,14 +18,14 @@ from wbsa.errors import WbsaError
 
 #: Modules that contribute subcommands, in the order of the pipeline.
 COMMAND_MODULES = (
-    "wbsa.population.command",
+    "wbsa.bodies.command",
     "wbsa.formulae.command",
     "wbsa.camera.command",
     "wbsa.scan.command",
     "wbsa.analysis.command",
     "wbsa.report.command",
     "wbsa.study.command",
-    "wbsa.estimate.command",
+    "wbsa.estimation.command",
 )
 
 

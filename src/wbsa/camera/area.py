@@ -29,7 +29,7 @@ import math
 import numpy as np
 
 from wbsa.camera.extrinsics import Pose
-from wbsa.camera.frame import DepthFrame
+from wbsa.core.frame import DepthFrame
 from wbsa.camera.intrinsics import Intrinsics, pixel_rays
 from wbsa.camera.roi import PixelGrid, homogeneous_pixels
 

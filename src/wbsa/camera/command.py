@@ -118,16 +118,14 @@ def views_from_args(args: argparse.Namespace, intrinsics, stature_m: float | Non
 def run_view(args: argparse.Namespace) -> int:
     """Handler of ``wbsa view``."""
     from wbsa.camera.export import write_view_outputs
-    from wbsa.population.export import write_mesh
-    from wbsa.surface import reconstruct, recon_column
+    from wbsa.core.mesh_io import write_mesh
     from wbsa.camera.intrinsics import Intrinsics
-    from wbsa.camera.measure import measure_view
     from wbsa.camera.scene import MeshScene
     from wbsa.camera.target import load_target
     from wbsa.io import write_json, write_table
 
     from wbsa.sensor.cli import sensor_model_from_args
-    from wbsa.sensor.measure import sense_view, view_rng
+    from wbsa.simulate import simulate_view
     from wbsa.surface.cli import reconstruct_methods_from_args, reconstruction_settings_from_args
 
     intrinsics: Intrinsics = intrinsics_from_args(args)
@@ -141,18 +139,13 @@ def run_view(args: argparse.Namespace) -> int:
     views = views_from_args(args, intrinsics, stature)
     out = Path(args.out) if args.out else None
     rows = []
+    subject = args.subject if args.population else 0
     for view in views:
-        need_frame = out is not None or not sensor.is_ideal or bool(methods)
-        row, frame = measure_view(scene, intrinsics, view, return_frame=need_frame)
-        row = {"mesh": source, "mesh_area_m2": float(scene.triangle_areas_m2.sum()), **row}
-        if not sensor.is_ideal:
-            subject = args.subject if args.population else 0
-            frame, sensed = sense_view(frame, scene, sensor, view_rng(args.sensor_seed, subject, view))
-            row.update(sensed)
-        recon = {}
-        for method in methods:
-            recon[method] = reconstruct(frame, method, recon_settings)
-            row[recon_column(method)] = recon[method].area_m2
+        sim = simulate_view(scene, intrinsics, view, sensor=None if sensor.is_ideal else sensor,
+                            seed=args.sensor_seed, subject_id=subject, reconstruct=tuple(methods),
+                            reconstruction=recon_settings, keep_frame=out is not None, keep_surfaces=out is not None)
+        row = {"mesh": source, "mesh_area_m2": float(scene.triangle_areas_m2.sum()), **sim.row}
+        frame, recon = sim.frame, sim.surfaces
         rows.append(row)
         if out is not None:
             target_dir = out if len(views) == 1 else out / view.label

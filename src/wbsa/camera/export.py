@@ -12,7 +12,7 @@ from typing import Literal
 
 import numpy as np
 
-from wbsa.camera.frame import DepthFrame
+from wbsa.core.frame import DepthFrame
 from wbsa.errors import WbsaError
 from wbsa.io import atomic_path, write_json
 
@@ -32,7 +32,7 @@ FILES = {
 
 def write_depth_png(frame: DepthFrame, path: str | os.PathLike) -> Path:
     """16-bit PNG of the z-depth in millimetres (0 = no return), readable by ``open3d.io.read_image``."""
-    from wbsa.sensor.depth_png import write_depth_png as write_png
+    from wbsa.core.depth_image import write_depth_png as write_png
 
     return write_png(path, frame.depth_m)
 

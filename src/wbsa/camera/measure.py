@@ -6,7 +6,7 @@ import numpy as np
 
 from wbsa.camera.area import GRAZING_COS
 from wbsa.camera.extrinsics import pose_from_view
-from wbsa.camera.frame import DepthFrame
+from wbsa.core.frame import DepthFrame
 from wbsa.camera.intrinsics import Intrinsics
 from wbsa.camera.raycast import MeshScene, RoiMode, cast
 from wbsa.camera.views import View

@@ -2,7 +2,7 @@
 
 :func:`cast` casts only the pixels that can see the mesh (see :mod:`wbsa.camera.roi`) and keeps the
 results compact (:class:`RayHits`); :func:`render` expands them to a full
-:class:`~wbsa.camera.frame.DepthFrame`. A pixel's ray is bit-identical whichever set of pixels is
+:class:`~wbsa.core.frame.DepthFrame`. A pixel's ray is bit-identical whichever set of pixels is
 cast, so the region of interest gives exactly the full frame's hits.
 """
 
@@ -15,7 +15,7 @@ from typing import Literal
 import numpy as np
 
 from wbsa.camera.extrinsics import Pose
-from wbsa.camera.frame import DepthFrame
+from wbsa.core.frame import DepthFrame
 from wbsa.camera.intrinsics import Intrinsics, pixel_axes, pixel_rays
 from wbsa.camera.roi import PixelGrid, projected_roi, silhouette_pixels
 from wbsa.camera.scene import MeshScene

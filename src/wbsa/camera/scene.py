@@ -7,7 +7,7 @@ from functools import lru_cache
 import numpy as np
 
 from wbsa.errors import WbsaError
-from wbsa.population.mesh import TriangleMesh
+from wbsa.core.mesh import TriangleMesh
 
 #: Unit cube corners, used for the 8 corners of the mesh's bounding box.
 _CORNERS = np.array([[i, j, k] for i in (0, 1) for j in (0, 1) for k in (0, 1)], dtype=np.float64)
@@ -42,6 +42,7 @@ class MeshScene:
     def __init__(self, mesh: TriangleMesh, nthreads: int = 0) -> None:
         import open3d as o3d
 
+        mesh = TriangleMesh.from_any(mesh)  # also a trimesh or Open3D mesh, or a (vertices, faces) pair
         vertices, faces = validate_mesh(mesh)
         self.mesh = mesh
         self.nthreads = int(nthreads)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from wbsa.population.mesh import TriangleMesh
+from wbsa.core.mesh import TriangleMesh
 
 
 def icosphere(radius_m: float = 1.0, subdivisions: int = 3, center: np.ndarray | None = None) -> TriangleMesh:

@@ -348,7 +348,7 @@ class _Builder:
         p.table("tab-stages", stage_table(d.sources), "Stages of the study: content address, time to compute, "
                 "and whether this run reused them.")
         p.table("tab-settings", settings_table(d.sources, d.fit_info), "Settings.")
-        from wbsa.study.pipeline import package_versions
+        from wbsa.core.versions import package_versions
 
         versions = d.sources.manifest.get("versions") or package_versions()
         p.table("tab-versions", pd.DataFrame(sorted(versions.items()), columns=["package", "version"]),

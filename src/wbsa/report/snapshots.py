@@ -67,16 +67,12 @@ def pick_subject(population: pd.DataFrame, subject_id: int = -1) -> int:
 def render_snapshot(population: pd.DataFrame, subject_id: int, intrinsics, azimuth_deg: float, elevation_deg: float,
                     distance_m: float) -> Snapshot:
     """Rebuild the subject's body, ray-cast the view and return its points in world coordinates."""
-    from wbsa.camera.extrinsics import pose_from_view
-    from wbsa.camera.raycast import MeshScene, render
-    from wbsa.camera.views import View
-    from wbsa.population.export import subject_mesh
+    from wbsa.bodies.subject import subject_mesh
+    from wbsa.camera import MeshScene, View
+    from wbsa.simulate import points_world, simulate_view
 
     mesh = subject_mesh(population, subject_id)
-    scene = MeshScene(mesh)
-    pose = pose_from_view(View(azimuth_deg, elevation_deg, distance_m), scene.center)
-    frame = render(scene, intrinsics, pose)
-    valid = frame.valid
-    pts = pose.inverse().apply(frame.points_cam[valid].astype(np.float64))
-    return Snapshot(subject_id=subject_id, points_world=pts, depth_m=frame.depth_m,
+    frame = simulate_view(MeshScene(mesh), intrinsics, View(azimuth_deg, elevation_deg, distance_m),
+                          keep_frame=True).frame
+    return Snapshot(subject_id=subject_id, points_world=points_world(frame), depth_m=frame.depth_m,
                     body_vertices=np.asarray(mesh.vertices, dtype=np.float64))

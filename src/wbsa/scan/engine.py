@@ -67,7 +67,7 @@ def scan_population(population: pd.DataFrame | str | os.PathLike, settings: Scan
     Parameters
     ----------
     population : DataFrame or path
-        Population table (``wbsa.population.table.read_population`` format), or its Parquet path.
+        Population table (``wbsa.bodies.table.read_population`` format), or its Parquet path.
     settings : ScanSettings
     out_dir : path
         Scan folder (see :mod:`wbsa.scan.layout`). If it holds an unfinished scan with the same
@@ -184,7 +184,7 @@ def _run_dask(subjects: pd.DataFrame, todo: list[Chunk], settings: ScanSettings,
 
 
 def _read_population(path: Path) -> pd.DataFrame:
-    from wbsa.population.table import read_population
+    from wbsa.bodies.table import read_population
 
     return read_population(path)
 

@@ -23,14 +23,14 @@ _BODY_MODEL = None
 
 
 def body_model():
-    """The process-wide :class:`wbsa.population.body_model.BodyModel`, built on first use.
+    """The process-wide :class:`wbsa.bodies.body_model.BodyModel`, built on first use.
 
     Building anny takes about 0.3 s from its cache (a minute on a fresh machine), so a worker builds it
     once and keeps it for every chunk it scans.
     """
     global _BODY_MODEL
     if _BODY_MODEL is None:
-        from wbsa.population.body_model import BodyModel
+        from wbsa.bodies.body_model import BodyModel
 
         _BODY_MODEL = BodyModel()
     return _BODY_MODEL
@@ -44,7 +44,7 @@ def check_population(population: pd.DataFrame) -> None:
     WbsaError
         If a required ``p_*`` column is missing.
     """
-    from wbsa.population.body_model import OPTIONAL_PHENOTYPES, PHENOTYPE_COLUMNS
+    from wbsa.bodies.body_model import OPTIONAL_PHENOTYPES, PHENOTYPE_COLUMNS
 
     missing = [c for c in PHENOTYPE_COLUMNS if c not in OPTIONAL_PHENOTYPES and c not in population.columns]
     if missing:
@@ -113,24 +113,12 @@ def scan_subject(mesh, subject_id: int, settings: ScanSettings, *, nthreads: int
         ``vbsa_recon_<method>_m2`` for each reconstruction method (from the sensor's frame when there is
         a sensor, else from the ideal frame).
     """
-    from wbsa.camera import MeshScene, measure_view
+    from wbsa.camera import MeshScene
+    from wbsa.simulate import simulate_view
 
     scene = MeshScene(mesh, nthreads=nthreads)
-    sensor, methods = settings.sensor, settings.reconstruct
-    need_frame = sensor is not None or bool(methods)
-    if sensor is not None:
-        from wbsa.sensor.measure import sense_view, view_rng
-    if methods:
-        from wbsa.surface import recon_column, vbsa_recon_m2
-
-    rows = []
-    for view in settings.views:
-        row, frame = measure_view(scene, settings.camera, view, scene.center, return_frame=need_frame)
-        row = {"subject_id": subject_id, **row}
-        if sensor is not None:
-            frame, sensed = sense_view(frame, scene, sensor, view_rng(settings.seed, subject_id, view))
-            row.update(sensed)
-        for method in methods:
-            row[recon_column(method)] = vbsa_recon_m2(frame, method, settings.reconstruction)
-        rows.append(row)
-    return rows
+    return [{"subject_id": subject_id,
+             **simulate_view(scene, settings.camera, view, sensor=settings.sensor, seed=settings.seed,
+                             subject_id=subject_id, reconstruct=settings.reconstruct,
+                             reconstruction=settings.reconstruction).row}
+            for view in settings.views]

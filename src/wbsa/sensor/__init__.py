@@ -2,7 +2,7 @@
 
 Nguyen et al. 2012 Kinect v1 noise, disparity quantisation, range limits and holes (the paper's
 dropped triangles, random pixel dropout, grazing-angle dropout), all seeded and optional
-(:class:`SensorModel`, :func:`apply_sensor`); 16-bit millimetre depth PNGs as a sensor writes them.
+(:class:`SensorModel`, :func:`apply_sensor`); depth PNG I/O lives in :mod:`wbsa.core.depth_image`.
 
 Names are imported lazily, so ``from wbsa.sensor.cli import add_sensor_arguments`` stays cheap
 for the CLI.
@@ -14,10 +14,6 @@ from wbsa.lazy import lazy_exports
 
 _EXPORTS = {
     "apply_sensor": "wbsa.sensor.apply",
-    "depth_to_png_mm": "wbsa.sensor.depth_png",
-    "png_mm_to_depth": "wbsa.sensor.depth_png",
-    "read_depth_png": "wbsa.sensor.depth_png",
-    "write_depth_png": "wbsa.sensor.depth_png",
     "NOISE_MODELS": "wbsa.sensor.model",
     "SensorModel": "wbsa.sensor.model",
     "axial_sigma_m": "wbsa.sensor.nguyen2012",

@@ -7,11 +7,11 @@ import dataclasses
 import numpy as np
 from scipy import ndimage
 
-from wbsa.camera.frame import DepthFrame
+from wbsa.core.frame import DepthFrame
 from wbsa.errors import WbsaError
 from wbsa.sensor import nguyen2012
 from wbsa.sensor.model import SensorModel
-from wbsa.surface.backproject import ray_directions
+from wbsa.core.backproject import ray_directions
 
 #: Background pixels within this many pixels of a return may pick it up through lateral noise.
 _LATERAL_REACH_PX = 2
@@ -42,7 +42,7 @@ def apply_sensor(frame: DepthFrame, model: SensorModel, rng: np.random.Generator
     Parameters
     ----------
     frame : DepthFrame
-        An ideal frame (from :func:`wbsa.camera.render`, or :func:`wbsa.surface.frame_from_depth_image`
+        An ideal frame (from :func:`wbsa.camera.render`, or :func:`wbsa.core.frame_from_depth_image`
         for effects that need no triangle IDs).
     model : SensorModel
     rng : numpy.random.Generator

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from wbsa.camera.frame import DepthFrame
+from wbsa.core.frame import DepthFrame
 
 
 def view_rng(seed: int, subject_id: int, view) -> np.random.Generator:

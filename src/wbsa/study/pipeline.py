@@ -31,6 +31,7 @@ from typing import Callable, TextIO
 
 from wbsa import __version__
 from wbsa.analysis.data import reference_distance
+from wbsa.core.versions import package_versions
 from wbsa.errors import WbsaError
 from wbsa.io import atomic_path, write_json
 from wbsa.study.settings import StudySettings, fit_settings, scan_settings
@@ -92,22 +93,6 @@ class StudyResult:
     fits_path: Path
     stages: list[StageRun] = field(default_factory=list)
     seconds: float = 0.0
-
-
-def package_versions() -> dict[str, str]:
-    """Versions of Python, wbsa and the libraries whose numbers enter the results."""
-    from importlib.metadata import PackageNotFoundError, version
-
-    out = {"python": platform.python_version(), "wbsa": __version__}
-    for name in ("numpy", "pandas", "scipy", "statsmodels", "matplotlib", "open3d-cpu", "open3d", "anny", "torch",
-                 "dask", "pyarrow"):
-        try:
-            out[name] = version(name)
-        except PackageNotFoundError:
-            continue
-    if "open3d-cpu" in out:
-        out.setdefault("open3d", out.pop("open3d-cpu"))
-    return out
 
 
 class _Log:
@@ -213,7 +198,7 @@ def _population_stage(settings: StudySettings, out: Path, workers: int, schedule
     if stage.done:
         return _reused("population", stage)
     from wbsa.io import write_table
-    from wbsa.population.build import build_population
+    from wbsa.bodies.build import build_population
 
     t = time.perf_counter()
     df = build_population(cfg.kind, n=cfg.n, seed=cfg.seed, density_kg_m3=cfg.density_kg_m3,

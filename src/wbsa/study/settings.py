@@ -55,7 +55,7 @@ class StudyInfo:
 
 @dataclass(frozen=True)
 class PopulationConfig:
-    """``[population]``: the virtual population (:func:`wbsa.population.build.build_population`).
+    """``[population]``: the virtual population (:func:`wbsa.bodies.build.build_population`).
 
     Attributes
     ----------

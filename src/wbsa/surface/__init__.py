@@ -1,8 +1,8 @@
 """surface stage: reconstruct the visible surface of one depth view and measure its area.
 
 ``grid`` (organised pixel-grid mesh with a boundary skirt, vectorised numpy), ``ball-pivoting``
-and ``poisson`` (Open3D, imported only when used); :func:`frame_from_depth_image` turns a depth
-image (e.g. a real sensor's PNG) into a frame the same code can reconstruct.
+and ``poisson`` (Open3D, imported only when used); the frames it reads come from the camera or from a depth
+image (:func:`wbsa.core.frame_from_depth_image`) (e.g. a real sensor's PNG) into a frame the same code can reconstruct.
 
 Names are imported lazily, so ``from wbsa.surface.cli import add_reconstruct_arguments``
 stays cheap for the CLI.
@@ -13,9 +13,6 @@ from __future__ import annotations
 from wbsa.lazy import lazy_exports
 
 _EXPORTS = {
-    "backproject_depth": "wbsa.surface.backproject",
-    "frame_from_depth_image": "wbsa.surface.backproject",
-    "organised_normals": "wbsa.surface.backproject",
     "denoise_depth": "wbsa.surface.denoise",
     "grid_mesh": "wbsa.surface.grid",
     "add_reconstruct_arguments": "wbsa.surface.cli",

@@ -33,7 +33,7 @@ from functools import lru_cache
 import numpy as np
 from scipy import ndimage
 
-from wbsa.population.mesh import TriangleMesh
+from wbsa.core.mesh import TriangleMesh
 from wbsa.surface.settings import BoundaryModel
 
 _SQRT2 = math.sqrt(2.0)

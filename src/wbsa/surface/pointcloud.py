@@ -15,7 +15,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from wbsa.errors import WbsaError
-from wbsa.population.mesh import TriangleMesh
+from wbsa.core.mesh import TriangleMesh
 from wbsa.surface.settings import ReconstructionSettings
 
 

@@ -6,10 +6,10 @@ import math
 
 import numpy as np
 
-from wbsa.camera.frame import DepthFrame
+from wbsa.core.frame import DepthFrame
 from wbsa.errors import WbsaError
-from wbsa.population.mesh import TriangleMesh
-from wbsa.surface.backproject import ray_directions
+from wbsa.core.mesh import TriangleMesh
+from wbsa.core.backproject import ray_directions
 from wbsa.surface.denoise import denoise_depth
 from wbsa.surface.grid import grid_mesh
 from wbsa.surface.settings import METHODS, ReconstructionSettings
@@ -20,7 +20,7 @@ def reconstruct(frame: DepthFrame, method: str = "grid",
     """Reconstruct the surface seen in one depth view.
 
     Only the depth image and the intrinsics are used (not the rendered points, normals or triangle
-    IDs), so the same code runs on real depth images (:func:`wbsa.surface.frame_from_depth_image`).
+    IDs), so the same code runs on real depth images (:func:`wbsa.core.frame_from_depth_image`).
 
     Parameters
     ----------

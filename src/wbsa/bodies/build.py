@@ -7,7 +7,7 @@ from typing import Literal
 import pandas as pd
 
 from wbsa.errors import WbsaError
-from wbsa.population.anthropometry import DEFAULT_DENSITY_KG_M3
+from wbsa.bodies.anthropometry import DEFAULT_DENSITY_KG_M3
 
 PopulationKind = Literal["random", "survey", "table"]
 
@@ -29,10 +29,10 @@ def build_population(kind: PopulationKind, n: int | None = None, seed: int = 0, 
     workers, scheduler
         Parallel body building (see :mod:`wbsa.parallel`); the table does not depend on them.
     """
-    from wbsa.population.table import measure_population
+    from wbsa.bodies.table import measure_population
 
     if kind == "random":
-        from wbsa.population.random_population import RandomPopulationSettings, sample_random_parameters
+        from wbsa.bodies.random_population import RandomPopulationSettings, sample_random_parameters
 
         if n is None:
             raise WbsaError("--kind random needs --n, the number of subjects")
@@ -44,7 +44,7 @@ def build_population(kind: PopulationKind, n: int | None = None, seed: int = 0, 
                                   show_progress=show_progress, workers=workers, scheduler=scheduler)
     if kind == "survey":
         try:
-            from wbsa.population.survey import build_survey_population
+            from wbsa.bodies.survey import build_survey_population
         except ModuleNotFoundError:
             raise WbsaError("the survey population is not available in this build") from None
         if n is None:
@@ -59,7 +59,7 @@ def _read_params(path: str | None) -> pd.DataFrame:
     import numpy as np
 
     from wbsa.io import read_table
-    from wbsa.population.age import param_to_years
+    from wbsa.bodies.age import param_to_years
 
     if not path:
         raise WbsaError("--kind table needs --params FILE with p_gender, p_age, ... columns")

@@ -9,7 +9,7 @@ import numpy as np
 import pandas as pd
 
 from wbsa.errors import WbsaError
-from wbsa.population.age import param_to_years, years_to_param
+from wbsa.bodies.age import param_to_years, years_to_param
 
 
 @dataclass(frozen=True)

@@ -2,7 +2,7 @@
 
 The survey matcher fits phenotype parameters by Gauss–Newton steps, which need these four
 measures *and* their derivatives for hundreds of bodies at once. The definitions are the
-same as :class:`~wbsa.population.anthropometry.Anthropometer`'s, so a fitted body measures
+same as :class:`~wbsa.bodies.anthropometry.Anthropometer`'s, so a fitted body measures
 back to the same numbers in the population table:
 
 * stature = max z − min z over all vertices;
@@ -29,8 +29,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import ConvexHull, QhullError
 
-from wbsa.population.anthropometry import Anthropometer
-from wbsa.population.body_model import BodyModel
+from wbsa.bodies.anthropometry import Anthropometer
+from wbsa.bodies.body_model import BodyModel
 
 #: The measures this module computes, in column order of :meth:`TorchMeasurer.evaluate`.
 FIT_MEASURES = ("stature_m", "mass_kg", "waist_circ_m", "hip_circ_m")

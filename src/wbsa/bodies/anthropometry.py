@@ -31,9 +31,9 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from wbsa.population.body_model import PHENOTYPE_COLUMNS, BodyModel, RestBodies
-from wbsa.population.mesh import face_cross_products
-from wbsa.population.sections import HorizontalSlicer, edge_plane_crossings, tape_perimeter_m, width_along_m
+from wbsa.bodies.body_model import PHENOTYPE_COLUMNS, BodyModel, RestBodies
+from wbsa.core.mesh import face_cross_products
+from wbsa.bodies.sections import HorizontalSlicer, edge_plane_crossings, tape_perimeter_m, width_along_m
 
 #: Default body density (kg/m³), as anny's own ``Anthropometry``.
 DEFAULT_DENSITY_KG_M3 = 980.0

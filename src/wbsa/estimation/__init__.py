@@ -5,7 +5,7 @@ connected region); ``single_view`` reconstructs the visible surface, measures it
 predicts WBSA with a prediction interval from a ``wbsa fit`` model file.
 """
 
-from wbsa.estimate.segment import SegmentSettings, segment_subject
-from wbsa.estimate.single_view import Estimate, estimate_wbsa
+from wbsa.estimation.segment import SegmentSettings, segment_subject
+from wbsa.estimation.single_view import Estimate, estimate_wbsa
 
 __all__ = ["Estimate", "SegmentSettings", "estimate_wbsa", "segment_subject"]

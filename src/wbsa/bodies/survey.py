@@ -1,10 +1,10 @@
 """The paper's "Virtual NHANES" population: virtual bodies matched to real survey people.
 
 ``build_survey_population`` draws ``n`` people from the NHANES 2017–March 2020 body measures
-(:mod:`~wbsa.population.survey_data`), fits each one's anny phenotypes to its stature, mass,
-waist and hip (:mod:`~wbsa.population.survey_match`), and adds ``variations`` bodies per person
+(:mod:`~wbsa.bodies.survey_data`), fits each one's anny phenotypes to its stature, mass,
+waist and hip (:mod:`~wbsa.bodies.survey_match`), and adds ``variations`` bodies per person
 that differ from the match in weight and muscle only (the paper's 500 × 25). Every body is then
-measured exactly as the random population is (:func:`~wbsa.population.table.measure_population`),
+measured exactly as the random population is (:func:`~wbsa.bodies.table.measure_population`),
 and the match is checked on those final measures:
 
 * ``matched`` is True when stature is within 1 cm, mass within 1 kg, and waist and hip (where
@@ -14,7 +14,7 @@ and the match is checked on those final measures:
 * ``match_*_err_*`` = table measure − survey measure, on the matched body's row (variation 0);
   NaN on variations.
 
-Extra columns beyond :data:`~wbsa.population.table.TABLE_COLUMNS`: see :data:`SURVEY_COLUMNS`.
+Extra columns beyond :data:`~wbsa.bodies.table.TABLE_COLUMNS`: see :data:`SURVEY_COLUMNS`.
 """
 
 from __future__ import annotations
@@ -27,9 +27,9 @@ import numpy as np
 import pandas as pd
 
 from wbsa.errors import WbsaError
-from wbsa.population.age import years_to_param
-from wbsa.population.anthropometry import DEFAULT_DENSITY_KG_M3
-from wbsa.population.survey_match import MatchSettings, torch_threads
+from wbsa.bodies.age import years_to_param
+from wbsa.bodies.anthropometry import DEFAULT_DENSITY_KG_M3
+from wbsa.bodies.survey_match import MatchSettings, torch_threads
 
 #: Columns a survey population has beyond the random population's.
 SURVEY_COLUMNS = (
@@ -116,18 +116,18 @@ def build_survey_population(n: int, variations: int = 0, seed: int = 0, *,
     Returns
     -------
     pandas.DataFrame
-        ``n × (variations + 1)`` rows: :data:`~wbsa.population.table.TABLE_COLUMNS` then
+        ``n × (variations + 1)`` rows: :data:`~wbsa.bodies.table.TABLE_COLUMNS` then
         :data:`SURVEY_COLUMNS`. ``subject_id = person × (variations + 1) + variation``. The
         frame's ``attrs["survey"]`` holds the cleaning counts, the match summary
         (:func:`match_rates`) and the wall and CPU seconds of each stage.
     """
-    from wbsa.population.anthropometry import Anthropometer
-    from wbsa.population.body_model import BodyModel
-    from wbsa.population.survey_data import load_survey, select_people
-    from wbsa.population.survey_match import match_bodies
-    from wbsa.population.survey_measures import TorchMeasurer
-    from wbsa.population.survey_start import StartTable
-    from wbsa.population.table import measure_population
+    from wbsa.bodies.anthropometry import Anthropometer
+    from wbsa.bodies.body_model import BodyModel
+    from wbsa.bodies.survey_data import load_survey, select_people
+    from wbsa.bodies.survey_match import match_bodies
+    from wbsa.bodies.survey_measures import TorchMeasurer
+    from wbsa.bodies.survey_start import StartTable
+    from wbsa.bodies.table import measure_population
 
     s = settings or SurveyPopulationSettings()
     if not isinstance(variations, (int, np.integer)) or variations < 0:
@@ -189,7 +189,7 @@ def _with_variations(people: pd.DataFrame, fit: pd.DataFrame, k: int, seed: int,
 
     Variations change weight and muscle only; they keep the person's local changes.
     """
-    from wbsa.population.body_model import BODY_PARAMETER_COLUMNS
+    from wbsa.bodies.body_model import BODY_PARAMETER_COLUMNS
 
     n = len(people)
     rep = np.repeat(np.arange(n), k + 1)
@@ -225,7 +225,7 @@ def _with_variations(people: pd.DataFrame, fit: pd.DataFrame, k: int, seed: int,
 
 def _add_match_columns(table: pd.DataFrame, m: MatchSettings) -> pd.DataFrame:
     """Match errors on each matched body's row and the ``matched`` flags on every row."""
-    from wbsa.population.table import TABLE_COLUMNS
+    from wbsa.bodies.table import TABLE_COLUMNS
 
     out = table.copy()
     first = out["variation"].to_numpy() == 0

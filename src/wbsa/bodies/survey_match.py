@@ -3,7 +3,7 @@
 Each person keeps the fixed parameters it is given (gender, age, ethnic mix) and the free
 ones (muscle, weight, height, proportions, the four local changes of the body model —
 waist, hips, belly, buttocks — and cup size for women) are fitted so that the
-body's stature, mass, waist and hip (as :class:`~wbsa.population.anthropometry.Anthropometer`
+body's stature, mass, waist and hip (as :class:`~wbsa.bodies.anthropometry.Anthropometer`
 defines them) equal the person's. The fit is a damped Gauss–Newton (Levenberg–Marquardt)
 least-squares problem per person, solved for a whole batch at once:
 
@@ -17,9 +17,9 @@ least-squares problem per person, solved for a whole batch at once:
   waist or hip simply drops out), weighted by ``weights`` so that stature and mass come
   first, plus a weak pull of each free parameter towards 0.5 (``prior_weight``) that picks
   the most neutral body when several fit equally well;
-* Jacobian: exact, from :class:`~wbsa.population.survey_measures.TorchMeasurer` (measure
+* Jacobian: exact, from :class:`~wbsa.bodies.survey_measures.TorchMeasurer` (measure
   gradients in blendshape space) chained through anny's phenotype → coefficient map;
-* start: a tabulated inverse (:class:`~wbsa.population.survey_start.StartTable`), which puts
+* start: a tabulated inverse (:class:`~wbsa.bodies.survey_start.StartTable`), which puts
   every person in the right basin (anny's mass and waist are not monotone in muscle).
 
 A person leaves the batch once every measure it has is within ``converge_fraction`` of its
@@ -38,9 +38,9 @@ import numpy as np
 import pandas as pd
 
 from wbsa.errors import WbsaError
-from wbsa.population.body_model import BODY_PARAMETER_COLUMNS, LOCAL_CHANGE_COLUMNS
-from wbsa.population.survey_measures import FIT_MEASURES, TorchMeasurer
-from wbsa.population.survey_start import StartGrid, StartTable
+from wbsa.bodies.body_model import BODY_PARAMETER_COLUMNS, LOCAL_CHANGE_COLUMNS
+from wbsa.bodies.survey_measures import FIT_MEASURES, TorchMeasurer
+from wbsa.bodies.survey_start import StartGrid, StartTable
 from wbsa.progress import progress
 
 #: Target columns :func:`match_bodies` reads (NaN waist/hip = not measured).
@@ -130,7 +130,7 @@ class MatchSettings:
 
     @property
     def tolerances(self) -> np.ndarray:
-        """(4,) tolerances in the order of :data:`~wbsa.population.survey_measures.FIT_MEASURES`."""
+        """(4,) tolerances in the order of :data:`~wbsa.bodies.survey_measures.FIT_MEASURES`."""
         return np.array([self.stature_tol_m, self.mass_tol_kg, self.girth_tol_m, self.girth_tol_m])
 
 
@@ -155,7 +155,7 @@ def match_bodies(targets: pd.DataFrame, measurer: TorchMeasurer, settings: Match
     -------
     pandas.DataFrame
         One row per target, same index order: every ``p_*`` and ``l_*`` column
-        (:data:`~wbsa.population.body_model.BODY_PARAMETER_COLUMNS`), ``fit_<measure>`` (the
+        (:data:`~wbsa.bodies.body_model.BODY_PARAMETER_COLUMNS`), ``fit_<measure>`` (the
         fitted body's measures as the fit saw them, SI), ``fit_iterations`` and
         ``fit_converged`` (every measured quantity within ``converge_fraction`` of its tolerance).
     """

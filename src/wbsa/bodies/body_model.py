@@ -35,7 +35,7 @@ import numpy as np
 import pandas as pd
 
 from wbsa.errors import WbsaError
-from wbsa.population.mesh import TriangleMesh
+from wbsa.core.mesh import TriangleMesh
 
 #: Phenotype columns of a population table, in anny's order (``p_`` + anny label).
 PHENOTYPE_COLUMNS = (

@@ -47,7 +47,7 @@ def run_population(args: argparse.Namespace) -> int:
     """Handler of ``wbsa population``."""
     from wbsa.io import write_table
     from wbsa.parallel import default_workers
-    from wbsa.population.build import build_population
+    from wbsa.bodies.build import build_population
 
     out = Path(args.out)
     fmt = args.format or _format_of(out)
@@ -64,9 +64,10 @@ def run_body(args: argparse.Namespace) -> int:
     """Handler of ``wbsa body``."""
     import pandas as pd
 
-    from wbsa.population.body_model import BodyModel
-    from wbsa.population.export import subject_mesh, write_mesh
-    from wbsa.population.table import read_population
+    from wbsa.bodies.body_model import BodyModel
+    from wbsa.bodies.subject import subject_mesh
+    from wbsa.core.mesh_io import write_mesh
+    from wbsa.bodies.table import read_population
 
     if args.population:
         mesh = subject_mesh(read_population(args.population), args.subject)

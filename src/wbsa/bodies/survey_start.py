@@ -25,9 +25,9 @@ from typing import Literal
 
 import numpy as np
 
-from wbsa.population.age import years_to_param
-from wbsa.population.body_model import PHENOTYPE_COLUMNS
-from wbsa.population.survey_measures import TorchMeasurer
+from wbsa.bodies.age import years_to_param
+from wbsa.bodies.body_model import PHENOTYPE_COLUMNS
+from wbsa.bodies.survey_measures import TorchMeasurer
 
 _INDEX = {name: i for i, name in enumerate(PHENOTYPE_COLUMNS)}
 

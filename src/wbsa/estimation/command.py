@@ -36,9 +36,9 @@ def run_estimate(args: argparse.Namespace) -> int:
     from wbsa.analysis.model_file import WbsaModel
     from wbsa.camera import resolve_camera
     from wbsa.errors import WbsaError
-    from wbsa.estimate.segment import SegmentSettings
-    from wbsa.estimate.single_view import estimate_wbsa
-    from wbsa.sensor import read_depth_png
+    from wbsa.estimation.segment import SegmentSettings
+    from wbsa.estimation.single_view import estimate_wbsa
+    from wbsa.core.depth_image import read_depth_png
 
     if args.stature_m is not None and not 0.3 <= args.stature_m <= 2.75:
         raise WbsaError(f"--stature-m {args.stature_m} is not a human stature in metres (0.3–2.75)")
@@ -50,7 +50,7 @@ def run_estimate(args: argparse.Namespace) -> int:
                                  group=args.group, kind=args.kind, level=args.level, segment=segment,
                                  vbsa_column=args.vbsa, distance_m=args.distance)
     if args.out_mesh:
-        from wbsa.population.export import write_mesh
+        from wbsa.core.mesh_io import write_mesh
 
         write_mesh(surface, args.out_mesh)
     if args.json:

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from wbsa.camera.frame import DepthFrame
+from wbsa.core.frame import DepthFrame
 from wbsa.errors import WbsaError
 
 
@@ -135,7 +135,7 @@ def _box_mean(a: np.ndarray, size: int) -> np.ndarray:
 
 
 def frame_from_depth_image(depth_m: np.ndarray, intrinsics, *, pose=None, settings: dict | None = None) -> DepthFrame:
-    """A :class:`~wbsa.camera.frame.DepthFrame` from a depth image alone (synthetic or from a real sensor).
+    """A :class:`~wbsa.core.frame.DepthFrame` from a depth image alone (synthetic or from a real sensor).
 
     Points are back-projected with the intrinsics and normals estimated from the pixel grid
     (:func:`organised_normals`). There is no mesh behind a depth image, so ``triangle_id`` is -1
@@ -144,7 +144,7 @@ def frame_from_depth_image(depth_m: np.ndarray, intrinsics, *, pose=None, settin
     Parameters
     ----------
     depth_m : (h, w) float
-        z-depth in metres, 0 or non-finite = no return (e.g. from :func:`wbsa.sensor.read_depth_png`).
+        z-depth in metres, 0 or non-finite = no return (e.g. from :func:`wbsa.core.read_depth_png`).
     intrinsics : wbsa.camera.Intrinsics
         Its ``width`` and ``height`` must match the image.
     pose : wbsa.camera.Pose, optional

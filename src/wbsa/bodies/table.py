@@ -10,8 +10,8 @@ import pandas as pd
 
 from wbsa.io import read_table
 from wbsa.parallel import keep_large_allocations, single_threaded_math
-from wbsa.population.anthropometry import DEFAULT_DENSITY_KG_M3, MEASURE_COLUMNS, Anthropometer
-from wbsa.population.body_model import (LOCAL_CHANGE_COLUMNS, PHENOTYPE_COLUMNS, BodyModel,
+from wbsa.bodies.anthropometry import DEFAULT_DENSITY_KG_M3, MEASURE_COLUMNS, Anthropometer
+from wbsa.bodies.body_model import (LOCAL_CHANGE_COLUMNS, PHENOTYPE_COLUMNS, BodyModel,
                                         body_parameter_array)
 from wbsa.progress import progress
 
@@ -21,7 +21,7 @@ PARALLEL_MIN_BODIES = 2000
 #: Columns every population table has (:func:`read_population` requires them).
 POPULATION_COLUMNS = ("subject_id", "sex", "age_years", *PHENOTYPE_COLUMNS, *MEASURE_COLUMNS)
 #: Columns a population table is written with: :data:`POPULATION_COLUMNS`, then the local changes
-#: (0 unless fitted, see :data:`~wbsa.population.body_model.LOCAL_CHANGE_COLUMNS`).
+#: (0 unless fitted, see :data:`~wbsa.bodies.body_model.LOCAL_CHANGE_COLUMNS`).
 TABLE_COLUMNS = (*POPULATION_COLUMNS, *LOCAL_CHANGE_COLUMNS)
 
 
@@ -46,7 +46,7 @@ def measure_population(params: pd.DataFrame, *, density_kg_m3: float = DEFAULT_D
     -------
     pandas.DataFrame
         ``params`` (missing optional ``p_*`` columns filled with 0.5) followed by
-        :data:`~wbsa.population.anthropometry.MEASURE_COLUMNS` and the ``l_*`` local changes
+        :data:`~wbsa.bodies.anthropometry.MEASURE_COLUMNS` and the ``l_*`` local changes
         (missing ones 0).
     """
     from wbsa.parallel import dask_client, map_unordered, resolve_scheduler

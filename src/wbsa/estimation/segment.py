@@ -59,7 +59,7 @@ def segment_subject(depth_m: np.ndarray, intrinsics, settings: SegmentSettings =
     import open3d as o3d
     from scipy import ndimage
 
-    from wbsa.surface.backproject import backproject_depth
+    from wbsa.core.backproject import backproject_depth
 
     depth = np.asarray(depth_m, dtype=np.float64)
     mask = np.isfinite(depth) & (depth >= settings.min_depth_m) & (depth <= settings.max_depth_m) & (depth > 0)

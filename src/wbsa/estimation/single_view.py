@@ -7,7 +7,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from wbsa.errors import WbsaError
-from wbsa.estimate.segment import SegmentSettings, segment_subject
+from wbsa.estimation.segment import SegmentSettings, segment_subject
 
 
 @dataclass(frozen=True)
@@ -61,7 +61,7 @@ def estimate_wbsa(depth_m: np.ndarray, intrinsics, model, azimuth_deg: float, el
     Parameters
     ----------
     depth_m : (h, w) float
-        z-depth in metres (0 = no return), e.g. from :func:`wbsa.sensor.read_depth_png`.
+        z-depth in metres (0 = no return), e.g. from :func:`wbsa.core.read_depth_png`.
     intrinsics : wbsa.camera.Intrinsics
         The sensor's intrinsics; the image size must match.
     model : wbsa.analysis.model_file.WbsaModel
@@ -78,7 +78,8 @@ def estimate_wbsa(depth_m: np.ndarray, intrinsics, model, azimuth_deg: float, el
     Estimate, TriangleMesh
         The estimate and the reconstructed visible surface (camera frame, metres).
     """
-    from wbsa.surface import frame_from_depth_image, reconstruct
+    from wbsa.core.backproject import frame_from_depth_image
+    from wbsa.surface import reconstruct
 
     column = vbsa_column or _single_vbsa_column(model)
     method = recon_method_for(column)

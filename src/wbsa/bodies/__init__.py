@@ -1,0 +1,1 @@
+"""bodies stage: virtual bodies (anny), skin mask, anthropometry, random and survey populations."""

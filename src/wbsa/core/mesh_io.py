@@ -1,0 +1,93 @@
+"""Triangle mesh files: read any mesh Open3D reads (metres), write PLY/OBJ atomically."""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import sys
+from pathlib import Path
+from typing import Iterator
+
+import numpy as np
+
+from wbsa.core.mesh import TriangleMesh
+from wbsa.errors import WbsaError
+from wbsa.io import atomic_path
+
+#: File types :func:`write_mesh` writes.
+WRITE_SUFFIXES = (".ply", ".obj")
+#: File types Open3D reads as triangle meshes.
+READ_SUFFIXES = (".ply", ".obj", ".stl", ".off", ".gltf", ".glb")
+#: A mesh taller or wider than this (m) is probably not in metres.
+_SUSPICIOUS_SIZE_M = 20.0
+
+
+@contextlib.contextmanager
+def _quiet_stderr() -> Iterator[None]:
+    """Silence C-level messages on file descriptor 2 (Open3D's file readers print their own errors)."""
+    fd = 2
+    try:
+        sys.stderr.flush()
+        saved = os.dup(fd)
+    except (OSError, ValueError):  # no file descriptor 2
+        yield
+        return
+    try:
+        with open(os.devnull, "wb") as devnull:
+            os.dup2(devnull.fileno(), fd)
+            yield
+    finally:
+        os.dup2(saved, fd)
+        os.close(saved)
+
+
+def read_mesh(path: str | os.PathLike) -> TriangleMesh:
+    """Read a triangle mesh file (metres) with Open3D.
+
+    Raises
+    ------
+    WbsaError
+        If the file is missing, of an unknown type, unreadable, empty, or has no triangles.
+    """
+    path = Path(path)
+    if not path.exists():
+        raise WbsaError(f"mesh file {path} does not exist; check the path")
+    if path.is_dir():
+        raise WbsaError(f"mesh path {path} is a folder; give a {'/'.join(s[1:] for s in READ_SUFFIXES)} file")
+    if path.suffix.lower() not in READ_SUFFIXES:
+        raise WbsaError(f"cannot read {path.name}: use a mesh file ending in {', '.join(READ_SUFFIXES)}")
+    import open3d as o3d
+
+    with _quiet_stderr(), o3d.utility.VerbosityContextManager(o3d.utility.VerbosityLevel.Error):
+        mesh = o3d.io.read_triangle_mesh(str(path), enable_post_processing=False)
+    vertices = np.asarray(mesh.vertices, dtype=np.float64)
+    faces = np.asarray(mesh.triangles, dtype=np.int64)
+    if vertices.shape[0] == 0:
+        raise WbsaError(f"{path} is empty or not a readable {path.suffix[1:].upper()} mesh; check the file")
+    if faces.shape[0] == 0:
+        raise WbsaError(f"{path} has {vertices.shape[0]} vertices but no triangles (a point cloud?); "
+                        f"give a triangle mesh")
+    size = float(np.max(vertices.max(axis=0) - vertices.min(axis=0))) if np.all(np.isfinite(vertices)) else 0.0
+    if size > _SUSPICIOUS_SIZE_M:
+        sys.stderr.write(f"warning: {path.name} is {size:g} units across; wbsa expects metres "
+                         f"(scale a millimetre mesh by 0.001)\n")
+    return TriangleMesh(vertices, faces.astype(np.int32))
+
+
+def write_mesh(mesh: TriangleMesh, path: str | os.PathLike) -> Path:
+    """Write ``mesh`` atomically as PLY or OBJ (by suffix), in metres."""
+    import open3d as o3d
+
+    path = Path(path)
+    if path.suffix.lower() not in WRITE_SUFFIXES:
+        raise WbsaError(f"cannot write a mesh as {path.suffix or 'no suffix'}; use a .ply or .obj name")
+    m = o3d.geometry.TriangleMesh(o3d.utility.Vector3dVector(np.asarray(mesh.vertices, dtype=np.float64)),
+                                  o3d.utility.Vector3iVector(np.asarray(mesh.faces, dtype=np.int32)))
+    with atomic_path(path, keep_suffix=True) as tmp:  # open3d picks the format from the suffix
+        ok = o3d.io.write_triangle_mesh(str(tmp), m, write_ascii=False, write_vertex_normals=False,
+                                        write_vertex_colors=False)
+        if not ok:
+            raise WbsaError(f"open3d could not write {path}")
+        for extra in tmp.parent.glob(tmp.stem + "*.mtl"):
+            extra.unlink()
+    return path

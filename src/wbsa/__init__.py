@@ -1,17 +1,75 @@
 """wbsa: whole body surface area from a single depth view.
 
-The package is laid out like the pipeline:
+The plain Python API (everything a notebook needs; the ``wbsa`` command is a thin layer over it):
 
-``population``  virtual bodies (anny), anthropometry, random and survey populations
+>>> import wbsa
+>>> sorted(n for n in wbsa.__all__ if n[0].islower())
+['body', 'bsa', 'estimate', 'population', 'render']
+
+``wbsa.population(n, kind, seed)``       a table of virtual people (stature, mass, WBSA, tape measures)
+``wbsa.body(table, subject_id)``         one body's skin mesh (or ``wbsa.body(gender=0, height=0.7)``)
+``wbsa.render(mesh, camera, view)``      the virtual depth camera: depth image, visible areas, reconstruction
+``wbsa.estimate(depth, camera, model)``  WBSA from one real depth image, with its interval and flags
+``wbsa.bsa("mosteller", 170, 70)``     the classical height/weight formulae (cm, kg → m²)
+``wbsa.Study.from_toml(path).run(out)``  the whole study: population → scan → fit → report
+
+The package is laid out like the pipeline, on top of a shared ``core``:
+
+``core``        shared types and formats: TriangleMesh, DepthFrame, mesh and depth-image files
+``bodies``      virtual bodies (anny), anthropometry, random and survey populations
 ``formulae``    classical BSA formulae (Du Bois, Mosteller, ...)
 ``camera``      pinhole intrinsics/extrinsics, view grids, ray casting, visible area
 ``sensor``      depth noise, quantisation, holes
 ``surface``     surface reconstruction from one depth view
+``simulate``    one simulated view: camera → sensor → surface (shared by view, scan and report)
 ``scan``        scanning a population at many views, in parallel, resumable
 ``analysis``    per-view regression, cross-validation, diagnostics, formula comparison
 ``report``      figures and the HTML report
 ``study``       the end-to-end study (``wbsa run``)
-``cli``         the ``wbsa`` command, a thin layer over the API
+``estimation``  WBSA of a real person from one depth image
+``cli``         the ``wbsa`` command
+
+Names are imported on first use, so ``import wbsa`` is fast.
 """
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from wbsa.lazy import lazy_exports
+
 __version__ = "0.1.0"
+
+if TYPE_CHECKING:  # pragma: no cover - real types for IDEs and type checkers
+    from wbsa.analysis.model_file import WbsaModel
+    from wbsa.bodies.make import body, population
+    from wbsa.camera.intrinsics import Intrinsics
+    from wbsa.camera.views import View
+    from wbsa.core.frame import DepthFrame
+    from wbsa.core.mesh import TriangleMesh
+    from wbsa.errors import WbsaError
+    from wbsa.estimation import Estimate, estimate
+    from wbsa.formulae.compute import bsa
+    from wbsa.sensor.model import SensorModel
+    from wbsa.simulate import SimulatedView, render
+    from wbsa.study.study import Study
+
+_EXPORTS = {
+    "body": "wbsa.bodies.make",
+    "population": "wbsa.bodies.make",
+    "render": "wbsa.simulate",
+    "SimulatedView": "wbsa.simulate",
+    "estimate": "wbsa.estimation",
+    "Estimate": "wbsa.estimation",
+    "bsa": "wbsa.formulae.compute",
+    "Study": "wbsa.study.study",
+    "TriangleMesh": "wbsa.core.mesh",
+    "DepthFrame": "wbsa.core.frame",
+    "Intrinsics": "wbsa.camera.intrinsics",
+    "View": "wbsa.camera.views",
+    "SensorModel": "wbsa.sensor.model",
+    "WbsaModel": "wbsa.analysis.model_file",
+    "WbsaError": "wbsa.errors",
+}
+__all__ = sorted(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -196,9 +196,13 @@ def preset(name: PresetName) -> Intrinsics:
 
 
 def resolve_camera(spec: str | os.PathLike | Intrinsics) -> Intrinsics:
-    """A preset name or the path of an Open3D intrinsics JSON file, as intrinsics."""
+    """A preset name, the path of an Open3D intrinsics JSON file, or an Open3D
+    ``PinholeCameraIntrinsic`` object, as intrinsics."""
     if isinstance(spec, Intrinsics):
         return spec
+    if hasattr(spec, "intrinsic_matrix") and hasattr(spec, "width"):  # open3d.camera.PinholeCameraIntrinsic
+        return Intrinsics.from_open3d_json({"width": spec.width, "height": spec.height,
+                                            "intrinsic_matrix": np.asarray(spec.intrinsic_matrix).T.ravel().tolist()})
     text = str(spec)
     if text in PRESETS:
         return PRESETS[text]

@@ -8,6 +8,7 @@ from __future__ import annotations
 from wbsa.lazy import lazy_exports
 
 _EXPORTS = {
+    "Study": "wbsa.study.study",
     "run_study": "wbsa.study.pipeline",
     "StudyResult": "wbsa.study.pipeline",
     "load_settings": "wbsa.study.settings",

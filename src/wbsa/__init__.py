@@ -51,14 +51,14 @@ if TYPE_CHECKING:  # pragma: no cover - real types for IDEs and type checkers
     from wbsa.estimation import Estimate, estimate
     from wbsa.formulae.compute import bsa
     from wbsa.sensor.model import SensorModel
-    from wbsa.simulate import SimulatedView, render
+    from wbsa.simulate.view import SimulatedView, render
     from wbsa.study.study import Study
 
 _EXPORTS = {
     "body": "wbsa.bodies.make",
     "population": "wbsa.bodies.make",
-    "render": "wbsa.simulate",
-    "SimulatedView": "wbsa.simulate",
+    "render": "wbsa.simulate.view",
+    "SimulatedView": "wbsa.simulate.view",
     "estimate": "wbsa.estimation",
     "Estimate": "wbsa.estimation",
     "bsa": "wbsa.formulae.compute",

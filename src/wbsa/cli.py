@@ -20,7 +20,7 @@ from wbsa.errors import WbsaError
 COMMAND_MODULES = (
     "wbsa.bodies.command",
     "wbsa.formulae.command",
-    "wbsa.camera.command",
+    "wbsa.simulate.command",
     "wbsa.scan.command",
     "wbsa.analysis.command",
     "wbsa.report.command",

@@ -69,7 +69,7 @@ def render_snapshot(population: pd.DataFrame, subject_id: int, intrinsics, azimu
     """Rebuild the subject's body, ray-cast the view and return its points in world coordinates."""
     from wbsa.bodies.subject import subject_mesh
     from wbsa.camera import MeshScene, View
-    from wbsa.simulate import points_world, simulate_view
+    from wbsa.simulate.view import points_world, simulate_view
 
     mesh = subject_mesh(population, subject_id)
     frame = simulate_view(MeshScene(mesh), intrinsics, View(azimuth_deg, elevation_deg, distance_m),

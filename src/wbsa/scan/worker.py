@@ -114,7 +114,7 @@ def scan_subject(mesh, subject_id: int, settings: ScanSettings, *, nthreads: int
         a sensor, else from the ideal frame).
     """
     from wbsa.camera import MeshScene
-    from wbsa.simulate import simulate_view
+    from wbsa.simulate.view import simulate_view
 
     scene = MeshScene(mesh, nthreads=nthreads)
     return [{"subject_id": subject_id,

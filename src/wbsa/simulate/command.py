@@ -117,15 +117,15 @@ def views_from_args(args: argparse.Namespace, intrinsics, stature_m: float | Non
 
 def run_view(args: argparse.Namespace) -> int:
     """Handler of ``wbsa view``."""
-    from wbsa.camera.export import write_view_outputs
+    from wbsa.simulate.export import write_view_outputs
     from wbsa.core.mesh_io import write_mesh
     from wbsa.camera.intrinsics import Intrinsics
     from wbsa.camera.scene import MeshScene
-    from wbsa.camera.target import load_target
+    from wbsa.simulate.target import load_target
     from wbsa.io import write_json, write_table
 
     from wbsa.sensor.cli import sensor_model_from_args
-    from wbsa.simulate import simulate_view
+    from wbsa.simulate.view import simulate_view
     from wbsa.surface.cli import reconstruct_methods_from_args, reconstruction_settings_from_args
 
     intrinsics: Intrinsics = intrinsics_from_args(args)

@@ -36,9 +36,8 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from wbsa.core.versions import WBSA_VERSION as __version__
 from wbsa.lazy import lazy_exports
-
-__version__ = "0.1.0"
 
 if TYPE_CHECKING:  # pragma: no cover - real types for IDEs and type checkers
     from wbsa.analysis.model_file import WbsaModel

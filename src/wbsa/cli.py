@@ -13,7 +13,7 @@ import importlib
 import sys
 import warnings
 
-from wbsa import __version__
+from wbsa.core.versions import WBSA_VERSION as __version__
 from wbsa.errors import WbsaError
 
 #: Modules that contribute subcommands, in the order of the pipeline.

@@ -46,7 +46,7 @@ class TriangleMesh:
         Parameters
         ----------
         mesh : TriangleMesh, trimesh.Trimesh, open3d.geometry.TriangleMesh, open3d.t.geometry.TriangleMesh,
-               (vertices, faces) pair of arrays, or a path to a mesh file
+               or a (vertices, faces) pair of arrays
             Coordinates in metres.
 
         Returns
@@ -70,9 +70,7 @@ class TriangleMesh:
         if isinstance(mesh, cls):
             return mesh
         if isinstance(mesh, (str, bytes)) or hasattr(mesh, "__fspath__"):
-            from wbsa.core.mesh_io import read_mesh
-
-            return read_mesh(mesh)
+            raise WbsaError(f"{mesh!r} is a path; read the file with wbsa.core.read_mesh first")
         kind = f"{type(mesh).__module__}.{type(mesh).__qualname__}"
         if isinstance(mesh, tuple) and len(mesh) == 2:
             vertices, faces = mesh

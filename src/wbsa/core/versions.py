@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import platform
 
+#: This package's version (also ``wbsa.__version__``).
+WBSA_VERSION = "0.1.0"
+
 
 def package_versions() -> dict[str, str]:
     """Versions of Python, wbsa and the libraries whose numbers enter the results.
@@ -16,9 +19,7 @@ def package_versions() -> dict[str, str]:
     """
     from importlib.metadata import PackageNotFoundError, version
 
-    from wbsa import __version__
-
-    out = {"python": platform.python_version(), "wbsa": __version__}
+    out = {"python": platform.python_version(), "wbsa": WBSA_VERSION}
     for name in ("numpy", "pandas", "scipy", "statsmodels", "matplotlib", "open3d-cpu", "open3d", "anny", "torch",
                  "dask", "pyarrow"):
         try:

@@ -11,7 +11,7 @@ from typing import Callable
 import numpy as np
 import pandas as pd
 
-from wbsa import __version__
+from wbsa.core.versions import WBSA_VERSION as __version__
 from wbsa.errors import WbsaError
 from wbsa.io import atomic_path
 from wbsa.progress import progress

@@ -19,7 +19,7 @@ from typing import Callable
 import numpy as np
 import pandas as pd
 
-from wbsa import __version__
+from wbsa.core.versions import WBSA_VERSION as __version__
 from wbsa.errors import WbsaError
 from wbsa.io import write_json, write_table
 from wbsa.parallel import default_workers, resolve_scheduler

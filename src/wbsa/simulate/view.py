@@ -149,6 +149,10 @@ def render(mesh: Any, camera: Any = "kinect-v1", view: Any = (0.0, 0.0, 4.3), *,
     from wbsa.camera import MeshScene, View, resolve_camera
 
     intrinsics = resolve_camera(camera)
+    if isinstance(mesh, str) or hasattr(mesh, "__fspath__"):
+        from wbsa.core.mesh_io import read_mesh
+
+        mesh = read_mesh(mesh)
     if not isinstance(view, View):
         try:
             view = View(*(float(v) for v in view))

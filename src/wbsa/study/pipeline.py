@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, TextIO
 
-from wbsa import __version__
+from wbsa.core.versions import WBSA_VERSION as __version__
 from wbsa.analysis.data import reference_distance
 from wbsa.core.versions import package_versions
 from wbsa.errors import WbsaError

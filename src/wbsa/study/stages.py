@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from wbsa import __version__
+from wbsa.core.versions import WBSA_VERSION as __version__
 from wbsa.io import write_json
 
 #: Marker file of a finished stage.

@@ -372,6 +372,12 @@ def test_unknown_name_is_one_line_listing_the_keys(name):
     assert all(key in message for key in FORMULAE)
 
 
+def test_wbsa_error_is_a_value_error():
+    assert issubclass(WbsaError, ValueError)
+    with pytest.raises(ValueError, match="unknown BSA formula"):
+        bsa("Mosteler", 170, 70)
+
+
 def test_cli_formula_accepts_known_names(capsys):
     argv = ["bsa", "--height-cm", "170", "--weight-kg", "70", "--json"]
     assert main([*argv, "--formula", "Mosteller", "--formula", "DuBois-DuBois", "--formula", "dubois"]) == 0

@@ -10,7 +10,7 @@ pytest.importorskip("open3d")
 from wbsa.camera import (Intrinsics, MeshScene, View, cast, distance_to_fit, measure_view, paper_views,  # noqa: E402
                          pose_from_view, preset, render, sphere_cap_area_m2, vbsa_hit_m2, vbsa_visible_m2)
 from wbsa.camera.area import triangle_view_cosines  # noqa: E402
-from wbsa.camera.shapes import body_like, box, icosphere  # noqa: E402
+from helpers.shapes import body_like, box, icosphere  # noqa: E402
 from wbsa.errors import WbsaError  # noqa: E402
 from wbsa.population.mesh import TriangleMesh  # noqa: E402
 

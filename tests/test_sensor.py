@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from wbsa.camera import MeshScene, Pose, preset, render
-from wbsa.camera.shapes import box, icosphere
+from helpers.shapes import box, icosphere
 from wbsa.errors import WbsaError
 from wbsa.population.mesh import TriangleMesh
 from wbsa.sensor import (SensorModel, apply_sensor, axial_sigma_m, depth_to_png_mm, lateral_sigma_px,

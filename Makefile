@@ -11,7 +11,7 @@ OUT    ?= runs/demo
 # On your own machine: make demo TORCH_INDEX=https://download.pytorch.org/whl/cpu
 TORCH_INDEX ?=
 
-.PHONY: demo test bench system-deps clean
+.PHONY: demo test test-quick bench system-deps clean
 
 $(STAMP): pyproject.toml constraints.txt
 	@$(MAKE) --no-print-directory system-deps
@@ -37,6 +37,10 @@ demo: $(STAMP)
 
 test: $(STAMP)
 	$(VENV)/bin/python -m pytest -q
+
+# The local edit-test loop: everything but the tests marked slow (CI runs `make test`, all of them).
+test-quick: $(STAMP)
+	$(VENV)/bin/python -m pytest -q -m "not slow"
 
 bench: $(STAMP)
 	$(VENV)/bin/python benchmarks/bench_population.py

@@ -65,6 +65,7 @@ def data(fit_dir):
                                             [fit_dir / "scan.parquet"]))
 
 
+@pytest.mark.slow  # about 4 s: draws and encodes every figure
 def test_report_command_embeds_every_figure_as_png_and_every_table(fit_dir, tmp_path, capsys):
     out = tmp_path / "r.html"
     code = main(["report", str(fit_dir / "fit"), "--population", str(fit_dir / "population.parquet"),

@@ -23,6 +23,14 @@ class TriangleMesh:
     vertices: np.ndarray
     faces: np.ndarray
 
+    def __repr__(self) -> str:
+        v, f = np.asarray(self.vertices), np.asarray(self.faces)
+        if v.ndim != 2 or v.shape[1:] != (3,) or f.ndim != 2 or f.shape[1:] != (3,) or not len(v):
+            return f"TriangleMesh(vertices {v.shape}, faces {f.shape})"
+        size = v.max(axis=0) - v.min(axis=0)
+        return (f"TriangleMesh({len(v):,} vertices, {len(f):,} faces, area {self.area_m2:.4g} m², "
+                f"bbox {size[0]:.3g} × {size[1]:.3g} × {size[2]:.3g} m)")
+
     @property
     def triangle_areas_m2(self) -> np.ndarray:
         """(m,) float64 area of every triangle in m²."""

@@ -6,15 +6,19 @@ VENV   := .venv
 PIP    := $(VENV)/bin/pip
 STAMP  := $(VENV)/.installed
 OUT    ?= runs/demo
+# Index torch is installed from. Empty: pip's configured indexes, where constraints.txt's pin finds a CPU
+# wheel only if one is there (PyPI's Linux wheel of torch 2.13.0 is a CUDA build with ~15 nvidia packages).
+# On your own machine: make demo TORCH_INDEX=https://download.pytorch.org/whl/cpu
+TORCH_INDEX ?=
 
-.PHONY: demo test bench system-deps clean
+.PHONY: demo test test-quick bench system-deps clean
 
 $(STAMP): pyproject.toml constraints.txt
 	@$(MAKE) --no-print-directory system-deps
 	test -x $(VENV)/bin/python || $(PYTHON) -m venv $(VENV)
 	$(PIP) install -q --upgrade pip
-	# torch first, pinned to the CPU wheel, so nothing later pulls CUDA packages.
-	$(PIP) install -q -c constraints.txt torch
+	# torch first, pinned (CPU wheel from TORCH_INDEX), so nothing later pulls another build.
+	$(PIP) install -q -c constraints.txt $(if $(TORCH_INDEX),--index-url $(TORCH_INDEX)) torch
 	$(PIP) install -q -c constraints.txt -e '.[test]'
 	touch $(STAMP)
 
@@ -33,6 +37,10 @@ demo: $(STAMP)
 
 test: $(STAMP)
 	$(VENV)/bin/python -m pytest -q
+
+# The local edit-test loop: everything but the tests marked slow (CI runs `make test`, all of them).
+test-quick: $(STAMP)
+	$(VENV)/bin/python -m pytest -q -m "not slow"
 
 bench: $(STAMP)
 	$(VENV)/bin/python benchmarks/bench_population.py

@@ -1,9 +1,11 @@
 """Time `fit_all` on synthetic paper-scale tables (20,000 subjects x 65 views) with the default settings."""
 import resource, sys, time
+from pathlib import Path
 t0 = time.perf_counter()
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # helpers.synthetic: test-only tables
 import statsmodels.api, statsmodels.stats.diagnostic, scipy.stats  # noqa: F401  (import time not counted)
 from wbsa.analysis.fit_views import FitSettings, fit_all
-from wbsa.analysis.synthetic import paper_view_angles, synthetic_population, synthetic_scan
+from helpers.synthetic import paper_view_angles, synthetic_population, synthetic_scan
 
 n = int(sys.argv[1]) if len(sys.argv) > 1 else 20000
 n_views = int(sys.argv[2]) if len(sys.argv) > 2 else 65

@@ -25,12 +25,13 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # helpers.shapes: test meshes
 
 from wbsa.camera import (MeshScene, measure_view, paper_views, pose_from_view,  # noqa: E402
                          render, resolve_camera)
 from wbsa.camera.raycast import cast, grid_rays, rect_rays  # noqa: E402
 from wbsa.camera.roi import projected_roi, silhouette_pixels  # noqa: E402
-from wbsa.camera.shapes import body_like  # noqa: E402
+from helpers.shapes import body_like  # noqa: E402
 
 
 def best_pass(fn, views, repeat: int) -> tuple[float, float]:
@@ -118,7 +119,7 @@ def bench(name: str, mesh, intrinsics, repeat: int, threads: int) -> None:
 def accuracy(name: str, mesh, intrinsics) -> None:
     """Visible-area accuracy: the paper's hit area vs the visible-area estimate across resolutions."""
     from wbsa.camera import View, sphere_cap_area_m2, vbsa_visible_m2
-    from wbsa.camera.shapes import icosphere
+    from helpers.shapes import icosphere
 
     if name == "body-like ellipsoid assembly":
         sphere = MeshScene(icosphere(0.3, 5))

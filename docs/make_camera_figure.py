@@ -6,7 +6,7 @@ Usage::
 
 Panel (a) looks down on the subject (world +Z towards the reader) and places the paper's azimuths;
 panel (b) is the vertical plane through a camera at azimuth θ with the paper's elevations; panel (c)
-is what the camera at azimuth 0, elevation 0 sees of the test figure (``wbsa.camera.shapes.body_like``),
+is what the camera at azimuth 0, elevation 0 sees of the test figure (``body_like`` of ``tests/helpers/shapes.py``),
 rendered by the ray caster itself, with the image axes.
 """
 
@@ -19,9 +19,10 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # helpers.shapes: test meshes
 
 from wbsa.camera import MeshScene, View, paper_views, pose_from_view, preset, render  # noqa: E402
-from wbsa.camera.shapes import body_like  # noqa: E402
+from helpers.shapes import body_like  # noqa: E402
 from wbsa.camera.views import PAPER_AZIMUTHS_DEG, PAPER_ELEVATIONS_DEG, view_direction  # noqa: E402
 
 

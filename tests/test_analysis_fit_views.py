@@ -6,7 +6,7 @@ import pytest
 
 from wbsa.analysis.fit_views import FIT_KEYS, FitSettings, fit_all, fit_views
 from wbsa.analysis.regression import fit_view
-from wbsa.analysis.synthetic import synthetic_population, synthetic_scan
+from helpers.synthetic import synthetic_population, synthetic_scan
 from wbsa.errors import WbsaError
 
 VIEWS = [(0.0, 0.0), (60.0, 30.0), (0.0, 90.0)]

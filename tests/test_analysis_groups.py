@@ -5,7 +5,7 @@ import pandas as pd
 import pytest
 
 from wbsa.analysis.groups import GROUP_NAMES, GroupSpec, assign_groups, check_group_names
-from wbsa.analysis.synthetic import synthetic_population
+from helpers.synthetic import synthetic_population
 from wbsa.errors import WbsaError
 
 

@@ -138,3 +138,18 @@ def test_loading_a_wrong_file_is_a_user_error(tmp_path):
         WbsaModel.load(p)
     with pytest.raises(WbsaError, match="does not exist"):
         WbsaModel.load(tmp_path / "missing.json")
+
+
+def test_model_and_fit_output_print_one_short_line(fitted):
+    out = fitted[2]
+    text = repr(out.model)
+    entries = out.model.entries
+    n_views = len({(e["azimuth_deg"], e["elevation_deg"]) for e in entries})
+    assert "\n" not in text and len(text) < 400  # the default dataclass repr printed every coefficient
+    assert text.startswith(f"WbsaModel({len(entries):,} entries, {n_views} views; kinds linear, wls, loglog; "
+                           "groups all, adults; predictors vbsa, vbsa+stature_m; columns ")
+    assert "cameras kinect-v1; distances 4.3 m)" in text
+    summary = repr(out)
+    assert "\n" not in summary and len(summary) < 600
+    assert f"fits {len(out.fits):,}, skipped {len(out.skipped):,}, residuals {len(out.residuals):,}" in summary
+    assert summary.endswith(f"model={text})")

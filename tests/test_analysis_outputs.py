@@ -16,7 +16,7 @@ from wbsa.analysis.formulae_comparison import (
 )
 from wbsa.analysis.model_file import WbsaModel
 from wbsa.analysis.summary import model_summary
-from wbsa.analysis.synthetic import synthetic_population, synthetic_scan
+from helpers.synthetic import synthetic_population, synthetic_scan
 from wbsa.cli import main
 from wbsa.errors import WbsaError
 

@@ -10,7 +10,7 @@ import pytest
 o3d = pytest.importorskip("open3d")
 
 from wbsa.camera import MeshScene, View, measure_view, preset  # noqa: E402
-from wbsa.camera.shapes import icosphere  # noqa: E402
+from helpers.shapes import icosphere  # noqa: E402
 from wbsa.cli import main  # noqa: E402
 
 

@@ -11,7 +11,7 @@ from wbsa.camera import MeshScene, View, cast, look_at_rotation, pose_from_view,
 from wbsa.camera.area import _CENTROID_T_TOL, GRAZING_COS, grazing_area_m2, triangle_view_cosines  # noqa: E402
 from wbsa.camera.roi import silhouette_blocks, silhouette_pixels  # noqa: E402
 from wbsa.camera.scene import _patches  # noqa: E402
-from wbsa.camera.shapes import body_like, icosphere  # noqa: E402
+from helpers.shapes import body_like, icosphere  # noqa: E402
 from wbsa.core.mesh import TriangleMesh  # noqa: E402
 
 KINECT = preset("kinect-v1")

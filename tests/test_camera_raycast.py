@@ -10,7 +10,7 @@ pytest.importorskip("open3d")
 from wbsa.camera import (Intrinsics, MeshScene, View, cast, distance_to_fit, measure_view, paper_views,  # noqa: E402
                          pose_from_view, preset, render, sphere_cap_area_m2, vbsa_hit_m2, vbsa_visible_m2)
 from wbsa.camera.area import triangle_view_cosines  # noqa: E402
-from wbsa.camera.shapes import body_like, box, icosphere  # noqa: E402
+from helpers.shapes import body_like, box, icosphere  # noqa: E402
 from wbsa.errors import WbsaError  # noqa: E402
 from wbsa.core.mesh import TriangleMesh  # noqa: E402
 
@@ -209,3 +209,18 @@ def test_orientation_does_not_change_the_answer():
     assert not open_scene.one_sided
     c = measure_view(open_scene, KINECT, view, target=np.zeros(3), return_frame=False)[0]
     assert c["vbsa_visible_m2"] == pytest.approx(a["vbsa_visible_m2"], rel=0.01)
+
+
+def test_meshes_scenes_and_frames_print_their_key_numbers(body):
+    mesh = box((0.4, 0.3, 1.8))
+    # 4 vertices per face; area 2(ab + bc + ca) = 2.76 m²
+    assert repr(mesh) == "TriangleMesh(24 vertices, 12 faces, area 2.76 m², bbox 0.4 × 0.3 × 1.8 m)"
+    scene = MeshScene(icosphere(0.3, 2, center=np.array([0.0, 0.0, 1.0])))
+    assert repr(scene).startswith("MeshScene(320 triangles, area 1.1")  # 4π·0.3² = 1.131 m², a bit less inscribed
+    assert "bbox 0.6 × 0.6 × 0.6 m around (0, 0, 1) m, one-sided" in repr(scene)
+    k = Intrinsics(320, 240, 300.0, 290.0, 150.0, 130.0)
+    frame = measure_view(body, k, View(0, 0, 3.0))[1]
+    valid = frame.depth_m[frame.depth_m > 0]
+    assert repr(frame) == (f"DepthFrame(320×240 px, {valid.size:,} returns, "
+                           f"depth {valid.min():.3f}–{valid.max():.3f} m, camera custom)")
+    assert len(repr(body)) < 200 and len(repr(body.mesh)) < 200

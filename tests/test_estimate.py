@@ -43,7 +43,7 @@ def room_views(body_model):
 @pytest.fixture(scope="module")
 def model_file(tmp_path_factory):
     from wbsa.analysis.fit_views import FitSettings, fit_all
-    from wbsa.analysis.synthetic import synthetic_population, synthetic_scan
+    from helpers.synthetic import synthetic_population, synthetic_scan
 
     pop = synthetic_population(200, seed=1)
     scan = synthetic_scan(pop, [(0.0, 0.0), (90.0, 0.0)], seed=1)

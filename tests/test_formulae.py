@@ -13,7 +13,7 @@ import pytest
 
 from wbsa.cli import main
 from wbsa.errors import WbsaError
-from wbsa.formulae import FORMULAE, Formula, bsa, bsa_all, bsa_table, parse_sex, validate_inputs
+from wbsa.formulae import FORMULAE, Formula, bsa, bsa_all, bsa_table, formula_key, parse_sex, validate_inputs
 
 # Published values at 170 cm / 70 kg (m², 4 decimals), copied from the project's reference facts.
 PUBLISHED_170_70 = {
@@ -185,8 +185,8 @@ def test_parse_sex():
 def test_schlich_needs_sex_and_unknown_key():
     with pytest.raises(WbsaError, match="--sex male or --sex female"):
         bsa("schlich", 170, 70)
-    with pytest.raises(WbsaError, match="unknown BSA formula 'du_bois'.*dubois"):
-        bsa("du_bois", 170, 70)
+    with pytest.raises(WbsaError, match="unknown BSA formula 'du_boys'.*dubois"):
+        bsa("du_boys", 170, 70)
     assert bsa("dubois", 170, 70, "female") == bsa("dubois", 170, 70)
 
 
@@ -292,3 +292,109 @@ def test_cli_usage_errors_exit_2(capsys, argv):
     assert info.value.code == 2
     err = capsys.readouterr().err
     assert err.startswith("error: ") and err.count("\n") == 1
+
+
+# --- names users already know (R admiral, R physiology) ----------------------------------------------
+
+# R admiral compute_bsa(method=...): the method names and admiral's own expected values at
+# 170 cm / 75 kg and 185 cm / 90 kg, rounded to 3 decimals (admiral tests/testthat/test-compute_bsa.R).
+ADMIRAL_170_75_185_90 = {
+    "Mosteller": ("mosteller", (1.882, 2.151)),
+    "DuBois-DuBois": ("dubois", (1.864, 2.141)),
+    "Haycock": ("haycock", (1.895, 2.161)),
+    "Gehan-George": ("gehan_george", (1.897, 2.160)),
+    "Boyd": ("boyd", (1.905, 2.158)),
+    "Fujimoto": ("fujimoto", (1.819, 2.086)),
+    "Takahira": ("takahira", (1.878, 2.158)),
+}
+
+
+@pytest.mark.parametrize("method", list(ADMIRAL_170_75_185_90))
+def test_admiral_methods_resolve_and_give_admirals_values(method):
+    key, expected = ADMIRAL_170_75_185_90[method]
+    assert formula_key(method) == key
+    values = bsa(method, [170.0, 185.0], [75.0, 90.0])
+    np.testing.assert_array_equal(values, bsa(key, [170.0, 185.0], [75.0, 90.0]))
+    np.testing.assert_array_equal(np.round(values, 3), expected)
+
+
+# R physiology: one function per formula, bsa_adult() is Mosteller.
+PHYSIOLOGY_FUNCTIONS = {
+    "bsa_adult": "mosteller",
+    "bsa_dubois_dubois": "dubois",
+    "bsa_mosteller": "mosteller",
+    "bsa_haycock": "haycock",
+    "bsa_gehan_george": "gehan_george",
+    "bsa_boyd": "boyd",
+    "bsa_fujimoto": "fujimoto",
+    "bsa_takahira": "takahira",
+    "bsa_shuter_aslani": "shuter_aslani",
+    "bsa_schlich": "schlich",
+}
+
+
+@pytest.mark.parametrize("function", list(PHYSIOLOGY_FUNCTIONS))
+def test_physiology_function_names_resolve(function):
+    key = PHYSIOLOGY_FUNCTIONS[function]
+    assert formula_key(function) == key
+    assert bsa(function, 170.0, 70.0, "female") == bsa(key, 170.0, 70.0, "female")
+
+
+@pytest.mark.parametrize(
+    ("name", "key"),
+    [
+        ("Mosteller", "mosteller"), ("MOSTELLER", "mosteller"), (" mosteller ", "mosteller"),
+        ("DuBois", "dubois"), ("dubois", "dubois"), ("Du Bois", "dubois"), ("du_bois", "dubois"),
+        ("Du Bois & Du Bois", "dubois"), ("dubois_dubois", "dubois"),
+        ("Gehan-George", "gehan_george"), ("gehan george", "gehan_george"), ("Gehan & George", "gehan_george"),
+        ("Shuter & Aslani", "shuter_aslani"), ("Yu, Lin & Yang", "yu"), ("Livingston-Lee", "livingston_lee"),
+        ("Schlich_Male", "schlich_male"),
+    ],
+)
+def test_names_are_case_and_separator_insensitive(name, key):
+    assert formula_key(name) == key
+
+
+def test_every_key_and_cited_name_resolves_to_itself():
+    for key, formula in FORMULAE.items():
+        assert formula_key(key) == key
+        assert formula_key(formula.name) == key
+        assert formula_key(formula.name.upper()) == key
+
+
+@pytest.mark.parametrize("name", ["du_boys", "", "bsa_", "bsa", "gehan", "adult", None, 3])
+def test_unknown_name_is_one_line_listing_the_keys(name):
+    with pytest.raises(WbsaError) as info:
+        formula_key(name)
+    message = str(info.value)
+    assert "\n" not in message
+    assert message.startswith(f"unknown BSA formula {name!r}; choose one of dubois, mosteller, haycock")
+    assert all(key in message for key in FORMULAE)
+
+
+def test_wbsa_error_is_a_value_error():
+    assert issubclass(WbsaError, ValueError)
+    with pytest.raises(ValueError, match="unknown BSA formula"):
+        bsa("Mosteler", 170, 70)
+
+
+def test_cli_formula_accepts_known_names(capsys):
+    argv = ["bsa", "--height-cm", "170", "--weight-kg", "70", "--json"]
+    assert main([*argv, "--formula", "Mosteller", "--formula", "DuBois-DuBois", "--formula", "dubois"]) == 0
+    payload = json.loads(capsys.readouterr().out)
+    assert payload["bsa_m2"] == pytest.approx({"mosteller": PUBLISHED_170_70["mosteller"],
+                                               "dubois": PUBLISHED_170_70["dubois"]}, abs=5e-5)
+    assert list(payload["bsa_m2"]) == ["mosteller", "dubois"]
+    assert main([*argv, "--formula", "bsa_schlich"]) == 0  # no sex: both Schlich variants, as in the full table
+    assert list(json.loads(capsys.readouterr().out)["bsa_m2"]) == ["schlich_male", "schlich_female"]
+    assert main(["bsa", "--height-cm", "170", "--weight-kg", "70", "--sex", "male", "--formula", "Gehan-George"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert len(out) == 3 and out[2].split() == ["Gehan", "&", "George", "1970", f"{PUBLISHED_170_70['gehan_george']:.4f}"]
+
+
+def test_cli_unknown_formula_exits_2(capsys):
+    assert main(["bsa", "--height-cm", "170", "--weight-kg", "70", "--formula", "Mosteler"]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    assert captured.err.startswith("error: unknown BSA formula 'Mosteler'; choose one of dubois")
+    assert captured.err.count("\n") == 1

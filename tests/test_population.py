@@ -290,3 +290,14 @@ def test_failed_run_keeps_an_existing_table_intact(tmp_path, capsys, body_model)
     _fails_cleanly(capsys, ["population", "--kind", "table", "--params", str(tmp_path / "bad.csv"),
                             "--out", str(out)], "p_weight")
     assert out.read_bytes() == before
+
+
+def test_body_model_and_bodies_print_their_sizes(body_model, anthropometer):
+    n_vertices = body_model.anny.template_vertices.shape[-2]
+    text = repr(body_model)
+    assert text.startswith(f"BodyModel(anny: {n_vertices:,} vertices, {len(body_model.faces):,} faces "
+                           f"({len(body_model.skin_faces):,} skin), 11 phenotypes, 4 local changes")
+    assert repr(anthropometer) == f"Anthropometer(density 980 kg/m³, {text})"
+    bodies = body_model.rest_bodies(pd.concat([reference_adult(0.0), reference_adult(1.0)]))
+    assert repr(bodies) == (f"RestBodies(2 bodies × {n_vertices:,} vertices, "
+                            f"{len(body_model.bone_labels)} bone heads, metres)")

@@ -1,6 +1,6 @@
 """The report's figures and HTML, built from small synthetic tables with the documented columns.
 
-The synthetic tables (``wbsa.analysis.synthetic``) follow the pinned population and scan schemas, so
+The synthetic tables (``tests/helpers/synthetic.py``) follow the pinned population and scan schemas, so
 these tests check that each figure draws exactly the numbers of the tables it is given; the end-to-end
 test with real bodies is in ``test_study.py``.
 """
@@ -15,7 +15,7 @@ import pytest
 
 from wbsa.analysis.fit_views import FitSettings
 from wbsa.analysis.outputs import run_fit
-from wbsa.analysis.synthetic import synthetic_population, synthetic_scan
+from helpers.synthetic import synthetic_population, synthetic_scan
 from wbsa.cli import main
 from wbsa.errors import WbsaError
 from wbsa.report import figures as F
@@ -65,6 +65,7 @@ def data(fit_dir):
                                             [fit_dir / "scan.parquet"]))
 
 
+@pytest.mark.slow  # about 4 s: draws and encodes every figure
 def test_report_command_embeds_every_figure_as_png_and_every_table(fit_dir, tmp_path, capsys):
     out = tmp_path / "r.html"
     code = main(["report", str(fit_dir / "fit"), "--population", str(fit_dir / "population.parquet"),

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from wbsa.camera import MeshScene, Pose, preset, render
-from wbsa.camera.shapes import box, icosphere
+from helpers.shapes import box, icosphere
 from wbsa.errors import WbsaError
 from wbsa.core.mesh import TriangleMesh
 from wbsa.core import frame_from_depth_image

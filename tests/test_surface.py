@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from wbsa.camera import MeshScene, Pose, preset, render, sphere_cap_area_m2
-from wbsa.camera.shapes import icosphere
+from helpers.shapes import icosphere
 from wbsa.errors import WbsaError
 from wbsa.core.mesh import TriangleMesh
 from wbsa.sensor import SensorModel, apply_sensor

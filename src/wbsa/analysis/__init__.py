@@ -15,7 +15,6 @@ Modules (small, one job each):
 - ``summary``: model kinds side by side (paper section 4.2)
 - ``outputs``: :func:`run_fit` reads the tables and writes every output file
 - ``command``: the ``wbsa fit`` subcommand
-- ``synthetic``: synthetic tables with a known law, for tests and benchmarks
 
 Names are imported lazily so that ``wbsa --help`` stays fast.
 """

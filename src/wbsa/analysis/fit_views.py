@@ -128,6 +128,11 @@ class FitOutput:
     model: WbsaModel
     info: dict
 
+    def __repr__(self) -> str:
+        rows = ", ".join(f"{name} {len(getattr(self, name)):,}"
+                         for name in ("fits", "skipped", "residuals", "qq", "subgroup_cv"))
+        return f"FitOutput(rows: {rows}; model={self.model!r})"
+
 
 def predictors_label(predictors: tuple[str, ...]) -> str:
     """Fit-table label of a predictor set: ``vbsa`` or ``vbsa+stature_m+...``."""

@@ -69,6 +69,21 @@ class WbsaModel:
                 raise WbsaError(f"model entry lacks {', '.join(missing)}; refit with wbsa fit")
             self._index[self._key(e)] = e
 
+    def __repr__(self) -> str:
+        """One line: entries, views and the values of each key (``print`` of the entries is megabytes)."""
+        def few(values, unit: str = "") -> str:
+            values = list(dict.fromkeys(values))
+            shown = ", ".join(f"{v:g}" if isinstance(v, float) else str(v) for v in values[:8])
+            return shown + unit + (f", … ({len(values)})" if len(values) > 8 else "")
+
+        e = self.entries
+        views = {(_az_key(x["azimuth_deg"]), _angle_key(x["elevation_deg"])) for x in e}
+        return (f"WbsaModel({len(e):,} entries, {len(views)} views; kinds {few(x['model'] for x in e)}; "
+                f"groups {few(x['group'] for x in e)}; "
+                f"predictors {few('+'.join(['vbsa', *x['predictors']]) for x in e)}; "
+                f"columns {few(x['vbsa_column'] for x in e)}; cameras {few(str(x['camera']) for x in e)}; "
+                f"distances {few((float(x['distance_m']) for x in e), ' m')})")
+
     @staticmethod
     def _key(e: dict) -> tuple:
         return (e["group"], e["model"], frozenset(e["predictors"]), e["vbsa_column"], str(e["camera"]),

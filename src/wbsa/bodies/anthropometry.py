@@ -201,6 +201,9 @@ class Anthropometer:
         #: (closed,) bool: which closed-shell triangles are skin (skin faces are the closed ones minus cavities)
         self._skin_in_closed = model.skin_face_mask[model.closed_face_mask]
 
+    def __repr__(self) -> str:
+        return f"Anthropometer(density {self.density_kg_m3:g} kg/m³, {self.model!r})"
+
     def measure(self, bodies: RestBodies) -> pd.DataFrame:
         """One row of :data:`MEASURE_COLUMNS` per body, SI units."""
         rows = [self.measure_one(v, j) for v, j in zip(bodies.vertices, bodies.bone_heads)]

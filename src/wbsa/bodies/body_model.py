@@ -164,6 +164,11 @@ class RestBodies:
     def __len__(self) -> int:
         return self.vertices.shape[0]
 
+    def __repr__(self) -> str:
+        b, n = self.vertices.shape[:2]
+        return (f"RestBodies({b:,} {'body' if b == 1 else 'bodies'} × {n:,} vertices, "
+                f"{self.bone_heads.shape[1]} bone heads, metres)")
+
 
 class BodyModel:
     """Build skin meshes and their helpers from phenotype parameters.
@@ -201,6 +206,12 @@ class BodyModel:
 
     #: see :func:`phenotype_array`
     phenotype_array = staticmethod(phenotype_array)
+
+    def __repr__(self) -> str:
+        return (f"BodyModel(anny: {len(self.vertex_bone):,} vertices, {len(self.faces):,} faces "
+                f"({len(self.skin_faces):,} skin), {len(self.phenotype_labels)} phenotypes, "
+                f"{len(self._local_order)} local changes, {len(self.bone_labels)} bones; "
+                f"batch_size {self.batch_size})")
 
     def coefficients(self, params):
         """anny blendshape coefficients ``(b, k)`` of body parameters (torch, differentiable).

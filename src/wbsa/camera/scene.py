@@ -79,6 +79,14 @@ class MeshScene:
         self._scene.add_triangles(o3d.core.Tensor(np.ascontiguousarray(vertices, dtype=np.float32)),
                                   o3d.core.Tensor(np.ascontiguousarray(faces, dtype=np.uint32)))
 
+    def __repr__(self) -> str:
+        size = self.bbox_max - self.bbox_min
+        c = self.center
+        return (f"MeshScene({self.n_triangles:,} triangles, area {self.triangle_areas_m2.sum():.4g} m², "
+                f"bbox {size[0]:.3g} × {size[1]:.3g} × {size[2]:.3g} m around "
+                f"({c[0]:.3g}, {c[1]:.3g}, {c[2]:.3g}) m, {'one-sided' if self.one_sided else 'two-sided'}, "
+                f"nthreads {self.nthreads})")
+
     @property
     def n_triangles(self) -> int:
         """Number of triangles."""

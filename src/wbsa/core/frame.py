@@ -36,6 +36,15 @@ class DepthFrame:
     pose: object
     settings: dict = field(default_factory=dict)
 
+    def __repr__(self) -> str:
+        h, w = np.shape(self.depth_m)[:2]
+        valid = self.depth_m > 0
+        depth = (f", depth {self.depth_m[valid].min():.3f}–{self.depth_m[valid].max():.3f} m" if valid.any()
+                 else "")
+        name = getattr(self.intrinsics, "name", None)
+        return (f"DepthFrame({w}×{h} px, {int(np.count_nonzero(valid)):,} returns{depth}"
+                + (f", camera {name}" if name else "") + ")")
+
     @property
     def valid(self) -> np.ndarray:
         """(h, w) bool mask of pixels with a return."""

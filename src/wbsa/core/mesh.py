@@ -34,10 +34,12 @@ class TriangleMesh:
             raise WbsaError(f"mesh faces must be an (m, 3) array of vertex indices, got shape {f}")
 
     def __repr__(self) -> str:
-        v = np.asarray(self.vertices)
-        size = v.max(axis=0) - v.min(axis=0) if len(v) else np.zeros(3)
-        return (f"TriangleMesh({len(v)} vertices, {len(self.faces)} triangles, "
-                f"{size[0]:.3g} x {size[1]:.3g} x {size[2]:.3g} m)")
+        v, f = np.asarray(self.vertices), np.asarray(self.faces)
+        if v.ndim != 2 or v.shape[1:] != (3,) or f.ndim != 2 or f.shape[1:] != (3,) or not len(v):
+            return f"TriangleMesh(vertices {v.shape}, faces {f.shape})"
+        size = v.max(axis=0) - v.min(axis=0)
+        return (f"TriangleMesh({len(v):,} vertices, {len(f):,} faces, area {self.area_m2:.4g} m², "
+                f"bbox {size[0]:.3g} × {size[1]:.3g} × {size[2]:.3g} m)")
 
     @classmethod
     def from_any(cls, mesh: Any) -> "TriangleMesh":

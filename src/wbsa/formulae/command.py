@@ -30,6 +30,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         default=None,
         help="selects the Schlich coefficients; without it both the male and the female values are shown",
     )
+    parser.add_argument(
+        "--formula",
+        action="append",
+        metavar="NAME",
+        help="only this formula (repeatable); a key such as dubois or a name users know, any case: Mosteller, "
+        "DuBois-DuBois, Gehan-George (R admiral), bsa_dubois_dubois (R physiology)",
+    )
     parser.add_argument("--json", action="store_true", help="print a JSON object instead of a table")
     parser.set_defaults(func=handle)
 
@@ -37,9 +44,17 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def handle(args: argparse.Namespace) -> int:
     """Compute and print every formula; a bad height or weight raises :class:`~wbsa.errors.WbsaError`."""
     from wbsa.formulae.catalogue import FORMULAE
-    from wbsa.formulae.compute import bsa_all
+    from wbsa.formulae.compute import bsa, bsa_all
+    from wbsa.formulae.names import formula_key
 
-    values = {key: float(v) for key, v in bsa_all(args.height_cm, args.weight_kg, args.sex).items()}
+    if args.formula:
+        keys = dict.fromkeys(formula_key(name) for name in args.formula)  # unknown names fail before any output
+        if args.sex is None and "schlich" in keys:  # as in the full table: Schlich at both sexes
+            both = ("schlich_male", "schlich_female")
+            keys = dict.fromkeys(k for key in keys for k in (both if key == "schlich" else (key,)))
+        values = {key: float(bsa(key, args.height_cm, args.weight_kg, args.sex)) for key in keys}
+    else:
+        values = {key: float(v) for key, v in bsa_all(args.height_cm, args.weight_kg, args.sex).items()}
     if args.json:
         payload = {"height_cm": args.height_cm, "weight_kg": args.weight_kg, "sex": args.sex, "bsa_m2": values}
         sys.stdout.write(json.dumps(payload, indent=2) + "\n")

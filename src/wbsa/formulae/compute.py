@@ -12,6 +12,7 @@ import numpy as np
 
 from wbsa.errors import WbsaError
 from wbsa.formulae.catalogue import FORMULAE, SCHLICH_BY_SEX
+from wbsa.formulae.names import formula_key
 from wbsa.formulae.validate import as_float_arrays, validate_inputs
 
 if TYPE_CHECKING:
@@ -62,7 +63,8 @@ def bsa(key: str, height_cm, weight_kg, sex=None, *, check: bool = True) -> np.n
     ----------
     key : str
         A key of :data:`~wbsa.formulae.FORMULAE`, or ``'schlich_male'`` / ``'schlich_female'``
-        (Schlich with a fixed sex, as returned by :func:`bsa_all` without sex).
+        (Schlich with a fixed sex, as returned by :func:`bsa_all` without sex), or any name
+        :func:`~wbsa.formulae.formula_key` accepts (``'Mosteller'``, ``'DuBois-DuBois'``, ...).
     height_cm : float or (...) array_like
         Stature in centimetres.
     weight_kg : float or (...) array_like
@@ -150,13 +152,9 @@ def bsa_table(height_cm, weight_kg, sex=None, *, check: bool = True) -> "pd.Data
     return pd.DataFrame({f"bsa_{k}_m2": np.reshape(v, n) for k, v in values.items()}, index=index)
 
 
-def _function(key: str):
-    if key in FORMULAE:
-        return FORMULAE[key].function
-    if key in SCHLICH_BY_SEX:
-        return SCHLICH_BY_SEX[key]
-    known = ", ".join([*FORMULAE, *SCHLICH_BY_SEX])
-    raise WbsaError(f"unknown BSA formula {key!r}; choose one of {known}")
+def _function(name: str):
+    key = formula_key(name)
+    return FORMULAE[key].function if key in FORMULAE else SCHLICH_BY_SEX[key]
 
 
 def _prepare(height_cm, weight_kg, sex, check: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:

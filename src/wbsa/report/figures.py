@@ -20,7 +20,8 @@ DM2 = 100.0
 
 #: Groups drawn in the group figures, in order, with their labels.
 GROUP_LABELS = {"all": "all subjects", "males": "males", "females": "females", "kids": "kids", "adults": "adults",
-                "small": "small stature", "normal": "normal stature", "big": "big stature", "obese": "obese (BMI ≥ 30)"}
+                "small": "small stature", "normal": "normal stature", "big": "big stature", "obese": "obese (BMI ≥ 30)",
+                "underweight": "underweight adults (BMI < 18.5)", "tall": "tall (≥ 1.85 m)"}
 
 
 class FigureUnavailable(WbsaError):

@@ -471,7 +471,8 @@ def headline_table(comparisons: pd.DataFrame) -> pd.DataFrame:
             "verdict_vs_hw": hw["verdict"], "best_formula": best["comparator_label"],
             "best_formula_mape_pct": best["comparator_mape_pct"], "diff_vs_formula": best["diff_pct_points"],
             "lo_vs_formula": best["diff_lo"], "hi_vs_formula": best["diff_hi"], "verdict_vs_formula": best["verdict"],
-            "formulae_w_t_l": "/".join(str(int(counts.get(v, 0))) for v in ("wins", "ties", "loses")),
+            "formulae_w_t_l": ("/".join(str(int(counts.get(v, 0))) for v in ("wins", "ties", "loses"))
+                               if counts.reindex(["wins", "ties", "loses"]).fillna(0).sum() else ""),
         })
     return pd.DataFrame(out, columns=cols)
 
@@ -495,9 +496,13 @@ def vbsa_plain(column: str) -> str:
     return column
 
 
+#: Verb of each verdict in the sentences.
+_VERB = {"wins": "beats", "ties": "ties with", "loses": "loses to"}
+
+
 def group_sentences(headline: pd.DataFrame) -> dict[str, str]:
-    """One plain sentence per group: does each view win, tie or lose against the H/W law refitted on the
-    same bodies and against the group's best published formula (numbers in the headline table)."""
+    """One plain sentence per group: does each view beat, tie with or lose to the H/W law refitted on the
+    same bodies and the group's best published formula (the numbers are in the headline table)."""
     out = {}
     for g, part in headline.groupby("group", sort=False):
         n = int(part["n"].max())
@@ -509,24 +514,25 @@ def group_sentences(headline: pd.DataFrame) -> dict[str, str]:
             views = []
             for i, (_, row) in enumerate(pv.iterrows()):
                 name = _role_plain(row)
-                if row["verdict_vs_hw"] == TOO_FEW:
+                v_hw, v_f = row["verdict_vs_hw"], row["verdict_vs_formula"]
+                if v_hw == TOO_FEW:
                     views.append(f"the {name} has too few subjects")
-                elif i == 0:
-                    views.append(f"the {name} {row['verdict_vs_hw']} against the H/W law refitted on these bodies "
-                                 f"and {row['verdict_vs_formula']} against the best published formula "
-                                 f"({row['best_formula']})")
+                elif v_hw == v_f:
+                    both = f"both the refitted H/W law and {row['best_formula']}" if i == 0 else "both"
+                    views.append(f"the {name} {_VERB[v_hw]} {both}")
                 else:
-                    views.append(f"the {name} {row['verdict_vs_hw']} and {row['verdict_vs_formula']}")
-            clauses.append(f"with the {vbsa_plain(vcol)}, " + ", ".join(views))
-        out[g] = (f"{GROUP_PLAIN.get(g, g)} (n = {n}): " + "; ".join(clauses) + ".")
+                    law, formula = (("the refitted H/W law", row["best_formula"]) if i == 0
+                                    else ("the law", "the formula"))
+                    views.append(f"the {name} {_VERB[v_hw]} {law} and {_VERB[v_f]} {formula}")
+            clauses.append(f"with the {vbsa_plain(vcol)} " + ", ".join(views))
+        out[g] = f"{GROUP_PLAIN.get(g, g)} (n = {n}): " + "; ".join(clauses) + "."
     return out
 
 
 def _role_plain(row: pd.Series) -> str:
     role = str(row["role"])
-    at = f"θ = {row['azimuth_deg']:g}°, φ = {row['elevation_deg']:g}°"
     if role == "best":
-        return f"best view ({at})"
+        return f"best view (θ = {row['azimuth_deg']:g}°, φ = {row['elevation_deg']:g}°)"
     if role.endswith("= best"):
-        return f"{role.removesuffix(' = best')} view ({at}, also the best)"
+        return f"{role.removesuffix(' = best')} view (the best)"
     return f"{role} view"

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pandas as pd
 
@@ -56,7 +58,8 @@ def _short_verdict(v: str) -> str:
 
 
 def _view(role: str, az: float, el: float) -> str:
-    return f"{role.replace(' = best', ', best').replace(' oblique', '')} ({az:g}°, {el:g}°)"
+    role = re.sub(r"^[-+\d.]+° oblique", "oblique", role.replace(" = best", ", best"))
+    return f"{role} ({az:g}°, {el:g}°)"
 
 
 def headline_display(result: ClaimResult) -> pd.DataFrame:

@@ -60,3 +60,29 @@ def test_bad_settings_are_user_errors():
         check_group_names(["all", "giants"])
     with pytest.raises(WbsaError, match="lacks column"):
         assign_groups(pd.DataFrame({"sex": ["male"]}))
+
+
+def test_underweight_is_adults_below_18_5_and_tall_is_from_1_85_m():
+    pop = pd.DataFrame({
+        "sex": ["male", "female", "male", "female"],
+        "age_years": [30.0, 10.0, 40.0, 25.0],
+        "stature_m": [1.85, 1.30, 1.8499, 1.90],
+        "bmi": [18.49, 14.0, 18.5, 22.0],
+    })
+    m = assign_groups(pop)
+    assert m["underweight"].tolist() == [True, False, False, False]  # the child's low BMI is not adult underweight
+    assert m["tall"].tolist() == [True, False, False, True]  # >= 1.85 m
+    m2 = assign_groups(pop, GroupSpec(underweight_max_bmi=20.0, tall_min_stature_m=1.95))
+    assert m2["underweight"].tolist() == [True, False, True, False]
+    assert not m2["tall"].any()
+
+
+def test_claim_thresholds_are_recorded_only_when_changed():
+    """Fit records (model.json, fit_info.json) written before the claim groups existed stay the same."""
+    assert set(GroupSpec().to_dict()) == {"kid_max_age_years", "small_max_stature_m", "big_min_stature_m",
+                                          "obese_min_bmi"}
+    d = GroupSpec(tall_min_stature_m=1.9).to_dict()
+    assert d["tall_min_stature_m"] == 1.9 and "underweight_max_bmi" not in d
+    assert GroupSpec(**d) == GroupSpec(tall_min_stature_m=1.9)  # round trip
+    with pytest.raises(WbsaError, match="underweight_max_bmi"):
+        GroupSpec(underweight_max_bmi=35.0)

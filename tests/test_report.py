@@ -6,6 +6,8 @@ test with real bodies is in ``test_study.py``.
 """
 
 import base64
+import contextlib
+import io
 import re
 import struct
 
@@ -65,13 +67,26 @@ def data(fit_dir):
                                             [fit_dir / "scan.parquet"]))
 
 
-@pytest.mark.slow  # about 4 s: draws and encodes every figure
-def test_report_command_embeds_every_figure_as_png_and_every_table(fit_dir, tmp_path, capsys):
-    out = tmp_path / "r.html"
-    code = main(["report", str(fit_dir / "fit"), "--population", str(fit_dir / "population.parquet"),
-                 "--scan", str(fit_dir / "scan.parquet"), "--out", str(out)])
+@pytest.fixture(scope="module")
+def cli_report(fit_dir, tmp_path_factory):
+    """``wbsa report`` run once on the synthetic fit: (exit code, stdout, the report's path)."""
+    out = tmp_path_factory.mktemp("report") / "r.html"
+    stdout = io.StringIO()
+    with contextlib.redirect_stdout(stdout), contextlib.redirect_stderr(io.StringIO()):
+        code = main(["report", str(fit_dir / "fit"), "--population", str(fit_dir / "population.parquet"),
+                     "--scan", str(fit_dir / "scan.parquet"), "--out", str(out)])
+    return code, stdout.getvalue(), out
+
+
+@pytest.fixture(scope="module")
+def report_html(cli_report):
+    return cli_report[2].read_text()
+
+
+def test_report_command_embeds_every_figure_as_png_and_every_table(cli_report):
+    code, stdout, out = cli_report
     assert code == 0
-    assert capsys.readouterr().out.strip() == str(out)  # stdout: just the report's path
+    assert stdout.strip() == str(out)  # stdout: just the report's path
     html = out.read_text()
     figs = embedded_figures(html)
     expected = {"fig-wbsa-distribution", "fig-vbsa-wbsa", "fig-group-errors", "fig-models", "fig-nonlinear",
@@ -84,7 +99,7 @@ def test_report_command_embeds_every_figure_as_png_and_every_table(fit_dir, tmp_
     # synthetic subjects have no body parameters, so there is no point cloud to draw: said, not faked
     assert re.findall(r'class="na" id="([^"]+)"', html) == ["fig-snapshots-na"]
     assert "body parameters" in html
-    for tab in ("tab-summary", "tab-population", "tab-correlation", "tab-groups", "tab-models", "tab-distance",
+    for tab in ("tab-claim", "tab-summary", "tab-population", "tab-correlation", "tab-groups", "tab-models", "tab-distance",
                 "tab-formulae", "tab-fits", "tab-stages", "tab-settings", "tab-versions"):
         assert f'id="{tab}"' in html, tab
     assert html.startswith("<!DOCTYPE html>") and html.rstrip().endswith("</html>")
@@ -215,3 +230,67 @@ def test_report_inputs_that_cannot_be_found_are_one_line_errors(fit_dir, tmp_pat
     with pytest.raises(WbsaError, match="must end in .html"):
         build_report(fit_dir_sources(fit_dir / "fit", fit_dir / "population.parquet", [fit_dir / "scan.parquet"]),
                      tmp_path / "r.pdf")
+
+
+def _table_rows(html: str, tab_id: str) -> list[tuple[str, ...]]:
+    i = html.index(f'id="{tab_id}"')
+    body = html[i:html.index("</table>", i)]
+    rows = re.findall(r"<tr[^>]*>(.*?)</tr>", body, re.S)
+    cells = [tuple(c.strip() for c in re.findall(r"<td[^>]*>(.*?)</td>", r, re.S)) for r in rows]
+    return [c for c in cells if c]
+
+
+def test_report_opens_with_the_claim_table_and_its_sentences(report_html, data):
+    html = report_html
+    first_h2 = re.search(r'<h2 id="([^"]+)"', html).group(1)
+    assert first_h2 == "claim"
+    claim_at = html.index('id="tab-claim"')
+    assert claim_at < html.index("<figure") and claim_at < html.index('id="tab-summary"')
+    sentences = re.search(r'<ul class="claims">(.*?)</ul>', html, re.S).group(1)
+    assert html.index('<ul class="claims">') < html.index("<figure")
+    assert "All subjects (n = " in sentences
+    assert re.search(r"(beats|ties with|loses to)", sentences)
+    rows = _table_rows(html, "tab-claim")
+    assert rows and rows[0][0] == "All subjects"
+    # both VBSA columns of the fit: the ideal area and the sensor reconstruction
+    assert {r[1] for r in rows} >= {"ideal", "sensor + grid"}
+    # every verdict is one of the three words (or a group too small to test)
+    verdicts = {r[7] for r in rows} | {r[11] for r in rows}
+    assert verdicts <= {"wins", "ties", "loses", "too few"}
+    assert 'id="tab-claim-all"' in html
+
+
+def test_model_table_has_no_duplicate_rows(report_html, fit_dir):
+    rows = _table_rows(report_html, "tab-models")
+    assert rows and len(rows) == len(set(rows))
+    assert len({r[:2] for r in rows}) == len(rows)  # one row per predictor set × model kind
+    ms = pd.read_csv(fit_dir / "fit" / "model_summary.csv")
+    keys = ["group", "predictors", "vbsa_column", "camera", "distance_m", "model", "fit_group"]
+    assert not ms.duplicated(keys).any()
+    assert not ms[ms["group"] == ms["fit_group"]].duplicated(keys[:-1]).any()
+
+
+def test_summary_uses_one_area_unit_and_printing_shows_every_row(report_html):
+    i = report_html.index('id="tab-summary"')
+    summary = report_html[i:report_html.index("</table>", i)]
+    assert "dm²" not in summary and "m²" in summary and "%" in summary
+    css = re.search(r"@media print \{(.*?)\n\}", report_html, re.S).group(1)
+    assert re.search(r"\.scroll \{[^}]*max-height: none[^}]*overflow: visible", css)
+
+
+def test_formulae_grid_is_one_readable_panel_with_the_table_numbers(data):
+    fig = F.formulae_comparison(data.formulae, model="linear", vbsa_column="vbsa_visible_m2", distance_m=4.3,
+                                camera=data.camera, dpi=100)
+    ax = fig.axes[0]
+    assert len(fig.axes) == 2  # the grid and its colour bar
+    assert min(t.get_fontsize() for t in ax.get_yticklabels()) >= 9
+    assert min(t.get_fontsize() for t in ax.texts) >= 9
+    assert fig.get_size_inches()[0] * 100 <= 1400  # shown at about its own size in a 1200 px page
+    # the cells are the table's MAPE values: Du Bois in the "all" column
+    f = data.formulae
+    want = f[(f["group"] == "all") & (f["method"] == "dubois")]["mape_pct"].iloc[0]
+    labels = [t.get_text() for t in ax.get_yticklabels()]
+    groups = [t.get_text().split("\n")[0] for t in ax.get_xticklabels()]
+    row, col = labels.index("Du Bois & Du Bois"), groups.index("all subjects")
+    cell = [t for t in ax.texts if t.get_position() == (col, row)]
+    assert cell and cell[0].get_text() == f"{want:.2f}"

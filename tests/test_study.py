@@ -39,7 +39,7 @@ workers = 1
 FIGURES = ("fig-wbsa-distribution", "fig-vbsa-wbsa", "fig-view-all", "fig-view-males", "fig-view-females",
            "fig-group-errors", "fig-models", "fig-nonlinear", "fig-residuals", "fig-snapshots", "fig-distance",
            "fig-formulae")
-TABLES = ("tab-summary", "tab-population", "tab-correlation", "tab-groups", "tab-models", "tab-distance",
+TABLES = ("tab-claim", "tab-summary", "tab-population", "tab-correlation", "tab-groups", "tab-models", "tab-distance",
           "tab-formulae", "tab-fits", "tab-stages", "tab-settings", "tab-versions")
 
 

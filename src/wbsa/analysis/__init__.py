@@ -2,7 +2,8 @@
 
 Modules (small, one job each):
 
-- ``groups``: :class:`GroupSpec`, :func:`assign_groups` (all, males/females, kids/adults, small/normal/big, obese)
+- ``groups``: :class:`GroupSpec`, :func:`assign_groups` (all, males/females, kids/adults, small/normal/big, obese,
+  underweight, tall)
 - ``design``: model kinds (linear, quadratic, loglog, wls) and their design matrices
 - ``cv``: seeded subject folds, out-of-fold predictions, CV RMSE / MSPE / MAPE
 - ``regression``: :func:`fit_view`, :class:`ViewFit` (one view, one group, one model)
@@ -12,6 +13,7 @@ Modules (small, one job each):
 - ``model_file``: :class:`WbsaModel` (save / load / predict with a prediction interval)
 - ``correlation``: Spearman matrix at one view (paper Table 2)
 - ``formulae_comparison``: classical BSA formulae versus the single-view models
+- ``claim``: the paper's central claim per group: one view vs every formula and a refitted H/W law (paired bootstrap)
 - ``summary``: model kinds side by side (paper section 4.2)
 - ``outputs``: :func:`run_fit` reads the tables and writes every output file
 - ``command``: the ``wbsa fit`` subcommand
@@ -35,6 +37,8 @@ _EXPORTS = {
     "WbsaModel": "wbsa.analysis.model_file",
     "spearman_matrix": "wbsa.analysis.correlation",
     "compare_formulae": "wbsa.analysis.formulae_comparison",
+    "evaluate_claim": "wbsa.analysis.claim",
+    "ClaimSettings": "wbsa.analysis.claim",
     "run_fit": "wbsa.analysis.outputs",
 }
 

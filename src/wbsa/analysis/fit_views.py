@@ -88,6 +88,7 @@ class FitSettings:
     def to_dict(self) -> dict:
         """Plain-JSON form of the settings."""
         d = asdict(self)
+        d["group_spec"] = self.group_spec.to_dict()
         d["predictor_sets"] = [list(s) for s in self.predictor_sets]
         return d
 

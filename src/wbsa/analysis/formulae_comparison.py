@@ -53,7 +53,8 @@ def formula_values(population: pd.DataFrame, bsa_table: Callable | None = None) 
     return out
 
 
-def _labels() -> dict[str, str]:
+def formula_labels() -> dict[str, str]:
+    """Display name of every formula key (``dubois`` -> "Du Bois & Du Bois")."""
     try:
         from wbsa.formulae import FORMULAE
     except ImportError:  # pragma: no cover - formulae is part of the package
@@ -77,7 +78,7 @@ def formula_errors(population: pd.DataFrame, spec: GroupSpec = GroupSpec(),
     values = formula_values(population, bsa_table)
     wbsa = population["wbsa_m2"].to_numpy(float)
     members = assign_groups(population.reset_index(drop=True), spec)
-    labels = _labels()
+    labels = formula_labels()
     rows = []
     for g in groups:
         for key in values.columns:

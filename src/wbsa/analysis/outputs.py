@@ -76,11 +76,14 @@ def write_outputs(out: FitOutput, population: pd.DataFrame, scan: pd.DataFrame, 
     write_table(out.residuals, p["residuals"])
     write_table(out.qq, p["qq"])
     write_table(out.subgroup_cv, p["subgroup_cv"])
+    # the all-subjects model evaluated within the other groups; within "all" it is the group fit itself, whose
+    # rows (with the Breusch-Pagan counts) come first, so "all" is not repeated
+    sub = out.subgroup_cv[out.subgroup_cv["group"].astype(str) != "all"] if len(out.subgroup_cv) else out.subgroup_cv
     write_table(pd.concat([model_comparison(fits).assign(fit_group=lambda d: d["group"]),
-                           model_comparison(out.subgroup_cv).assign(fit_group="all")], ignore_index=True),
+                           model_comparison(sub).assign(fit_group="all")], ignore_index=True),
                 p["model_comparison"])
     write_table(pd.concat([model_summary(fits).assign(fit_group=lambda d: d["group"]),
-                           model_summary(out.subgroup_cv).assign(fit_group="all")], ignore_index=True),
+                           model_summary(sub).assign(fit_group="all")], ignore_index=True),
                 p["model_summary"])
     out.model.save(p["model"])
     write_table(correlation, p["correlation_csv"])

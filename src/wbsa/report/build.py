@@ -16,6 +16,7 @@ from wbsa.errors import WbsaError
 from wbsa.io import atomic_path
 from wbsa.progress import progress
 from wbsa.report import figures as F
+from wbsa.report.claim import comparisons_display, compute_claim, group_spec_of, headline_display, method_text
 from wbsa.report.data import ReportData, load_report_data, select
 from wbsa.report.html import Page, png_bytes
 from wbsa.report.sources import ReportSources, resolve_sources
@@ -121,12 +122,13 @@ class _Builder:
         self.s = settings
         self.dpi = int(settings.dpi)
         self.unavailable: dict[str, str] = {}
+        self.claim_result = None
         manifest = data.sources.manifest
         title = manifest.get("study", {}).get("name") or f"wbsa report: {data.sources.fit_dir}"
         self.page = Page(title=title, subtitle=(
             f"Generated {time.strftime('%Y-%m-%d %H:%M')} by wbsa {__version__} from "
-            f"{data.sources.study_dir or data.sources.fit_dir}. Areas in figures are in dm² (1 m² = 100 dm², the "
-            "paper's unit); tables are in SI units (m²)."))
+            f"{data.sources.study_dir or data.sources.fit_dir}. Tables give areas in m² and errors in %; figures "
+            "draw areas in dm² (1 m² = 100 dm², the paper's unit)."))
 
     # -- helpers -------------------------------------------------------------------------------------------------
 
@@ -145,13 +147,36 @@ class _Builder:
         return dict(distance_m=d.distance_m, camera=d.camera, dpi=self.dpi)
 
     def steps(self) -> list[Callable[[], None]]:
-        steps = [self.summary, self.population, self.scatter]
+        steps = [self.claim, self.summary, self.population, self.scatter]
         steps += [lambda g=g: self.view_figure(g) for g in self.d.groups]
         steps += [self.groups, self.nonlinear, self.residuals, self.snapshots, self.reconstruction, self.distance,
-                  self.formulae, self.fit_table, self.run_info]
+                  self.formulae, self.claim_details, self.fit_table, self.run_info]
         return steps
 
     # -- sections ------------------------------------------------------------------------------------------------
+
+    def claim(self) -> None:
+        """The opening section: one view against height and weight, per group (issue 10)."""
+        from wbsa.analysis.claim import ClaimUnavailable
+
+        p = self.page
+        p.section("claim", "The central claim: one view against height and weight")
+        try:
+            self.claim_result = compute_claim(self.d)
+        except ClaimUnavailable as exc:
+            self.claim_result = None
+            self.unavailable["tab-claim"] = str(exc)
+            p.unavailable("tab-claim", "claim table", str(exc))
+            return
+        r = self.claim_result
+        k = int(self.d.fit_info.get("settings", {}).get("k", 10))
+        p.bullets(list(r.sentences.values()))
+        p.table("tab-claim", headline_display(r), "The single view against the height/weight (H/W) law refitted on "
+                "the same bodies and against the best published formula of each group: MAPE in %, differences "
+                "view − other in percentage points (negative: the view is better) with their paired-bootstrap "
+                "interval; W/T/L counts the published formulae the view beats, ties with and loses to (each "
+                "comparison is listed in 'The central claim: every comparison').", nowrap=True)
+        p.paragraph(method_text(r, k))
 
     def summary(self) -> None:
         d, p = self.d, self.page
@@ -175,12 +200,12 @@ class _Builder:
             if part.empty:
                 continue
             best, worst = part.loc[part["cv_rmse_m2"].idxmin()], part.loc[part["cv_rmse_m2"].idxmax()]
-            rows.append((f"all subjects, {F.predictors_title(lab)}: CV RMSE (m²), best view",
-                         f"{best['cv_rmse_m2']:.4f} at θ = {best['azimuth_deg']:g}°, φ = {best['elevation_deg']:g}°"))
-            rows.append((f"all subjects, {F.predictors_title(lab)}: CV RMSE (m²), worst view",
-                         f"{worst['cv_rmse_m2']:.4f} at θ = {worst['azimuth_deg']:g}°, φ = {worst['elevation_deg']:g}°"))
+            for which, row in (("best", best), ("worst", worst)):
+                rows.append((f"all subjects, {F.predictors_title(lab)}: CV RMSE (m²) and CV MAPE (%), {which} view",
+                             f"{row['cv_rmse_m2']:.4f} m² ({row['cv_mape_pct']:.2f} %) at θ = {row['azimuth_deg']:g}°, "
+                             f"φ = {row['elevation_deg']:g}°"))
         rows.append(("paper (Virtual Random, 19,995 subjects)",
-                     "CV RMSE 0.0071–0.055 m² (0.71–5.5 dm²) over the views; mean WBSA 1.67 m²"))
+                     "CV RMSE 0.0071–0.055 m² over the views; mean WBSA 1.67 m²"))
         p.table("tab-summary", pd.DataFrame(rows, columns=["quantity", "value"]),
                 "Key numbers of this study (all-subjects fits at the reference distance).")
 
@@ -256,7 +281,11 @@ class _Builder:
             if "fit_group" in ms:
                 ms = ms[ms["fit_group"] == ms["group"]]
             ms = ms[(ms["group"] == "all") & (ms["vbsa_column"] == d.vbsa_column)]
-            ms = select(ms, distance_m=d.distance_m) if "distance_m" in ms else ms
+            ms = select(ms, distance_m=d.distance_m, camera=d.camera if "camera" in ms else None)
+            # fit folders written before the fix hold the all-subjects rows twice (once from the group fits, once
+            # from the subgroup evaluation of the same model): keep the first, which has the Breusch–Pagan counts
+            ms = ms.drop_duplicates(subset=[c for c in ("group", "predictors", "vbsa_column", "camera", "distance_m",
+                                                        "model") if c in ms.columns])
             cols = [c for c in ("predictors", "model", "n_views", "mean_cv_rmse_m2", "max_cv_rmse_m2",
                                 "mean_cv_mape_pct", "rmse_ratio", "views_better", "heteroscedastic_views")
                     if c in ms.columns]
@@ -323,13 +352,25 @@ class _Builder:
         p.section("formulae", "Classical formulae")
         self._figure("fig-formulae", "formulae comparison",
                      lambda: F.formulae_comparison(d.formulae, model=d.model, vbsa_column=d.vbsa_column, **self.common),
-                     "MAPE of the classical BSA formulae (height and weight) against the mesh WBSA, beside the "
-                     "single-view models' cross-validated MAPE at their best and worst view.")
+                     "MAPE (%) of the classical BSA formulae (height and weight) against the mesh WBSA, and below "
+                     "them the all-subjects single-view model's cross-validated MAPE at its best and worst view in "
+                     "each group; one column per group.")
         if not d.formulae.empty:
             cols = [c for c in ("group", "kind", "label", "azimuth_deg", "elevation_deg", "n", "mape_pct", "bias_pct",
                                 "bias_m2", "rmse_m2") if c in d.formulae.columns]
             p.table("tab-formulae", d.formulae[cols], "Formulae and single-view models against the mesh WBSA, per "
                     "group (MAPE in %, bias and RMSE in m²).", scroll=True)
+
+    def claim_details(self) -> None:
+        r = getattr(self, "claim_result", None)
+        if r is None:
+            return
+        p = self.page
+        p.section("claim-details", "The central claim: every comparison")
+        p.table("tab-claim-all", comparisons_display(r), "Every paired comparison of the headline table: the single "
+                "view against the refitted height/weight law and against each published formula, per group, view "
+                "area and view (MAPE in %, difference in percentage points with its paired-bootstrap interval).",
+                scroll=True, nowrap=True)
 
     def fit_table(self) -> None:
         d, p = self.d, self.page
@@ -361,10 +402,9 @@ class _Builder:
 
 def population_table(population: pd.DataFrame, fit_info: dict) -> pd.DataFrame:
     """Counts, WBSA (m²) and stature (m) of every group (paper Table 1)."""
-    from wbsa.analysis.groups import GROUP_NAMES, GroupSpec, assign_groups
+    from wbsa.analysis.groups import GROUP_NAMES, assign_groups
 
-    spec_d = fit_info.get("settings", {}).get("group_spec") or {}
-    spec = GroupSpec(**spec_d) if spec_d else GroupSpec()
+    spec = group_spec_of(fit_info)
     members = assign_groups(population.reset_index(drop=True), spec)
     desc = spec.describe()
     rows = []

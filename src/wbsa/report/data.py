@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from wbsa.analysis.data import nearest_view, reference_distance  # noqa: F401 (nearest_view re-exported)
+from wbsa.analysis.data import nearest_view, reference_distance, resolve_vbsa_column  # noqa: F401 (re-export)
 from wbsa.camera.views import PAPER_DISTANCE_M
 from wbsa.errors import WbsaError
 from wbsa.io import read_table
@@ -125,7 +125,9 @@ def load_report_data(sources: ReportSources) -> ReportData:
                         "fit more subjects or fewer folds (--k)")
     settings = info.get("settings", {})
     models = [m for m in settings.get("models", []) if m in set(fits["model"])] or list(dict.fromkeys(fits["model"]))
-    vcols = [c for c in dict.fromkeys(fits["vbsa_column"])]
+    fitted = list(dict.fromkeys(fits["vbsa_column"]))  # the fit table sorts them by name: use the asked order
+    asked = [resolve_vbsa_column(c) for c in settings.get("vbsa_columns", [])]
+    vcols = [c for c in asked if c in fitted] or fitted
     cameras = sorted(fits["camera"].unique())
     distances = tuple(sorted(float(d) for d in fits["distance_m"].unique()))
     ref = reference_distance(distances)

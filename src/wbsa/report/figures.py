@@ -20,7 +20,8 @@ DM2 = 100.0
 
 #: Groups drawn in the group figures, in order, with their labels.
 GROUP_LABELS = {"all": "all subjects", "males": "males", "females": "females", "kids": "kids", "adults": "adults",
-                "small": "small stature", "normal": "normal stature", "big": "big stature", "obese": "obese (BMI ≥ 30)"}
+                "small": "small stature", "normal": "normal stature", "big": "big stature", "obese": "obese (BMI ≥ 30)",
+                "underweight": "underweight adults (BMI < 18.5)", "tall": "tall (≥ 1.85 m)"}
 
 
 class FigureUnavailable(WbsaError):
@@ -389,62 +390,78 @@ def residual_diagnostics(residuals: pd.DataFrame, qq: pd.DataFrame, *, view: tup
 # Formulae comparison
 
 
-def formulae_comparison(formulae: pd.DataFrame, groups: tuple[str, ...] = ("all", "kids", "adults", "obese", "big"),
-                        *, model: str | None = None, vbsa_column: str | None = None, distance_m: float | None = None,
-                        camera: str | None = None, dpi: int = 100) -> Figure:
-    """MAPE of every BSA formula against the mesh WBSA beside the single-view models' CV MAPE
-    (best and worst view), per group.
+def formulae_comparison(formulae: pd.DataFrame, groups: tuple[str, ...] | None = None, *, model: str | None = None,
+                        vbsa_column: str | None = None, distance_m: float | None = None, camera: str | None = None,
+                        dpi: int = 100) -> Figure:
+    """MAPE of every BSA formula against the mesh WBSA beside the single-view all-subjects model's CV MAPE
+    (best and worst view in the group), as one grid: a row per method, a column per group, the MAPE
+    written in every cell.
 
     Parameters
     ----------
     formulae : DataFrame
         :func:`wbsa.analysis.formulae_comparison.compare_formulae` table.
-    groups : tuple of str
-        Groups drawn (those present), one panel each.
+    groups : tuple of str, optional
+        Columns, those present (default: the claim groups, :data:`wbsa.analysis.groups.CLAIM_GROUPS`).
     model, vbsa_column, distance_m, camera : optional
         Keep only the single-view rows of this model, VBSA column, distance and camera.
     """
+    from wbsa.analysis.formulae_comparison import KIND_ALL_MODEL, KIND_FORMULA
+    from wbsa.analysis.groups import CLAIM_GROUPS
+
     if formulae.empty:
         raise FigureUnavailable("no formulae comparison table")
-    sv = formulae["kind"] != "formula"
-    keep = ~sv
-    ok = sv.copy()
+    groups = CLAIM_GROUPS if groups is None else groups
+    sv = formulae["kind"] == KIND_ALL_MODEL
     for col, value in (("model", model), ("vbsa_column", vbsa_column), ("camera", camera)):
         if value is not None:
-            ok &= formulae[col] == value
+            sv &= formulae[col] == value
     if distance_m is not None:
-        ok &= np.abs(formulae["distance_m"].astype(float) - float(distance_m)) < 1e-6
-    formulae = formulae[keep | ok]
-    present = [g for g in groups if (formulae["group"] == g).any()]
+        sv &= np.abs(formulae["distance_m"].astype(float) - float(distance_m)) < 1e-6
+    table = formulae[(formulae["kind"] == KIND_FORMULA) | sv]
+    present = [g for g in groups if (table["group"] == g).any()]
     if not present:
         raise FigureUnavailable("the formulae comparison has none of the groups " + ", ".join(groups))
-    n_rows = max(len(formulae[formulae["group"] == g]) for g in present)
-    fig = _fig(4.2 * len(present), 0.26 * n_rows + 1.6, dpi)
-    axes = np.atleast_1d(fig.subplots(1, len(present), squeeze=False)[0])
-    colors = {"formula": "#8172B2", "single view, all-subjects model": "#4C72B0", "single view, group model": "#55A868"}
-    for ax, g in zip(axes, present):
-        part = formulae[formulae["group"] == g].reset_index(drop=True)
-        y = np.arange(len(part))[::-1]
-        ax.barh(y, part["mape_pct"], color=[colors.get(k, "grey") for k in part["kind"]])
-        ax.set_yticks(y)
-        ax.set_yticklabels([_short_label(r) for _, r in part.iterrows()], fontsize=7)
-        ax.set_xlabel("MAPE (%)")
-        n = int(part["n"].max()) if len(part) else 0
-        ax.set_title(f"{GROUP_LABELS.get(g, g)} (n = {n})", fontsize=10)
-        ax.grid(True, axis="x", alpha=0.3)
-    from matplotlib.patches import Patch
-
-    handles = [Patch(color=c, label=k) for k, c in colors.items() if (formulae["kind"] == k).any()]
-    fig.legend(handles=handles, loc="outside lower center", ncol=len(handles), fontsize=8)
+    table = table.assign(_row=[_short_label(r) for _, r in table.iterrows()])
+    rows = list(dict.fromkeys(table["_row"]))
+    grid = table.pivot_table(index="_row", columns="group", values="mape_pct", aggfunc="first").reindex(
+        index=rows, columns=present)
+    n = table.groupby("group")["n"].max()
+    values = grid.to_numpy(float)
+    fig = _fig(1.0 * len(present) + 4.2, 0.34 * len(rows) + 1.4, dpi)
+    ax = fig.subplots()
+    finite = values[np.isfinite(values)]
+    vmax = float(np.quantile(finite, 0.95)) if finite.size else 1.0
+    im = ax.imshow(values, cmap="YlOrRd", vmin=0.0, vmax=max(vmax, 1e-6), aspect="auto")
+    for i in range(values.shape[0]):
+        for j in range(values.shape[1]):
+            v = values[i, j]
+            if np.isfinite(v):
+                ax.text(j, i, f"{v:.2f}", ha="center", va="center", fontsize=9,
+                        color="white" if v > 0.7 * vmax else "black")
+    ax.set_xticks(range(len(present)))
+    ax.set_xticklabels([f"{GROUP_LABELS.get(g, g)}\n(n = {int(n.get(g, 0))})" for g in present], fontsize=9,
+                       rotation=30, ha="right", rotation_mode="anchor")
+    ax.set_yticks(range(len(rows)))
+    ax.set_yticklabels(rows, fontsize=9)
+    for i, r in enumerate(rows):
+        if not r.startswith("one view"):
+            continue
+        ax.get_yticklabels()[i].set_fontweight("bold")
+    n_formulae = int((table.drop_duplicates("_row")["kind"] == KIND_FORMULA).sum())
+    if 0 < n_formulae < len(rows):
+        ax.axhline(n_formulae - 0.5, color="k", lw=1.5)
+    ax.tick_params(top=False, bottom=True, length=0)
+    fig.colorbar(im, ax=ax, shrink=0.6, label="MAPE against the mesh WBSA (%)")
+    ax.set_title("Height/weight formulae (top) and one camera view (bottom, cross-validated), MAPE in %",
+                 fontsize=10)
     return fig
 
 
 def _short_label(row: pd.Series) -> str:
     if row["kind"] == "formula":
         return str(row["label"])
-    who = "all-subj. model" if "all-subjects" in str(row["kind"]) else "group model"
-    return (f"{who}, {predictors_title(str(row['predictors']))}, {row['view']} "
-            f"({row['azimuth_deg']:g}°, {row['elevation_deg']:g}°)")
+    return f"one view, {predictors_title(str(row['predictors']))}, {row['view']} view in group"
 
 
 # ---------------------------------------------------------------------------------------------------------------

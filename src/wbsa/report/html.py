@@ -22,6 +22,14 @@ table.data th { background: #f3f3f3; } table.data td:first-child, table.data th:
 .scroll { max-height: 32em; overflow: auto; display: inline-block; max-width: 100%; }
 p.na { color: #a33; font-style: italic; } .meta { color: #666; font-size: 0.9em; }
 nav ul { columns: 2; font-size: 0.9em; } code { background: #f5f5f5; padding: 0 3px; }
+ul.claims li { margin: 0.3em 0; } table.nowrap td { white-space: nowrap; }
+@media print {
+  body { max-width: none; margin: 0; font-size: 10pt; }
+  .scroll { max-height: none; overflow: visible; display: block; }
+  table.data { font-size: 8pt; } table.data thead { display: table-header-group; }
+  table.data tr, figure { page-break-inside: avoid; break-inside: avoid; }
+  nav { display: none; }
+}
 """
 
 
@@ -70,6 +78,11 @@ class Page:
         """A paragraph (escaped unless ``raw``)."""
         self.parts.append(f"<p>{text if raw else html.escape(text)}</p>")
 
+    def bullets(self, items: list[str]) -> None:
+        """A bulleted list of plain (escaped) sentences."""
+        lis = "".join(f"<li>{html.escape(t)}</li>" for t in items)
+        self.parts.append(f'<ul class="claims">{lis}</ul>')
+
     def figure(self, fig_id: str, png: bytes, caption: str) -> None:
         """An embedded PNG figure with a numbered caption."""
         self._n_fig += 1
@@ -85,11 +98,16 @@ class Page:
         self.parts.append(f'<p class="na" id="{html.escape(fig_id)}-na">{html.escape(what)}: not drawn, '
                           f"{html.escape(reason)}.</p>")
 
-    def table(self, tab_id: str, df: pd.DataFrame, caption: str, digits: int = 4, scroll: bool = False) -> None:
-        """A table with a numbered caption; floats to ``digits`` significant digits."""
+    def table(self, tab_id: str, df: pd.DataFrame, caption: str, digits: int = 4, scroll: bool = False,
+              nowrap: bool = False) -> None:
+        """A table with a numbered caption; floats to ``digits`` significant digits.
+
+        ``scroll`` puts it in a scroll box on screen (printed in full); ``nowrap`` keeps each cell on one line.
+        """
         self._n_tab += 1
         self.tables.append(tab_id)
-        body = format_table(df, digits).to_html(index=False, table_id=tab_id, classes="data", border=0, escape=True,
+        classes = "data nowrap" if nowrap else "data"
+        body = format_table(df, digits).to_html(index=False, table_id=tab_id, classes=classes, border=0, escape=True,
                                                na_rep="")
         cap = f"<p><b>Table {self._n_tab}.</b> {html.escape(caption)}</p>"
         self.parts.append(cap + (f'<div class="scroll">{body}</div>' if scroll else body))

@@ -71,9 +71,9 @@ def settings_from_args(args: argparse.Namespace):
     views = parse_views(spec, azimuths=args.azimuths, elevations=args.elevations, distance_m=args.distance)
     sensor = None
     if hasattr(args, "noise"):
-        from wbsa.sensor.cli import sensor_model_from_args
+        from wbsa.sensor.cli import sensor_settings_from_args
 
-        sensor = sensor_model_from_args(args, camera)
+        sensor = sensor_settings_from_args(args, camera)
         if sensor.is_ideal:
             sensor = None
     methods, reconstruction = (), None

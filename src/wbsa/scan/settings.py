@@ -22,7 +22,7 @@ if TYPE_CHECKING:  # pragma: no cover - imported for type hints only
     import pandas as pd
 
     from wbsa.camera import Intrinsics, View
-    from wbsa.sensor import SensorModel
+    from wbsa.sensor import SensorSettings
     from wbsa.surface import ReconstructionSettings
 
 #: Default number of subjects per chunk (one Parquet part, one dask task).
@@ -39,7 +39,7 @@ class ScanSettings:
         Pinhole intrinsics of the virtual depth camera (its ``name`` goes into the ``camera`` column).
     views : tuple of wbsa.camera.View
         Camera placements, each scanned for every subject.
-    sensor : wbsa.sensor.SensorModel or None
+    sensor : wbsa.sensor.SensorSettings or None
         Depth-sensor simulation applied to every rendered frame before reconstruction;
         ``None`` keeps the ideal ray-cast frame.
     reconstruct : tuple of str
@@ -57,7 +57,7 @@ class ScanSettings:
 
     camera: Intrinsics
     views: tuple[View, ...]
-    sensor: SensorModel | None = None
+    sensor: SensorSettings | None = None
     reconstruct: tuple[str, ...] = ()
     reconstruction: ReconstructionSettings | None = None
     seed: int = 0

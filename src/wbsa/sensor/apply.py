@@ -10,7 +10,7 @@ from scipy import ndimage
 from wbsa.core.frame import DepthFrame
 from wbsa.errors import WbsaError
 from wbsa.sensor import nguyen2012
-from wbsa.sensor.model import SensorModel
+from wbsa.sensor.settings import SensorSettings
 from wbsa.core.backproject import ray_directions
 
 #: Background pixels within this many pixels of a return may pick it up through lateral noise.
@@ -19,7 +19,7 @@ _LATERAL_REACH_PX = 2
 _SAME_SURFACE_RATIO = 0.05
 
 
-def apply_sensor(frame: DepthFrame, model: SensorModel, rng: np.random.Generator) -> DepthFrame:
+def apply_sensor(frame: DepthFrame, model: SensorSettings, rng: np.random.Generator) -> DepthFrame:
     """Simulate a depth sensor on an ideal frame.
 
     The effects of ``model`` are applied in this order, each drawing from its own child stream of
@@ -44,7 +44,7 @@ def apply_sensor(frame: DepthFrame, model: SensorModel, rng: np.random.Generator
     frame : DepthFrame
         An ideal frame (from :func:`wbsa.camera.render`, or :func:`wbsa.core.frame_from_depth_image`
         for effects that need no triangle IDs).
-    model : SensorModel
+    model : SensorSettings
     rng : numpy.random.Generator
         Source of randomness; same generator state and settings give the same frame.
 

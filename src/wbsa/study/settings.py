@@ -130,7 +130,7 @@ class ScanConfig:
 
 @dataclass(frozen=True)
 class SensorConfig:
-    """``[sensor]``: the simulated depth sensor (:class:`wbsa.sensor.SensorModel`); all off by default.
+    """``[sensor]``: the simulated depth sensor (:class:`wbsa.sensor.SensorSettings`); all off by default.
 
     Attributes
     ----------
@@ -532,11 +532,11 @@ def camera_spec(settings: StudySettings) -> str:
 
 
 def sensor_model(settings: StudySettings):
-    """The :class:`wbsa.sensor.SensorModel` of ``[sensor]``, or None when it changes nothing."""
+    """The :class:`wbsa.sensor.SensorSettings` of ``[sensor]``, or None when it changes nothing."""
     s = settings.sensor
-    from wbsa.sensor.model import SensorModel
+    from wbsa.sensor.settings import SensorSettings
 
-    model = SensorModel(noise=s.noise, lateral_noise=s.lateral_noise, quantise=s.quantise,
+    model = SensorSettings(noise=s.noise, lateral_noise=s.lateral_noise, quantise=s.quantise,
                         holes_fraction=s.holes_fraction, pixel_dropout=s.pixel_dropout,
                         grazing_dropout_deg=None if s.grazing_dropout_deg < 0 else s.grazing_dropout_deg,
                         range_limits=s.range_limits)

@@ -84,13 +84,31 @@ def from_table(cls: type[T], table: dict, section: str, source: str = "<dict>") 
         raise WbsaError(f"{source}: [{section}] {exc}") from None
 
 
-def to_table(settings: Any) -> dict[str, Any]:
-    """A settings dataclass as a TOML-ready table: tuples as lists, sub-dataclasses as sub-tables, None left out."""
+def to_table(settings: Any, keep_none: bool = False) -> dict[str, Any]:
+    """A settings dataclass as a TOML-ready table: tuples as lists, sub-dataclasses as sub-tables.
+
+    None values are left out (TOML has no null), or kept with ``keep_none`` (:func:`dump_toml` then
+    writes them as comments, so a written file still shows every key).
+    """
     out: dict[str, Any] = {}
     for f in dataclasses.fields(settings):
-        value = _plain(getattr(settings, f.name))
-        if value is not None:
+        value = _plain(getattr(settings, f.name), keep_none)
+        if value is not None or keep_none:
             out[f.name] = value
+    return out
+
+
+def field_defaults(cls: type) -> dict[str, Any]:
+    """The default of every field of settings class ``cls`` that has one (for help texts of CLI flags).
+
+    Works for classes whose defaults alone are not a valid instance (a population has no default size).
+    """
+    out = {}
+    for f in dataclasses.fields(cls):
+        if f.default is not dataclasses.MISSING:
+            out[f.name] = f.default
+        elif f.default_factory is not dataclasses.MISSING:
+            out[f.name] = f.default_factory()
     return out
 
 
@@ -98,7 +116,7 @@ def dump_toml(tables: dict[str, dict[str, Any]], header: str = "") -> str:
     """Write ``{table: {key: value}}`` as TOML text that :mod:`tomllib` reads back.
 
     Values are scalars, lists of scalars (or of lists), or dicts, which become sub-tables
-    (``[table.key]``) after the table's own keys.
+    (``[table.key]``) after the table's own keys. A None value becomes the comment ``# key: not set``.
     """
     lines = [f"# {header}", ""] if header else []
     for name, table in tables.items():
@@ -108,7 +126,8 @@ def dump_toml(tables: dict[str, dict[str, Any]], header: str = "") -> str:
 
 def _dump_table(name: str, table: dict[str, Any]) -> list[str]:
     lines = [f"[{name}]"]
-    lines += [f"{k} = {_toml_value(v)}" for k, v in table.items() if not isinstance(v, dict)]
+    lines += [f"# {k}: not set" if v is None else f"{k} = {_toml_value(v)}"
+              for k, v in table.items() if not isinstance(v, dict)]
     lines.append("")
     for k, v in table.items():
         if isinstance(v, dict):
@@ -116,11 +135,11 @@ def _dump_table(name: str, table: dict[str, Any]) -> list[str]:
     return lines
 
 
-def _plain(obj: Any) -> Any:
+def _plain(obj: Any, keep_none: bool = False) -> Any:
     if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
-        return to_table(obj)
+        return to_table(obj, keep_none)
     if isinstance(obj, (tuple, list)):
-        return [_plain(v) for v in obj]
+        return [_plain(v, keep_none) for v in obj]
     return obj
 
 

@@ -9,7 +9,8 @@ import numpy as np
 import pandas as pd
 
 from wbsa.analysis.correlation import correlation_table, spearman_matrix
-from wbsa.analysis.data import POPULATION_COLUMNS, SCAN_COLUMNS, nearest_view, reference_distance, resolve_vbsa_column
+from wbsa.analysis.data import (REQUIRED_POPULATION_COLUMNS, SCAN_COLUMNS, nearest_view, reference_distance,
+                                resolve_vbsa_column)
 from wbsa.analysis.fit_views import FitOutput, FitSettings, fit_all
 from wbsa.analysis.formulae_comparison import compare_formulae
 from wbsa.analysis.groups import COMPARISON_GROUPS
@@ -41,7 +42,7 @@ OUTPUT_FILES: dict[str, str] = {
 def read_inputs(population_path: str | os.PathLike, scan_path: str | os.PathLike,
                 vbsa_columns: tuple[str, ...]) -> tuple[pd.DataFrame, pd.DataFrame]:
     """Read and check the population and scan tables (Parquet or CSV)."""
-    population = read_table(population_path, POPULATION_COLUMNS, what="population")
+    population = read_table(population_path, REQUIRED_POPULATION_COLUMNS, what="population")
     cols = tuple(resolve_vbsa_column(c) for c in vbsa_columns)
     scan = read_table(scan_path, SCAN_COLUMNS + cols, what="scan")
     return population, scan

@@ -19,7 +19,8 @@ from wbsa.report import figures as F
 from wbsa.report.data import ReportData, load_report_data, select
 from wbsa.report.html import Page, png_bytes
 from wbsa.report.sources import ReportSources, resolve_sources
-from wbsa.study.settings import ReportConfig, section_from_table
+from wbsa.report.settings import ReportSettings
+from wbsa.settings_io import from_table
 
 #: Figures of the report in order: id -> what it reproduces.
 FIGURES: dict[str, str] = {
@@ -61,16 +62,16 @@ class ReportResult:
     seconds: float = 0.0
 
 
-def report_settings_of(sources: ReportSources) -> ReportConfig:
+def report_settings_of(sources: ReportSources) -> ReportSettings:
     """The ``[report]`` settings recorded in the study's manifest, or the defaults."""
     table = sources.manifest.get("settings", {}).get("report")
     if not table:
-        return ReportConfig()
-    return section_from_table(ReportConfig, table, "report", str(sources.study_dir or sources.fit_dir))
+        return ReportSettings()
+    return from_table(ReportSettings, table, "report", str(sources.study_dir or sources.fit_dir))
 
 
 def build_report(sources: ReportSources | str | os.PathLike, out: str | os.PathLike,
-                 settings: ReportConfig | None = None, *, show_progress: bool | None = None) -> ReportResult:
+                 settings: ReportSettings | None = None, *, show_progress: bool | None = None) -> ReportResult:
     """Draw every figure, lay out every table and write one HTML file.
 
     Parameters
@@ -79,7 +80,7 @@ def build_report(sources: ReportSources | str | os.PathLike, out: str | os.PathL
         The inputs, or a study / fit folder (see :func:`wbsa.report.sources.resolve_sources`).
     out : path
         The HTML file to write (atomically).
-    settings : ReportConfig, optional
+    settings : ReportSettings, optional
         Views of the single-view figures; default: the study's ``[report]`` settings.
     show_progress : bool, optional
         Progress bar over the figures.
@@ -116,7 +117,7 @@ def build_report(sources: ReportSources | str | os.PathLike, out: str | os.PathL
 class _Builder:
     """Fills a :class:`Page` section by section from a :class:`ReportData`."""
 
-    def __init__(self, data: ReportData, settings: ReportConfig) -> None:
+    def __init__(self, data: ReportData, settings: ReportSettings) -> None:
         self.d = data
         self.s = settings
         self.dpi = int(settings.dpi)
@@ -289,7 +290,7 @@ class _Builder:
             raise F.FigureUnavailable(f"the population lacks the body parameters ({', '.join(missing)})")
         try:
             intr = snapshot_intrinsics(d.sources.scan_paths, d.camera)
-            sid = pick_subject(d.population, int(self.s.snapshot_subject))
+            sid = pick_subject(d.population, self.s.snapshot_subject)
             snap = render_snapshot(d.population, sid, intr, az, el, d.distance_m)
         except WbsaError as exc:
             raise F.FigureUnavailable(str(exc)) from None

@@ -16,7 +16,7 @@ from wbsa.sensor import SensorSettings, apply_sensor
 from wbsa.core import frame_from_depth_image
 from wbsa.surface import ReconstructionSettings, denoise_depth, grid_mesh, reconstruct, recon_column, vbsa_recon_m2
 from wbsa.core.backproject import backproject_depth, organised_normals
-from wbsa.surface.cli import add_reconstruct_arguments, reconstruct_methods_from_args, reconstruction_settings_from_args
+from wbsa.surface.cli import add_reconstruct_arguments, reconstruction_settings_from_args
 from wbsa.surface.grid import contour_arc_pitches
 
 K = preset("kinect-v1")
@@ -215,11 +215,11 @@ def test_reconstruct_flags():
     add_reconstruct_arguments(p)
     args = p.parse_args(["--reconstruct", "grid,poisson", "--denoise", "median", "--boundary", "footprint",
                          "--voxel-size", "0.01", "--smooth"])
-    assert reconstruct_methods_from_args(args) == ("grid", "poisson")
     s = reconstruction_settings_from_args(args)
+    assert s.methods == ("grid", "poisson")
     assert (s.denoise, s.boundary, s.voxel_size_m, s.smoothing) == ("median", "footprint", 0.01, "mls")
     assert reconstruction_settings_from_args(p.parse_args([])) == ReconstructionSettings()
-    assert reconstruct_methods_from_args(p.parse_args([])) == ()
+    assert reconstruction_settings_from_args(p.parse_args([])).methods == ()
     with pytest.raises(SystemExit):
         p.parse_args(["--reconstruct", "grid,greedy"])
     assert recon_column("ball-pivoting") == "vbsa_recon_ball_pivoting_m2"

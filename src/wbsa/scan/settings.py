@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from wbsa.camera.views import PAPER_DISTANCE_M
+from wbsa.camera.views import PAPER_DISTANCE_M, VIEW_SPECS
 from wbsa.errors import SettingsError, WbsaError, check_field
 
 if TYPE_CHECKING:  # pragma: no cover - imported for type hints only
@@ -78,8 +78,9 @@ class ScanSettings:
         if not (self.azimuths_deg or self.elevations_deg):
             try:
                 self.view_list(self.distances_m[0])
-            except WbsaError as exc:
-                raise SettingsError("views", f"is not a view set: {exc}") from None
+            except WbsaError:
+                raise SettingsError("views", f"must be one of {', '.join(VIEW_SPECS)} (or give azimuths_deg and "
+                                             f"elevations_deg instead), got {self.views!r}") from None
 
     def view_list(self, distance_m: float) -> tuple[View, ...]:
         """The views at one camera distance (``views``, or ``azimuths_deg`` × ``elevations_deg``)."""

@@ -178,3 +178,14 @@ def test_range_limits_need_a_camera_with_a_range(tmp_path):
                            source="s.toml", base_dir=str(tmp_path))
     ok = settings_from_dict({"population": {"n": 5}, "scan": {"camera": "cam.json"}}, base_dir=str(tmp_path))
     assert scan_job(ok, 4.3).camera.width == 64  # the relative JSON path is read from the study file's folder
+
+
+def test_the_parsers_read_the_settings_defaults_without_importing_pandas():
+    import subprocess
+    import sys
+
+    code = ("import sys, wbsa.cli\n"
+            "try:\n    wbsa.cli.main(['--help'])\nexcept SystemExit:\n    pass\n"
+            "print(sorted({m.split('.')[0] for m in sys.modules} & {'pandas', 'torch', 'open3d', 'matplotlib'}))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip().splitlines()[-1] == "[]"

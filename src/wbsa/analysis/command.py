@@ -25,9 +25,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("population", metavar="POPULATION", help="population table (.parquet) from wbsa population")
     parser.add_argument("scan", metavar="SCAN", help="scan table (.parquet) from wbsa scan")
     parser.add_argument("--out", required=True, metavar="DIR", help="output folder")
-    from wbsa.analysis.settings import FitSettings
+    from types import SimpleNamespace
 
-    d = FitSettings()
+    from wbsa.analysis.settings import FitSettings
+    from wbsa.settings_io import field_defaults
+
+    d = SimpleNamespace(**field_defaults(FitSettings))  # FitSettings() would import pandas to check itself
     g = d.group_spec
     parser.add_argument("--vbsa", default=None, metavar="COLS",
                         help="VBSA column(s), comma-separated: vbsa_hit_m2, vbsa_visible_m2, vbsa_recon_m2:<method> "

@@ -189,3 +189,17 @@ def test_the_parsers_read_the_settings_defaults_without_importing_pandas():
             "print(sorted({m.split('.')[0] for m in sys.modules} & {'pandas', 'torch', 'open3d', 'matplotlib'}))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip().splitlines()[-1] == "[]"
+
+
+def test_the_report_reads_its_settings_from_study_manifests_old_and_new(tmp_path):
+    from wbsa.report.build import report_settings_of
+    from wbsa.report.sources import ReportSources
+
+    def sources(report_table):
+        return ReportSources(tmp_path, tmp_path / "p.parquet", (), tmp_path, {"settings": {"report": report_table}})
+
+    new = ReportSettings(snapshot_subject=3, dpi=120)
+    assert report_settings_of(sources(to_table(new))) == new
+    old = {"scatter_view_deg": [0.0, 0.0], "nonlinear_view_deg": [60.0, 60.0], "snapshot_view_deg": [60.0, 60.0],
+           "snapshot_subject": -1, "dpi": 100}  # study.json of a study run before optional keys
+    assert report_settings_of(sources(old)) == ReportSettings()

@@ -67,6 +67,8 @@ def report_settings_of(sources: ReportSources) -> ReportSettings:
     table = sources.manifest.get("settings", {}).get("report")
     if not table:
         return ReportSettings()
+    if table.get("snapshot_subject") == -1:  # manifests written before optional keys: -1 meant "not set"
+        table = {k: v for k, v in table.items() if k != "snapshot_subject"}
     return from_table(ReportSettings, table, "report", str(sources.study_dir or sources.fit_dir))
 
 

@@ -201,14 +201,15 @@ def settings_from_dict(tables: dict, source: str = "<dict>", base_dir: str = "."
     user : dict, optional
         The user's own tables (checked first, so an unknown key is reported for the user's file).
     """
+    moved = []
     for name, value in (user if user is not None else tables).items():
         if name not in SECTIONS:
             raise WbsaError(f"{source}: unknown table [{name}]; valid tables: {', '.join(SECTIONS)}")
         if not isinstance(value, dict):
             raise WbsaError(f"{source}: {name} must be a table ([{name}] with keys), not a single value")
-        for key in value:
-            if (name, key) in MOVED_KEYS:
-                raise WbsaError(f"{source}: [{name}] {key} is now {MOVED_KEYS[name, key]}; move it there")
+        moved += [f"[{name}] {key} is now {MOVED_KEYS[name, key]}" for key in value if (name, key) in MOVED_KEYS]
+    if moved:
+        raise WbsaError(f"{source}: {', '.join(moved)}; move {'it' if len(moved) == 1 else 'them'} there")
     sections = {name: from_table(cls, tables.get(name, {}), name, source) for name, cls in SECTIONS.items()}
     settings = StudySettings(**sections, source=source, base_dir=base_dir)
     validate_settings(settings)

@@ -57,7 +57,7 @@ def main(argv: list[str] | None = None) -> int:
     from wbsa.camera import MeshScene, View, measure_view, paper_views, preset, render
     from wbsa.camera.extrinsics import pose_from_view
     from wbsa.bodies.body_model import BodyModel
-    from wbsa.sensor import SensorModel, apply_sensor
+    from wbsa.sensor import SensorSettings, apply_sensor
     from wbsa.surface import ReconstructionSettings, vbsa_recon_m2
 
     camera = preset("kinect-v1")
@@ -70,7 +70,7 @@ def main(argv: list[str] | None = None) -> int:
     meshes = BodyModel().skin_meshes(bodies)
     default = ReconstructionSettings()
     bare = ReconstructionSettings(boundary="none", denoise="none")
-    noise = SensorModel(noise="nguyen2012")
+    noise = SensorSettings(noise="nguyen2012")
     print(f"camera {camera.name} {camera.width}x{camera.height}, distance 4.3 m, {len(views)} views, "
           f"bodies: adult male / female (skin {meshes[0].area_m2:.3f} / {meshes[1].area_m2:.3f} m²)")
     print(f"grid settings: {default.to_dict()}")
@@ -174,7 +174,7 @@ def print_sweep(sweep: pd.DataFrame, sigmas, camera) -> None:
 
     from wbsa.camera import MeshScene, Pose, render
     from wbsa.core.mesh import TriangleMesh
-    from wbsa.sensor import SensorModel, apply_sensor
+    from wbsa.sensor import SensorSettings, apply_sensor
     from wbsa.surface import ReconstructionSettings, vbsa_recon_m2
 
     print("\n4. Denoising trade-off (grid, contour skirt; one noise realisation per view)")
@@ -193,7 +193,7 @@ def print_sweep(sweep: pd.DataFrame, sigmas, camera) -> None:
         mesh = TriangleMesh(np.stack([c - 0.5 * u - 0.5 * v, c + 0.5 * u - 0.5 * v, c + 0.5 * u + 0.5 * v,
                                       c - 0.5 * u + 0.5 * v]), np.array([[0, 1, 2], [0, 2, 3]], dtype=np.int32))
         frame = render(MeshScene(mesh), camera, Pose(np.eye(3), np.zeros(3)))
-        noisy = apply_sensor(frame, SensorModel(noise="nguyen2012"), np.random.default_rng(4))
+        noisy = apply_sensor(frame, SensorSettings(noise="nguyen2012"), np.random.default_rng(4))
         errs = [100 * (vbsa_recon_m2(noisy, "grid", ReconstructionSettings(boundary="footprint", denoise_sigma_px=s))
                        / mesh.area_m2 - 1) for s in (*sigmas, 3.5, 5.0)]
         print(f"noisy 1 m² plane at {distance:.1f} m: " + ", ".join(

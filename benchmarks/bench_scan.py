@@ -79,13 +79,13 @@ def main() -> None:
     from wbsa.parallel import dask_client, default_workers
     from wbsa.bodies.random_population import RandomPopulationSettings, sample_random_parameters
     from wbsa.scan.engine import scan_population
-    from wbsa.scan.settings import ScanSettings
+    from wbsa.scan.settings import ScanJob
     from wbsa.scan.worker import body_model, keep_large_allocations, single_threaded_math
 
     workers = args.workers or default_workers()
     camera = resolve_camera(args.camera)
     views = tuple(parse_views(args.views))
-    settings = ScanSettings(camera=camera, views=views, chunk_size=args.chunk_size)
+    settings = ScanJob(camera=camera, views=views)
     params = sample_random_parameters(RandomPopulationSettings(n=args.subjects, seed=0))
     n_views = args.subjects * len(views)
     keep_large_allocations()  # as in the scan's workers
@@ -143,13 +143,14 @@ def main() -> None:
                 bare, occl = bare_passes()
                 c = Clock()
                 with c:
-                    local = scan_population(params, settings, Path(tmp) / f"local{rep}", workers=1).table
+                    local = scan_population(params, settings, Path(tmp) / f"local{rep}", workers=1,
+                                            chunk_size=args.chunk_size).table
                 local_t = c.result()
                 cpu0 = sum(client.run(time.process_time).values())
                 c = Clock()
                 with c:
                     warm = scan_population(params, settings, Path(tmp) / f"warm{rep}",
-                                           scheduler=client.scheduler.address).table
+                                           scheduler=client.scheduler.address, chunk_size=args.chunk_size).table
                 worker_cpu = sum(client.run(time.process_time).values()) - cpu0
                 warm_t = (c.result()[0], c.result()[1] + worker_cpu)
                 reps.append({"bare": bare, "occl": occl, "local": local_t, "warm": warm_t,
@@ -158,7 +159,7 @@ def main() -> None:
         if not args.skip_cold:
             c = Clock()
             with c:
-                scan_population(params, settings, Path(tmp) / "cold", workers=workers)
+                scan_population(params, settings, Path(tmp) / "cold", workers=workers, chunk_size=args.chunk_size)
             cold_t = (c.result()[0], float("nan"))
 
     def med(fn) -> float:

@@ -140,5 +140,5 @@ def test_bad_inputs_are_user_errors(tables):
         fit_views(pop, scan, FitSettings(predictor_sets=(("shoe_size",),), k=3))
     with pytest.raises(WbsaError, match="unknown model"):
         FitSettings(models=("spline",))
-    with pytest.raises(WbsaError, match="too few"):
+    with pytest.raises(WbsaError, match="k must be at least 2 folds"):
         FitSettings(k=1)

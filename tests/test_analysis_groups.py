@@ -54,7 +54,7 @@ def test_missing_values_leave_a_subject_only_in_all():
 
 
 def test_bad_settings_are_user_errors():
-    with pytest.raises(WbsaError, match="stature cuts"):
+    with pytest.raises(WbsaError, match="small_max_stature_m must be positive and below big_min_stature_m"):
         GroupSpec(small_max_stature_m=2.1, big_min_stature_m=2.0)
     with pytest.raises(WbsaError, match="unknown group"):
         check_group_names(["all", "giants"])

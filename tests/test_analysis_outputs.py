@@ -123,7 +123,7 @@ def test_wbsa_fit_writes_every_table(tables, tmp_path):
     (["--models", "spline"], "unknown model"),
     (["--groups", "giants"], "unknown group"),
     (["--correlation-view", "30,0"], "no view at azimuth 30"),
-    (["--stature-cuts", "2.1,1.4"], "stature cuts"),
+    (["--stature-cuts", "2.1,1.4"], "stature cuts 0 < small < big"),
     (["--vbsa", "vbsa_recon_m2:poisson"], "vbsa_recon_poisson_m2"),
     (["--predictors", "shoe_size"], "not a population column"),
     (["--k", "1000"], "no model could be fitted"),

@@ -257,8 +257,10 @@ def _fails_cleanly(capsys, argv: list[str], words: str) -> None:
 def test_bad_inputs_give_one_line_errors(tmp_path, capsys, body_model):
     out = tmp_path / "p.parquet"
     _fails_cleanly(capsys, ["population", "--kind", "martian", "--n", "3", "--out", str(out)], "invalid choice")
-    _fails_cleanly(capsys, ["population", "--kind", "random", "--n", "0", "--out", str(out)], "positive")
-    _fails_cleanly(capsys, ["population", "--kind", "random", "--n", "-4", "--out", str(out)], "positive")
+    _fails_cleanly(capsys, ["population", "--kind", "random", "--n", "0", "--out", str(out)], "n must be at least 1")
+    _fails_cleanly(capsys, ["population", "--kind", "random", "--n", "-4", "--out", str(out)], "n must be at least 1")
+    _fails_cleanly(capsys, ["population", "--kind", "random", "--out", str(out)], "n must be given for kind 'random'")
+    _fails_cleanly(capsys, ["population", "--kind", "table", "--out", str(out)], "params_path must name")
     blocker = tmp_path / "file"
     blocker.write_text("x")
     _fails_cleanly(capsys, ["population", "--kind", "random", "--n", "2", "--out", str(blocker / "p.parquet")],

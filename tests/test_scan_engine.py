@@ -24,7 +24,7 @@ from wbsa.errors import WbsaError
 from wbsa import parallel
 from wbsa.scan.engine import scan_population
 from wbsa.scan.layout import PARTS_DIR, SETTINGS_FILE, TABLE_FILE, plan_chunks
-from wbsa.scan.settings import ScanSettings
+from wbsa.scan.settings import ScanJob
 
 # The dask workers are separate processes: ship this module's functions by value.
 cloudpickle.register_pickle_by_value(sys.modules[__name__])
@@ -47,7 +47,7 @@ class _View:
 VIEWS = tuple(_View(a, e, 4.3) for a in (0.0, 90.0, 180.0) for e in (-30.0, 0.0, 30.0))
 
 
-def stand_in_chunk(subjects: pd.DataFrame, settings: ScanSettings) -> pd.DataFrame:
+def stand_in_chunk(subjects: pd.DataFrame, settings: ScanJob) -> pd.DataFrame:
     """A cheap, deterministic per-subject function with per-subject randomness, like the real worker."""
     rows = []
     for sid, height in zip(subjects["subject_id"].to_numpy(), subjects["p_height"].to_numpy()):
@@ -62,14 +62,14 @@ def stand_in_chunk(subjects: pd.DataFrame, settings: ScanSettings) -> pd.DataFra
     return pd.DataFrame(rows[::-1])
 
 
-def pid_chunk(subjects: pd.DataFrame, settings: ScanSettings) -> pd.DataFrame:
+def pid_chunk(subjects: pd.DataFrame, settings: ScanJob) -> pd.DataFrame:
     """The stand-in rows plus the id of the process that made them."""
     rows = stand_in_chunk(subjects, settings)
     rows["pid"] = os.getpid()
     return rows
 
 
-def failing_chunk(subjects: pd.DataFrame, settings: ScanSettings) -> pd.DataFrame:
+def failing_chunk(subjects: pd.DataFrame, settings: ScanJob) -> pd.DataFrame:
     if 7 in subjects["subject_id"].to_numpy():
         raise WbsaError("subject 7 cannot be scanned")
     return stand_in_chunk(subjects, settings)
@@ -82,12 +82,13 @@ def _population(n: int = 23, start: int = 0) -> pd.DataFrame:
     return pd.DataFrame({"subject_id": ids, "p_height": rng.uniform(0, 1, n)}).sample(frac=1.0, random_state=3)
 
 
-def _settings(**kw) -> ScanSettings:
-    return ScanSettings(**{"camera": _Camera(), "views": VIEWS, "seed": 5, "chunk_size": 4, **kw})
+def _settings(**kw) -> ScanJob:
+    return ScanJob(**{"camera": _Camera(), "views": VIEWS, "seed": 5, **kw})
 
 
 def _scan(pop, out, **kw):
     kw.setdefault("workers", 1)
+    kw.setdefault("chunk_size", 4)
     return scan_population(pop, kw.pop("settings", _settings()), out, chunk_fn=kw.pop("chunk_fn", stand_in_chunk),
                            show_progress=False, **kw)
 
@@ -116,7 +117,7 @@ def test_in_process_scan_writes_sorted_table_parts_and_settings(tmp_path):
 
 def test_result_does_not_depend_on_chunk_size(tmp_path):
     a = _scan(_population(), tmp_path / "a").table
-    b = _scan(_population(), tmp_path / "b", settings=_settings(chunk_size=7)).table
+    b = _scan(_population(), tmp_path / "b", chunk_size=7).table
     pd.testing.assert_frame_equal(a, b)
 
 
@@ -193,12 +194,38 @@ def test_resume_with_the_same_command_is_idempotent(tmp_path):
     pd.testing.assert_frame_equal(first, again.table)
 
 
-@pytest.mark.parametrize("change", [{"seed": 6}, {"chunk_size": 5}, {"views": VIEWS[:3]}])
+@pytest.mark.parametrize("change", [{"seed": 6}, {"views": VIEWS[:3]}])
 def test_refuses_to_resume_with_other_settings(tmp_path, change):
     _scan(_population(), tmp_path / "out")
     with pytest.raises(WbsaError, match="other settings.*use another --out") as exc:
         _scan(_population(), tmp_path / "out", settings=_settings(**change))
     assert "\n" not in str(exc.value)
+
+
+def counting_chunk(subjects: pd.DataFrame, settings: ScanJob) -> pd.DataFrame:
+    """The stand-in rows; appends the chunk's subject ids to the file named by $WBSA_TEST_CHUNK_LOG."""
+    with open(os.environ["WBSA_TEST_CHUNK_LOG"], "a") as fh:
+        fh.write(" ".join(map(str, subjects["subject_id"])) + "\n")
+    return stand_in_chunk(subjects, settings)
+
+
+def test_chunk_size_is_not_part_of_the_folder_key_and_never_rescans(tmp_path, monkeypatch):
+    log = tmp_path / "chunks.log"
+    monkeypatch.setenv("WBSA_TEST_CHUNK_LOG", str(log))
+    pop, out = _population(), tmp_path / "out"
+    first = _scan(pop, out, chunk_fn=counting_chunk)
+    assert len(log.read_text().splitlines()) == first.n_chunks == 6
+    # A finished folder with another chunk size: reused as it is, nothing scanned again.
+    again = _scan(pop, out, chunk_fn=counting_chunk, chunk_size=9)
+    assert again.n_views_scanned == 0 and again.n_resumed == again.n_chunks == 6
+    assert len(log.read_text().splitlines()) == 6
+    pd.testing.assert_frame_equal(first.table, again.table)
+    # An interrupted folder resumed with another chunk size keeps its own plan: only the missing chunk runs.
+    (out / PARTS_DIR / "part-00000004-00000007.parquet").unlink()
+    resumed = _scan(pop, out, chunk_fn=counting_chunk, chunk_size=2)
+    assert log.read_text().splitlines()[6:] == ["4 5 6 7"] and resumed.n_resumed == 5
+    pd.testing.assert_frame_equal(first.table, resumed.table)
+    assert "chunk_size" not in json.loads((out / SETTINGS_FILE).read_text())["settings"]
 
 
 def test_refuses_to_resume_with_another_population(tmp_path):

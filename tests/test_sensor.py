@@ -15,8 +15,8 @@ from wbsa.errors import WbsaError
 from wbsa.core.mesh import TriangleMesh
 from wbsa.core import frame_from_depth_image
 from wbsa.core.depth_image import depth_to_png_mm, png_mm_to_depth, read_depth_png, write_depth_png
-from wbsa.sensor import SensorModel, apply_sensor, axial_sigma_m, lateral_sigma_px
-from wbsa.sensor.cli import add_sensor_arguments, sensor_model_from_args
+from wbsa.sensor import SensorSettings, apply_sensor, axial_sigma_m, lateral_sigma_px
+from wbsa.sensor.cli import add_sensor_arguments, sensor_settings_from_args
 from wbsa.sensor.measure import view_rng
 
 K = preset("kinect-v1")
@@ -71,7 +71,7 @@ def test_nguyen_sigmas_known_values():
 
 def test_axial_noise_matches_sigma_z_face_on():
     frame = plane_frame(2.0, 0.0)
-    model = SensorModel(noise="nguyen2012", lateral_noise=False)
+    model = SensorSettings(noise="nguyen2012", lateral_noise=False)
     noisy = apply_sensor(frame, model, np.random.default_rng(1))
     both = interior(frame.valid) & noisy.valid
     err = (noisy.depth_m[both] - frame.depth_m[both]).astype(np.float64)
@@ -87,7 +87,7 @@ def test_axial_noise_matches_sigma_z_face_on():
 
 def test_axial_noise_steep_term_at_70_degrees():
     frame = plane_frame(2.0, 70.0, half_size_m=1.5)
-    noisy = apply_sensor(frame, SensorModel(noise="nguyen2012", lateral_noise=False), np.random.default_rng(2))
+    noisy = apply_sensor(frame, SensorSettings(noise="nguyen2012", lateral_noise=False), np.random.default_rng(2))
     both = frame.valid & noisy.valid & (incidence(frame) > math.radians(62))
     assert np.count_nonzero(both) > 50_000
     err = (noisy.depth_m[both] - frame.depth_m[both]).astype(np.float64)
@@ -103,7 +103,7 @@ def test_lateral_noise_matches_sigma_l_on_a_depth_ramp():
     # On a plane tilted 70° the depth changes by g = ∂z/∂u per pixel, so a lateral shift of N(0, σL) px
     # adds (g σL)² to the axial variance; the measured variance must match σz² + σL² (gu² + gv²).
     frame = plane_frame(2.0, 70.0, half_size_m=1.5)
-    noisy = apply_sensor(frame, SensorModel(noise="nguyen2012"), np.random.default_rng(3))
+    noisy = apply_sensor(frame, SensorSettings(noise="nguyen2012"), np.random.default_rng(3))
     d = frame.depth_m.astype(np.float64)
     gu = np.zeros_like(d)
     gv = np.zeros_like(d)
@@ -122,7 +122,7 @@ def test_lateral_noise_matches_sigma_l_on_a_depth_ramp():
 
 def test_same_seed_same_image_and_independent_effects():
     frame = render(MeshScene(icosphere(0.3, 4, center=np.array([0.0, 0.0, 2.5]))), K, CAMERA)
-    model = SensorModel(noise="nguyen2012", holes_fraction=0.1, pixel_dropout=0.05, quantise=True)
+    model = SensorSettings(noise="nguyen2012", holes_fraction=0.1, pixel_dropout=0.05, quantise=True)
     a = apply_sensor(frame, model, np.random.default_rng(7))
     b = apply_sensor(frame, model, np.random.default_rng(7))
     c = apply_sensor(frame, model, np.random.default_rng(8))
@@ -140,8 +140,8 @@ def test_same_seed_same_image_and_independent_effects():
 
 def test_ideal_model_changes_nothing():
     frame = render(MeshScene(icosphere(0.3, 3, center=np.array([0.0, 0.0, 2.5]))), K, CAMERA)
-    out = apply_sensor(frame, SensorModel(), np.random.default_rng(0))
-    assert SensorModel().is_ideal
+    out = apply_sensor(frame, SensorSettings(), np.random.default_rng(0))
+    assert SensorSettings().is_ideal
     np.testing.assert_array_equal(out.depth_m, frame.depth_m)
     np.testing.assert_array_equal(out.triangle_id, frame.triangle_id)
     assert out.settings["sensor"]["noise"] == "none"
@@ -150,7 +150,7 @@ def test_ideal_model_changes_nothing():
 def test_triangle_holes_fraction_is_honoured():
     frame = plane_frame(2.0, 20.0, half_size_m=0.5, n=40)  # 3,200 triangles, about 25 pixels each
     ids_before = np.unique(frame.triangle_id[frame.valid])
-    out = apply_sensor(frame, SensorModel(holes_fraction=0.3), np.random.default_rng(5))
+    out = apply_sensor(frame, SensorSettings(holes_fraction=0.3), np.random.default_rng(5))
     ids_after = np.unique(out.triangle_id[out.valid])
     assert len(ids_after) == len(ids_before) - round(0.3 * len(ids_before))
     dropped = np.setdiff1d(ids_before, ids_after)
@@ -167,7 +167,7 @@ def test_triangle_holes_fraction_is_honoured():
 
 def test_pixel_dropout_is_binomial():
     frame = plane_frame(2.0, 0.0)
-    out = apply_sensor(frame, SensorModel(pixel_dropout=0.2), np.random.default_rng(6))
+    out = apply_sensor(frame, SensorSettings(pixel_dropout=0.2), np.random.default_rng(6))
     n = frame.n_pixels
     lost = 1 - out.n_pixels / n
     assert lost == pytest.approx(0.2, abs=4 * math.sqrt(0.2 * 0.8 / n))
@@ -175,19 +175,19 @@ def test_pixel_dropout_is_binomial():
 
 def test_grazing_dropout_cuts_at_the_angle():
     frame = render(MeshScene(icosphere(0.4, 5, center=np.array([0.0, 0.0, 2.5]))), K, CAMERA)
-    out = apply_sensor(frame, SensorModel(grazing_dropout_deg=20.0), np.random.default_rng(0))
+    out = apply_sensor(frame, SensorSettings(grazing_dropout_deg=20.0), np.random.default_rng(0))
     theta = np.degrees(incidence(frame))
     assert np.all(theta[out.valid] <= 70.0 + 1e-6)
     assert not np.any(out.valid & (theta > 70.0 + 1e-6))
     assert np.all(out.valid[frame.valid & (theta < 69.9)])
     # the Nguyen model drops the last 8° by default
-    assert SensorModel(noise="nguyen2012").effective_grazing_dropout_deg == 8.0
-    assert SensorModel().effective_grazing_dropout_deg == 0.0
+    assert SensorSettings(noise="nguyen2012").effective_grazing_dropout_deg == 8.0
+    assert SensorSettings().effective_grazing_dropout_deg == 0.0
 
 
 def test_disparity_quantisation_kinect_v1():
     frame = plane_frame(3.0, 40.0)
-    out = apply_sensor(frame, SensorModel(quantise=True), np.random.default_rng(0))
+    out = apply_sensor(frame, SensorSettings(quantise=True), np.random.default_rng(0))
     fb = K.fx * 0.075
     z = out.depth_m[out.valid].astype(np.float64)
     steps = fb / z / 0.125
@@ -203,7 +203,7 @@ def test_range_limits_of_the_preset():
     frame = plane_frame(2.0, 75.0)  # the tilted plane spans depths on both sides of 4.0 m
     z = frame.depth_m
     assert z[frame.valid].max() > 4.0
-    out = apply_sensor(frame, SensorModel(range_limits=True), np.random.default_rng(0))
+    out = apply_sensor(frame, SensorSettings(range_limits=True), np.random.default_rng(0))
     assert out.depth_m[out.valid].max() <= K.max_range_m
     assert np.all(out.valid == (frame.valid & (z >= K.min_range_m) & (z <= K.max_range_m)))
 
@@ -211,19 +211,19 @@ def test_range_limits_of_the_preset():
 def test_triangle_holes_need_triangle_ids():
     frame = frame_from_depth_image(plane_frame(2.0, 0.0).depth_m, K)
     with pytest.raises(WbsaError, match="triangle"):
-        apply_sensor(frame, SensorModel(holes_fraction=0.1), np.random.default_rng(0))
+        apply_sensor(frame, SensorSettings(holes_fraction=0.1), np.random.default_rng(0))
     # pixel dropout and noise work on depth images
-    out = apply_sensor(frame, SensorModel(noise="nguyen2012", pixel_dropout=0.1), np.random.default_rng(0))
+    out = apply_sensor(frame, SensorSettings(noise="nguyen2012", pixel_dropout=0.1), np.random.default_rng(0))
     assert 0 < out.n_pixels < frame.n_pixels
 
 
-def test_model_validation():
-    with pytest.raises(WbsaError):
-        SensorModel(noise="kinect")
-    with pytest.raises(WbsaError):
-        SensorModel(holes_fraction=1.5)
-    with pytest.raises(WbsaError):
-        SensorModel(grazing_dropout_deg=90.0)
+def test_settings_errors_name_the_field():
+    with pytest.raises(WbsaError, match="^noise must be one of none, nguyen2012, got 'kinect'$"):
+        SensorSettings(noise="kinect")
+    with pytest.raises(WbsaError, match=r"^holes_fraction must be a fraction in \[0, 1\], got 1.5$"):
+        SensorSettings(holes_fraction=1.5)
+    with pytest.raises(WbsaError, match=r"^grazing_dropout_deg must be degrees in \[0, 90\)"):
+        SensorSettings(grazing_dropout_deg=90.0)
 
 
 # -- depth PNG -------------------------------------------------------------------------------------
@@ -272,19 +272,19 @@ def test_sensor_flags():
     add_sensor_arguments(p, seed=True)
     args = p.parse_args(["--noise", "nguyen2012", "--holes", "0.2", "--pixel-dropout", "0.01", "--quantise",
                          "--grazing-dropout", "10", "--sensor-seed", "3"])
-    model = sensor_model_from_args(args, K)
-    assert model == SensorModel(noise="nguyen2012", holes_fraction=0.2, pixel_dropout=0.01, quantise=True,
-                                grazing_dropout_deg=10.0)
+    sensor = sensor_settings_from_args(args, K)
+    assert sensor == SensorSettings(noise="nguyen2012", holes_fraction=0.2, pixel_dropout=0.01, quantise=True,
+                                    grazing_dropout_deg=10.0)
     assert args.sensor_seed == 3
-    assert sensor_model_from_args(p.parse_args([])).is_ideal
+    assert sensor_settings_from_args(p.parse_args([])).is_ideal
     with pytest.raises(SystemExit):
         p.parse_args(["--holes", "1.5"])
     with pytest.raises(SystemExit):
         p.parse_args(["--noise", "gaussian"])
     from wbsa.camera import Intrinsics
 
-    with pytest.raises(WbsaError, match="range"):
-        sensor_model_from_args(p.parse_args(["--range-limits"]), Intrinsics(64, 48, 50, 50, 31.5, 23.5))
+    with pytest.raises(WbsaError, match="range_limits needs a camera with a working range"):
+        sensor_settings_from_args(p.parse_args(["--range-limits"]), Intrinsics(64, 48, 50, 50, 31.5, 23.5))
 
 
 def test_sensor_rng_is_keyed():

@@ -120,6 +120,15 @@ def test_rerun_reuses_every_stage_and_gives_the_same_fit_table(study, capsys):
     assert all(s["reused"] for s in manifest["stages"])
 
 
+def test_changing_only_execution_knobs_rescans_nothing(study, tmp_path, capsys):
+    out, _, _, _, _ = study
+    cfg = tmp_path / "knobs.toml"
+    cfg.write_text(TINY.replace("[run]\nworkers = 1", "[run]\nworkers = 2\nchunk_size = 5\nprogress = false"))
+    assert main(["run", "--config", str(cfg), "--out", str(out)]) == 0
+    assert capsys.readouterr().err.count(" reused ") == 5  # population, both scans, fit, report
+    assert "chunk_size = 5" in (out / "study.toml").read_text()
+
+
 def test_report_command_finds_the_inputs_of_a_fit_stage(study, tmp_path, capsys):
     out = study[0]
     manifest = json.loads((out / "study.json").read_text())

@@ -12,11 +12,11 @@ from wbsa.camera import MeshScene, Pose, preset, render, sphere_cap_area_m2
 from helpers.shapes import icosphere
 from wbsa.errors import WbsaError
 from wbsa.core.mesh import TriangleMesh
-from wbsa.sensor import SensorModel, apply_sensor
+from wbsa.sensor import SensorSettings, apply_sensor
 from wbsa.core import frame_from_depth_image
 from wbsa.surface import ReconstructionSettings, denoise_depth, grid_mesh, reconstruct, recon_column, vbsa_recon_m2
 from wbsa.core.backproject import backproject_depth, organised_normals
-from wbsa.surface.cli import add_reconstruct_arguments, reconstruct_methods_from_args, reconstruction_settings_from_args
+from wbsa.surface.cli import add_reconstruct_arguments, reconstruction_settings_from_args
 from wbsa.surface.grid import contour_arc_pitches
 
 K = preset("kinect-v1")
@@ -179,7 +179,7 @@ def test_filters_reduce_noise_within_the_mask():
 def test_noisy_plane_area_after_denoising():
     # at 2 m Kinect v1 noise (σz ≈ 6 mm) is about twice the pixel pitch (3.5 mm)
     mesh, frame = plane(2.0, 20.0, half_m=0.4)
-    noisy = apply_sensor(frame, SensorModel(noise="nguyen2012"), np.random.default_rng(4))
+    noisy = apply_sensor(frame, SensorSettings(noise="nguyen2012"), np.random.default_rng(4))
     raw = vbsa_recon_m2(noisy, "grid", ReconstructionSettings(denoise="none", boundary="footprint"))
     assert raw > 1.3 * mesh.area_m2  # jagged
     errors = [vbsa_recon_m2(noisy, "grid", ReconstructionSettings(boundary="footprint", denoise_sigma_px=s))
@@ -215,11 +215,11 @@ def test_reconstruct_flags():
     add_reconstruct_arguments(p)
     args = p.parse_args(["--reconstruct", "grid,poisson", "--denoise", "median", "--boundary", "footprint",
                          "--voxel-size", "0.01", "--smooth"])
-    assert reconstruct_methods_from_args(args) == ("grid", "poisson")
     s = reconstruction_settings_from_args(args)
+    assert s.methods == ("grid", "poisson")
     assert (s.denoise, s.boundary, s.voxel_size_m, s.smoothing) == ("median", "footprint", 0.01, "mls")
     assert reconstruction_settings_from_args(p.parse_args([])) == ReconstructionSettings()
-    assert reconstruct_methods_from_args(p.parse_args([])) == ()
+    assert reconstruction_settings_from_args(p.parse_args([])).methods == ()
     with pytest.raises(SystemExit):
         p.parse_args(["--reconstruct", "grid,greedy"])
     assert recon_column("ball-pivoting") == "vbsa_recon_ball_pivoting_m2"

@@ -20,3 +20,30 @@ class WbsaError(ValueError):
     Likewise an argparse ``type=`` function must raise ``argparse.ArgumentTypeError``, not this class:
     argparse replaces the message of any ``ValueError`` by "invalid ... value".
     """
+
+
+class SettingsError(WbsaError):
+    """A settings field with a bad value; the message starts with the field's name.
+
+    Raised by the ``__post_init__`` of the stages' frozen settings dataclasses. The TOML layer
+    (:mod:`wbsa.settings_io`) adds the file and the table, e.g.
+    ``study.toml: [fit] k must be at least 2 folds, got 1``.
+
+    Attributes
+    ----------
+    field : str
+        The dataclass field (also the TOML key).
+    problem : str
+        What is wrong with it, e.g. ``must be at least 2 folds, got 1``.
+    """
+
+    def __init__(self, field: str, problem: str) -> None:
+        super().__init__(f"{field} {problem}")
+        self.field = field
+        self.problem = problem
+
+
+def check_field(ok: bool, field: str, problem: str) -> None:
+    """Raise :class:`SettingsError` ``(field, problem)`` unless ``ok``."""
+    if not ok:
+        raise SettingsError(field, problem)

@@ -11,9 +11,10 @@ from __future__ import annotations
 import logging
 import os
 from contextlib import contextmanager
+from dataclasses import dataclass
 from typing import Any, Callable, Iterator, Sequence
 
-from wbsa.errors import WbsaError
+from wbsa.errors import WbsaError, check_field
 
 SCHEDULER_ENV = "DASK_SCHEDULER_ADDRESS"
 CONNECT_TIMEOUT_S = 20
@@ -129,3 +130,40 @@ def single_threaded_math() -> Iterator[None]:
             yield
     finally:
         torch.set_num_threads(before)
+
+
+#: Subjects per scan chunk by default (one Parquet part, one dask task, the unit of resuming).
+DEFAULT_CHUNK_SIZE = 25
+
+
+@dataclass(frozen=True)
+class RunSettings:
+    """How to run (``[run]`` of a study): never changes a result, so never part of a cache key.
+
+    Attributes
+    ----------
+    workers : int
+        Worker processes of the population and scan stages; 0 = all cores, 1 = in this process (no dask).
+    scheduler : str or None
+        Address of an existing dask scheduler (None: ``$DASK_SCHEDULER_ADDRESS`` or a local cluster).
+    chunk_size : int
+        Subjects per scan chunk: the unit of parallel work and of resuming.
+    progress : bool or None
+        Progress bars on stderr (None: when stderr is a terminal).
+    """
+
+    workers: int = 0
+    scheduler: str | None = None
+    chunk_size: int = DEFAULT_CHUNK_SIZE
+    progress: bool | None = None
+
+    def __post_init__(self) -> None:
+        if self.scheduler == "":  # the empty string of older study files
+            object.__setattr__(self, "scheduler", None)
+        check_field(self.workers >= 0, "workers", f"must be 0 (all cores) or more, got {self.workers}")
+        check_field(self.chunk_size >= 1, "chunk_size", f"must be at least 1 subject, got {self.chunk_size}")
+
+    @property
+    def n_workers(self) -> int:
+        """``workers`` with 0 resolved to the cores this process may use."""
+        return default_workers() if self.workers == 0 else self.workers

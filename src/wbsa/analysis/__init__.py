@@ -26,7 +26,7 @@ from __future__ import annotations
 from wbsa.lazy import lazy_exports
 
 _EXPORTS = {
-    "FitSettings": "wbsa.analysis.fit_views",
+    "FitSettings": "wbsa.analysis.settings",
     "FitOutput": "wbsa.analysis.fit_views",
     "fit_all": "wbsa.analysis.fit_views",
     "fit_views": "wbsa.analysis.fit_views",

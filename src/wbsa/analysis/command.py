@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 from wbsa.errors import WbsaError
+from wbsa.typing import GROUP_NAMES, MODEL_KINDS
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -24,34 +25,42 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("population", metavar="POPULATION", help="population table (.parquet) from wbsa population")
     parser.add_argument("scan", metavar="SCAN", help="scan table (.parquet) from wbsa scan")
     parser.add_argument("--out", required=True, metavar="DIR", help="output folder")
-    parser.add_argument("--vbsa", default="vbsa_visible_m2", metavar="COLS",
+    from types import SimpleNamespace
+
+    from wbsa.analysis.settings import FitSettings
+    from wbsa.settings_io import field_defaults
+
+    d = SimpleNamespace(**field_defaults(FitSettings))  # FitSettings() would import pandas to check itself
+    g = d.group_spec
+    parser.add_argument("--vbsa", default=None, metavar="COLS",
                         help="VBSA column(s), comma-separated: vbsa_hit_m2, vbsa_visible_m2, vbsa_recon_m2:<method> "
-                             "(default vbsa_visible_m2)")
+                             f"(default {','.join(d.vbsa_columns)})")
     parser.add_argument("--predictors", action="append", default=None, metavar="COLS",
                         help="extra predictors besides VBSA as one comma-separated set, e.g. stature or "
                              "stature,waist_circ_m; repeat for several sets; the VBSA-only model is always fitted "
                              "(default: one set, stature)")
-    parser.add_argument("--models", default="linear,loglog,wls", metavar="LIST",
-                        help="model kinds: linear, quadratic, loglog, wls (default linear,loglog,wls)")
-    parser.add_argument("--groups", default="all,males,females,kids,adults,small,normal,big", metavar="LIST",
-                        help="groups fitted on their own: all, males, females, kids, adults, small, normal, big, "
-                             "obese (default: the paper's eight)")
-    parser.add_argument("--k", type=int, default=10, help="cross-validation folds (default 10)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the fold assignment (default 0)")
-    parser.add_argument("--kid-max-age", type=float, default=15.0, metavar="YEARS",
-                        help="kids are at most this old (default 15)")
-    parser.add_argument("--stature-cuts", default="1.40,2.00", metavar="SMALL,BIG",
-                        help="small stature <= SMALL m < normal <= BIG m < big (default 1.40,2.00)")
-    parser.add_argument("--obese-bmi", type=float, default=30.0, metavar="BMI",
-                        help="obese group: BMI >= this (default 30)")
+    parser.add_argument("--models", default=None, metavar="LIST",
+                        help=f"model kinds: {', '.join(MODEL_KINDS)} (default {','.join(d.models)})")
+    parser.add_argument("--groups", default=None, metavar="LIST",
+                        help=f"groups fitted on their own: {', '.join(GROUP_NAMES)} (default: the paper's eight)")
+    parser.add_argument("--k", type=int, default=None, help=f"cross-validation folds (default {d.k})")
+    parser.add_argument("--seed", type=int, default=None, help=f"seed of the fold assignment (default {d.seed})")
+    parser.add_argument("--kid-max-age", type=float, default=None, metavar="YEARS",
+                        help=f"kids are at most this old (default {g.kid_max_age_years:g})")
+    parser.add_argument("--stature-cuts", default=None, metavar="SMALL,BIG",
+                        help="small stature <= SMALL m < normal <= BIG m < big "
+                             f"(default {g.small_max_stature_m:.2f},{g.big_min_stature_m:.2f})")
+    parser.add_argument("--obese-bmi", type=float, default=None, metavar="BMI",
+                        help=f"obese group: BMI >= this (default {g.obese_min_bmi:g})")
     parser.add_argument("--include-out-of-frame", action="store_true",
                         help="keep views where the body is cut by the image border (default: leave them out)")
-    parser.add_argument("--correlation-view", default="0,0", metavar="AZ,EL",
-                        help="view of the Spearman correlation matrix, degrees (default 0,0)")
-    parser.add_argument("--residual-groups", default="all", metavar="LIST",
-                        help="groups whose per-subject residuals are written (default all)")
-    parser.add_argument("--residual-models", default="linear", metavar="LIST",
-                        help="model kinds whose per-subject residuals are written (default linear)")
+    parser.add_argument("--correlation-view", default=None, metavar="AZ,EL",
+                        help="view of the Spearman correlation matrix, degrees "
+                             f"(default {','.join(f'{a:g}' for a in d.correlation_view_deg)})")
+    parser.add_argument("--residual-groups", default=None, metavar="LIST",
+                        help=f"groups whose per-subject residuals are written (default {','.join(d.residual_groups)})")
+    parser.add_argument("--residual-models", default=None, metavar="LIST",
+                        help=f"model kinds whose per-subject residuals are written (default {','.join(d.residual_models)})")
     parser.add_argument("--population-kind", default=None, metavar="NAME",
                         help="label of the population in the model file (default: the population file name)")
     parser.set_defaults(func=handle)
@@ -75,31 +84,37 @@ def _floats(text: str, n: int, what: str) -> tuple[float, ...]:
 
 
 def settings_from_args(args: argparse.Namespace):
-    """The :class:`~wbsa.analysis.fit_views.FitSettings` of parsed ``wbsa fit`` arguments."""
-    from wbsa.analysis.fit_views import FitSettings
-    from wbsa.analysis.groups import GroupSpec
+    """The :class:`~wbsa.analysis.settings.FitSettings` of parsed ``wbsa fit`` arguments.
 
-    small, big = _floats(args.stature_cuts, 2, "stature-cuts")
-    if args.predictors is None:
-        sets = ((), ("stature_m",))
-    else:
-        given = [tuple(s.strip() for s in p.split(",") if s.strip() and s.strip().lower() != "none")
-                 for p in args.predictors]
-        sets = tuple(dict.fromkeys([(), *given]))
-    return FitSettings(
-        vbsa_columns=_list(args.vbsa, "vbsa"),
-        predictor_sets=sets,
-        models=_list(args.models, "models"),
-        groups=_list(args.groups, "groups"),
-        group_spec=GroupSpec(kid_max_age_years=args.kid_max_age, small_max_stature_m=small, big_min_stature_m=big,
-                             obese_min_bmi=args.obese_bmi),
-        k=args.k,
-        seed=args.seed,
-        require_in_frame=not args.include_out_of_frame,
-        residual_groups=_list(args.residual_groups, "residual-groups"),
-        residual_models=_list(args.residual_models, "residual-models"),
-        population_kind=args.population_kind or Path(args.population).stem,
-    )
+    Each flag sets the field of the same meaning; a flag left out keeps the field's default.
+    """
+    from wbsa.analysis.groups import GroupSpec
+    from wbsa.analysis.settings import FitSettings, with_vbsa_only
+
+    fields: dict = {"population_kind": args.population_kind or Path(args.population).stem,
+                    "require_in_frame": not args.include_out_of_frame}
+    for flag, name in (("vbsa", "vbsa_columns"), ("models", "models"), ("groups", "groups"),
+                       ("residual_groups", "residual_groups"), ("residual_models", "residual_models")):
+        if getattr(args, flag) is not None:
+            fields[name] = _list(getattr(args, flag), flag.replace("_", "-"))
+    if args.predictors is not None:
+        fields["predictor_sets"] = with_vbsa_only(
+            tuple(s.strip() for s in p.split(",") if s.strip() and s.strip().lower() != "none") for p in args.predictors)
+    for flag in ("k", "seed"):
+        if getattr(args, flag) is not None:
+            fields[flag] = getattr(args, flag)
+    if args.correlation_view is not None:
+        fields["correlation_view_deg"] = _floats(args.correlation_view, 2, "correlation-view")
+    spec: dict = {}
+    if args.stature_cuts is not None:
+        spec["small_max_stature_m"], spec["big_min_stature_m"] = _floats(args.stature_cuts, 2, "stature-cuts")
+    if args.kid_max_age is not None:
+        spec["kid_max_age_years"] = args.kid_max_age
+    if args.obese_bmi is not None:
+        spec["obese_min_bmi"] = args.obese_bmi
+    if spec:
+        fields["group_spec"] = GroupSpec(**spec)
+    return FitSettings(**fields)
 
 
 def handle(args: argparse.Namespace) -> int:
@@ -107,8 +122,7 @@ def handle(args: argparse.Namespace) -> int:
     from wbsa.analysis.outputs import run_fit
 
     settings = settings_from_args(args)
-    view = _floats(args.correlation_view, 2, "correlation-view")
-    out, paths = run_fit(args.population, args.scan, args.out, settings, correlation_view=view)
+    out, paths = run_fit(args.population, args.scan, args.out, settings)
     info = out.info
     w = sys.stdout.write
     w(f"fitted {info['n_fits']} models: {info['n_subjects']} subjects x {info['n_views']} views, "

@@ -33,7 +33,7 @@ def fold_ids(subject_ids: np.ndarray, k: int, seed: int) -> np.ndarray:
         Fold index in ``[0, k)`` of every row.
     """
     if int(k) < 2:
-        raise WbsaError(f"k = {k} folds is too few for cross-validation; use --k 2 or more (paper: 10)")
+        raise WbsaError(f"k = {k} folds is too few for cross-validation; use k = 2 or more (paper: 10)")
     ids = np.asarray(subject_ids)
     uniq = np.unique(ids)
     order = np.random.default_rng(seed).permutation(len(uniq))

@@ -14,8 +14,8 @@ from wbsa.errors import WbsaError
 #: Columns of the scan table that identify a view, in table order.
 VIEW_KEYS: tuple[str, ...] = ("camera", "distance_m", "azimuth_deg", "elevation_deg")
 
-#: Population columns the analysis always needs.
-POPULATION_COLUMNS: tuple[str, ...] = ("subject_id", "sex", "age_years", "stature_m", "mass_kg", "bmi", "wbsa_m2")
+#: The columns of a population table (:data:`wbsa.bodies.table.POPULATION_COLUMNS`) that the fit always reads.
+REQUIRED_POPULATION_COLUMNS: tuple[str, ...] = ("subject_id", "sex", "age_years", "stature_m", "mass_kg", "bmi", "wbsa_m2")
 
 #: Scan columns the analysis always needs (besides the VBSA columns).
 SCAN_COLUMNS: tuple[str, ...] = ("subject_id", "azimuth_deg", "elevation_deg", "distance_m", "camera", "fits_in_frame")
@@ -106,7 +106,8 @@ def join_tables(population: pd.DataFrame, scan: pd.DataFrame, vbsa_columns: tupl
     WbsaError
         Missing columns, duplicate subjects or (subject, view) rows, or scan subjects absent from the population.
     """
-    for what, df, need in (("population", population, POPULATION_COLUMNS), ("scan", scan, SCAN_COLUMNS + vbsa_columns)):
+    for what, df, need in (("population", population, REQUIRED_POPULATION_COLUMNS),
+                           ("scan", scan, SCAN_COLUMNS + vbsa_columns)):
         missing = [c for c in need if c not in df.columns]
         if missing:
             hint = ""

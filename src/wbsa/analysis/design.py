@@ -20,16 +20,12 @@ wls
 
 from __future__ import annotations
 
-from typing import Literal, Mapping, get_args
+from typing import Mapping
 
 import numpy as np
 
 from wbsa.errors import WbsaError
-
-ModelKind = Literal["linear", "quadratic", "loglog", "wls"]
-
-#: Every model kind.
-MODEL_KINDS: tuple[str, ...] = get_args(ModelKind)
+from wbsa.typing import MODEL_KINDS, ModelKind  # noqa: F401 - re-exported for the analysis modules
 
 #: Short description of every model kind, for tables and the report.
 MODEL_DESCRIPTIONS: dict[str, str] = {
@@ -40,11 +36,11 @@ MODEL_DESCRIPTIONS: dict[str, str] = {
 }
 
 
-def check_model_kinds(names: tuple[str, ...] | list[str]) -> tuple[str, ...]:
-    """Validate model kind names; raise :class:`WbsaError` naming the valid ones."""
+def check_model_kinds(names: tuple[str, ...] | list[str], field: str | None = None) -> tuple[str, ...]:
+    """Validate model kind names; raise :class:`WbsaError` naming the valid ones (see ``check_names``)."""
     from wbsa.analysis.groups import check_names
 
-    return check_names(names, tuple(MODEL_KINDS), "model")
+    return check_names(names, MODEL_KINDS, "model", field)
 
 
 def term_names(model: str, predictors: tuple[str, ...] | list[str]) -> tuple[str, ...]:

@@ -3,18 +3,19 @@
 from __future__ import annotations
 
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
 
 from wbsa.analysis.cv import cv_metrics, fold_ids
 from wbsa.analysis.data import VIEW_KEYS, join_tables, resolve_predictor, resolve_vbsa_column
-from wbsa.analysis.design import MODEL_DESCRIPTIONS, check_model_kinds
-from wbsa.analysis.groups import GROUP_NAMES, PAPER_GROUPS, GroupSpec, assign_groups, check_group_names
+from wbsa.analysis.design import MODEL_DESCRIPTIONS
+from wbsa.analysis.groups import GROUP_NAMES, assign_groups
 from wbsa.analysis.model_file import WbsaModel
 from wbsa.analysis.regression import CannotFit, fit_arrays
 from wbsa.analysis.residuals import qq_quantiles, residual_frame
+from wbsa.analysis.settings import FitSettings
 from wbsa.errors import WbsaError
 from wbsa.progress import progress
 
@@ -23,74 +24,6 @@ FIT_KEYS: tuple[str, ...] = ("group", "model", "predictors", "vbsa_column", *VIE
 
 #: Columns of the subgroup CV table.
 SUBGROUP_COLUMNS: list[str] = [*FIT_KEYS, "fit_group", "n", "cv_rmse_m2", "cv_mspe_m4", "cv_mape_pct", "cv_bias_m2"]
-
-
-@dataclass(frozen=True)
-class FitSettings:
-    """What :func:`fit_all` fits.
-
-    Attributes
-    ----------
-    vbsa_columns : tuple of str
-        VBSA selectors (``vbsa_hit_m2``, ``vbsa_visible_m2``, ``vbsa_recon_m2:<method>``), one fit each.
-    predictor_sets : tuple of tuple of str
-        Extra predictors besides VBSA, one fit per set; ``()`` is the VBSA-only model of eq. 5–7,
-        ``('stature_m',)`` eq. 8 with stature. Aliases (``stature``, ``mass``, ``age``, ``sex``) are resolved.
-    models : tuple of str
-        Model kinds (:data:`wbsa.analysis.design.MODEL_KINDS`).
-    groups : tuple of str
-        Groups fitted, each on its own (:data:`wbsa.analysis.groups.GROUP_NAMES`).
-    group_spec : GroupSpec
-        Group thresholds.
-    k : int
-        Cross-validation folds (paper: 10).
-    seed : int
-        Seed of the fold assignment (folds are per group, by subject, the same at every view).
-    require_in_frame : bool
-        Drop scan rows whose body is cut by the image border (``fits_in_frame`` False).
-    qq_points : int
-        Quantiles per fit in the QQ table.
-    residual_groups, residual_models : tuple of str
-        Fits whose per-subject residuals are kept (the table grows as subjects × views).
-    population_kind : str
-        Label of the population (e.g. ``random``, ``survey``), recorded in the model file.
-    """
-
-    vbsa_columns: tuple[str, ...] = ("vbsa_visible_m2",)
-    predictor_sets: tuple[tuple[str, ...], ...] = ((), ("stature_m",))
-    models: tuple[str, ...] = ("linear", "loglog", "wls")
-    groups: tuple[str, ...] = PAPER_GROUPS
-    group_spec: GroupSpec = field(default_factory=GroupSpec)
-    k: int = 10
-    seed: int = 0
-    require_in_frame: bool = True
-    qq_points: int = 99
-    residual_groups: tuple[str, ...] = ("all",)
-    residual_models: tuple[str, ...] = ("linear",)
-    population_kind: str = "unknown"
-
-    def __post_init__(self) -> None:
-        if int(self.k) < 2:
-            raise WbsaError(f"k = {self.k} folds is too few; use --k 2 or more (paper: 10)")
-        if int(self.qq_points) < 2:
-            raise WbsaError(f"qq_points = {self.qq_points} is too few; use 2 or more")
-        check_model_kinds(self.models)
-        check_group_names(self.groups)
-        if not self.vbsa_columns:
-            raise WbsaError("no VBSA column given; use --vbsa vbsa_visible_m2")
-        if not self.predictor_sets:
-            raise WbsaError("no predictor set given; use () for VBSA only")
-        if self.residual_groups:
-            check_group_names(self.residual_groups)
-        if self.residual_models:
-            check_model_kinds(self.residual_models)
-
-    def to_dict(self) -> dict:
-        """Plain-JSON form of the settings."""
-        d = asdict(self)
-        d["group_spec"] = self.group_spec.to_dict()
-        d["predictor_sets"] = [list(s) for s in self.predictor_sets]
-        return d
 
 
 @dataclass
@@ -249,7 +182,7 @@ def _fit_all(population: pd.DataFrame, scan: pd.DataFrame, settings: FitSettings
     rank[order] = np.arange(len(order))
     fits = fits.iloc[order].reset_index(drop=True)
     meta = {
-        "population_kind": settings.population_kind,
+        "population_kind": settings.population_kind or "unknown",
         "cameras": sorted(table["camera"].unique().tolist()),
         "distances_m": sorted(float(d) for d in table["distance_m"].unique()),
         "vbsa_columns": list(vbsa_columns),

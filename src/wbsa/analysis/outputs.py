@@ -9,7 +9,8 @@ import numpy as np
 import pandas as pd
 
 from wbsa.analysis.correlation import correlation_table, spearman_matrix
-from wbsa.analysis.data import POPULATION_COLUMNS, SCAN_COLUMNS, nearest_view, reference_distance, resolve_vbsa_column
+from wbsa.analysis.data import (REQUIRED_POPULATION_COLUMNS, SCAN_COLUMNS, nearest_view, reference_distance,
+                                resolve_vbsa_column)
 from wbsa.analysis.fit_views import FitOutput, FitSettings, fit_all
 from wbsa.analysis.formulae_comparison import compare_formulae
 from wbsa.analysis.groups import COMPARISON_GROUPS
@@ -41,7 +42,7 @@ OUTPUT_FILES: dict[str, str] = {
 def read_inputs(population_path: str | os.PathLike, scan_path: str | os.PathLike,
                 vbsa_columns: tuple[str, ...]) -> tuple[pd.DataFrame, pd.DataFrame]:
     """Read and check the population and scan tables (Parquet or CSV)."""
-    population = read_table(population_path, POPULATION_COLUMNS, what="population")
+    population = read_table(population_path, REQUIRED_POPULATION_COLUMNS, what="population")
     cols = tuple(resolve_vbsa_column(c) for c in vbsa_columns)
     scan = read_table(scan_path, SCAN_COLUMNS + cols, what="scan")
     return population, scan
@@ -98,15 +99,16 @@ def write_outputs(out: FitOutput, population: pd.DataFrame, scan: pd.DataFrame, 
 
 
 def run_fit(population_path: str | os.PathLike, scan_path: str | os.PathLike, out_dir: str | os.PathLike,
-            settings: FitSettings = FitSettings(), correlation_view: tuple[float, float] = (0.0, 0.0),
-            show_progress: bool | None = None, nearest_correlation_view: bool = False
+            settings: FitSettings = FitSettings(), show_progress: bool | None = None,
+            nearest_correlation_view: bool = False
             ) -> tuple[FitOutput, dict[str, Path]]:
     """Read the tables, fit every view, write every output; the API behind ``wbsa fit``.
 
     The correlation matrix (paper Table 2, Spearman) is computed first with the first VBSA column,
-    at the scanned distance nearest the paper's 4.3 m and at ``correlation_view`` (an unscanned view is an
-    error, found before the long fit, unless ``nearest_correlation_view`` picks the nearest scanned one).
+    at the scanned distance nearest the paper's 4.3 m and at ``settings.correlation_view_deg`` (an unscanned view
+    is an error, found before the long fit, unless ``nearest_correlation_view`` picks the nearest scanned one).
     """
+    correlation_view = tuple(float(a) for a in settings.correlation_view_deg)
     population, scan = read_inputs(population_path, scan_path, settings.vbsa_columns)
     vcol = resolve_vbsa_column(settings.vbsa_columns[0])
     distance = reference_distance(scan["distance_m"].unique().tolist())
@@ -120,7 +122,7 @@ def run_fit(population_path: str | os.PathLike, scan_path: str | os.PathLike, ou
     if out.fits.empty:
         reason = out.skipped["reason"].iloc[0] if len(out.skipped) else "no scan rows"
         raise WbsaError(f"no model could be fitted ({len(out.skipped)} combinations skipped, e.g. {reason}); "
-                        "lower --k, include more subjects or check the VBSA column")
+                        "lower k, include more subjects or check the VBSA column")
     paths = write_outputs(out, population, scan, out_dir, settings, correlation,
                           inputs={"population": population_path, "scan": scan_path})
     return out, paths

@@ -34,9 +34,7 @@ import pandas as pd
 from wbsa.bodies.body_model import PHENOTYPE_COLUMNS, BodyModel, RestBodies
 from wbsa.core.mesh import face_cross_products
 from wbsa.bodies.sections import HorizontalSlicer, edge_plane_crossings, tape_perimeter_m, width_along_m
-
-#: Default body density (kg/m³), as anny's own ``Anthropometry``.
-DEFAULT_DENSITY_KG_M3 = 980.0
+from wbsa.bodies.settings import DEFAULT_DENSITY_KG_M3  # noqa: F401 - re-exported (defined with the population settings)
 
 #: Columns :func:`measure` returns, in order.
 MEASURE_COLUMNS = (

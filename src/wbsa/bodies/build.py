@@ -2,14 +2,12 @@
 
 from __future__ import annotations
 
-from typing import Literal
-
 import pandas as pd
 
 from wbsa.errors import WbsaError
 from wbsa.bodies.anthropometry import DEFAULT_DENSITY_KG_M3
-
-PopulationKind = Literal["random", "survey", "table"]
+from wbsa.bodies.settings import PopulationSettings
+from wbsa.typing import PopulationKind
 
 
 def build_population(kind: PopulationKind, n: int | None = None, seed: int = 0, *,
@@ -18,6 +16,9 @@ def build_population(kind: PopulationKind, n: int | None = None, seed: int = 0, 
                      show_progress: bool | None = None, workers: int = 1,
                      scheduler: str | None = None) -> pd.DataFrame:
     """Build a population table.
+
+    The settings are checked as a :class:`~wbsa.bodies.settings.PopulationSettings` (same names), so
+    ``build_population(**dataclasses.asdict(settings))`` builds the population of ``settings``.
 
     Parameters
     ----------
@@ -31,11 +32,11 @@ def build_population(kind: PopulationKind, n: int | None = None, seed: int = 0, 
     """
     from wbsa.bodies.table import measure_population
 
+    PopulationSettings(kind=kind, n=n, seed=seed, density_kg_m3=density_kg_m3, variations=variations,
+                       survey_weights=survey_weights, params_path=params_path)  # checks every argument
     if kind == "random":
         from wbsa.bodies.random_population import RandomPopulationSettings, sample_random_parameters
 
-        if n is None:
-            raise WbsaError("--kind random needs --n, the number of subjects")
         params = sample_random_parameters(RandomPopulationSettings(n=n, seed=seed))
         return measure_population(params, density_kg_m3=density_kg_m3, show_progress=show_progress,
                                   workers=workers, scheduler=scheduler)
@@ -47,11 +48,9 @@ def build_population(kind: PopulationKind, n: int | None = None, seed: int = 0, 
             from wbsa.bodies.survey import build_survey_population
         except ModuleNotFoundError:
             raise WbsaError("the survey population is not available in this build") from None
-        if n is None:
-            raise WbsaError("--kind survey needs --n, the number of survey people")
         return build_survey_population(n=n, variations=variations, seed=seed, density_kg_m3=density_kg_m3,
                                        survey_weights=survey_weights, show_progress=show_progress)
-    raise WbsaError(f"unknown population kind {kind!r}; use random, survey or table")
+    raise AssertionError(kind)  # pragma: no cover - PopulationSettings accepts only the kinds above
 
 
 def _read_params(path: str | None) -> pd.DataFrame:
@@ -61,8 +60,6 @@ def _read_params(path: str | None) -> pd.DataFrame:
     from wbsa.io import read_table
     from wbsa.bodies.age import param_to_years
 
-    if not path:
-        raise WbsaError("--kind table needs --params FILE with p_gender, p_age, ... columns")
     required = ("p_gender", "p_age", "p_muscle", "p_weight", "p_height", "p_proportions",
                 "p_african", "p_asian", "p_caucasian")
     df = read_table(path, required=required, what="phenotype table").copy()

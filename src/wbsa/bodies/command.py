@@ -11,23 +11,31 @@ from wbsa.errors import WbsaError
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``population`` and ``body`` subcommands."""
+    from types import SimpleNamespace
+
+    from wbsa.bodies.settings import PopulationSettings
+    from wbsa.settings_io import field_defaults
+    from wbsa.typing import POPULATION_KINDS
+
+    d = SimpleNamespace(**field_defaults(PopulationSettings))
     p = sub.add_parser("population", help="build a virtual population and its anthropometric table",
                        description="Build a virtual population (one row per subject: phenotypes, stature, mass, "
                                    "BMI, WBSA, tape measures; SI units).")
-    p.add_argument("--kind", required=True, choices=("random", "survey", "table"),
+    p.add_argument("--kind", required=True, choices=POPULATION_KINDS,
                    help="random: uniform macro parameters (paper's Virtual Random); survey: matched to NHANES "
                         "people; table: phenotypes from --params")
     p.add_argument("--n", type=int, help="number of subjects (random) or survey people (survey)")
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--seed", type=int, default=d.seed, help=f"random seed (default {d.seed})")
     p.add_argument("--out", required=True, help="output table (.parquet, .csv or .xlsx)")
     p.add_argument("--format", choices=("parquet", "csv", "xlsx"), help="table format (default: from --out's suffix)")
-    p.add_argument("--density", type=float, default=980.0, metavar="KG_M3",
-                   help="body density for mass = volume × density (default 980 kg/m³, as anny)")
+    p.add_argument("--density", type=float, default=d.density_kg_m3, metavar="KG_M3",
+                   help=f"body density for mass = volume × density (default {d.density_kg_m3:g} kg/m³, as anny)")
     p.add_argument("--params", help="(--kind table) Parquet/CSV with p_gender, p_age, ... columns in [0, 1]")
-    p.add_argument("--variations", type=int, default=0, help="(--kind survey) weight/muscle variations per person")
+    p.add_argument("--variations", type=int, default=d.variations,
+                   help="(--kind survey) weight/muscle variations per person")
     p.add_argument("--survey-weights", action="store_true", help="(--kind survey) select people by exam weights")
-    p.add_argument("--workers", type=int, default=None,
-                   help="worker processes (default: all cores; 1 = in this process)")
+    p.add_argument("--workers", type=int, default=0,
+                   help="worker processes (default 0: all cores; 1 = in this process)")
     p.add_argument("--scheduler", default=None,
                    help="address of an existing dask scheduler (default: $DASK_SCHEDULER_ADDRESS)")
     p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
@@ -43,18 +51,28 @@ def register(sub: argparse._SubParsersAction) -> None:
     b.set_defaults(func=run_body)
 
 
+def settings_from_args(args: argparse.Namespace):
+    """The :class:`~wbsa.bodies.settings.PopulationSettings` of parsed ``wbsa population`` arguments."""
+    from wbsa.bodies.settings import PopulationSettings
+
+    return PopulationSettings(kind=args.kind, n=args.n, seed=args.seed, density_kg_m3=args.density,
+                              variations=args.variations, survey_weights=args.survey_weights, params_path=args.params)
+
+
 def run_population(args: argparse.Namespace) -> int:
     """Handler of ``wbsa population``."""
-    from wbsa.io import write_table
-    from wbsa.parallel import default_workers
-    from wbsa.bodies.build import build_population
+    import dataclasses
 
+    from wbsa.bodies.build import build_population
+    from wbsa.io import write_table
+    from wbsa.parallel import RunSettings
+
+    settings = settings_from_args(args)
+    run = RunSettings(workers=args.workers, scheduler=args.scheduler, progress=args.progress)
     out = Path(args.out)
     fmt = args.format or _format_of(out)
-    df = build_population(kind=args.kind, n=args.n, seed=args.seed, density_kg_m3=args.density,
-                          params_path=args.params, variations=args.variations,
-                          survey_weights=args.survey_weights, show_progress=args.progress,
-                          workers=args.workers or default_workers(), scheduler=args.scheduler)
+    df = build_population(**dataclasses.asdict(settings), show_progress=run.progress, workers=run.n_workers,
+                          scheduler=run.scheduler)
     write_table(df, out, fmt)
     print(f"wrote {len(df)} subjects to {out}")
     return 0

@@ -20,7 +20,8 @@ from wbsa.report.claim import comparisons_display, compute_claim, group_spec_of,
 from wbsa.report.data import ReportData, load_report_data, select
 from wbsa.report.html import Page, png_bytes
 from wbsa.report.sources import ReportSources, resolve_sources
-from wbsa.study.settings import ReportConfig, section_from_table
+from wbsa.report.settings import ReportSettings
+from wbsa.settings_io import from_table
 
 #: Figures of the report in order: id -> what it reproduces.
 FIGURES: dict[str, str] = {
@@ -62,16 +63,18 @@ class ReportResult:
     seconds: float = 0.0
 
 
-def report_settings_of(sources: ReportSources) -> ReportConfig:
+def report_settings_of(sources: ReportSources) -> ReportSettings:
     """The ``[report]`` settings recorded in the study's manifest, or the defaults."""
     table = sources.manifest.get("settings", {}).get("report")
     if not table:
-        return ReportConfig()
-    return section_from_table(ReportConfig, table, "report", str(sources.study_dir or sources.fit_dir))
+        return ReportSettings()
+    if table.get("snapshot_subject") == -1:  # manifests written before optional keys: -1 meant "not set"
+        table = {k: v for k, v in table.items() if k != "snapshot_subject"}
+    return from_table(ReportSettings, table, "report", str(sources.study_dir or sources.fit_dir))
 
 
 def build_report(sources: ReportSources | str | os.PathLike, out: str | os.PathLike,
-                 settings: ReportConfig | None = None, *, show_progress: bool | None = None) -> ReportResult:
+                 settings: ReportSettings | None = None, *, show_progress: bool | None = None) -> ReportResult:
     """Draw every figure, lay out every table and write one HTML file.
 
     Parameters
@@ -80,7 +83,7 @@ def build_report(sources: ReportSources | str | os.PathLike, out: str | os.PathL
         The inputs, or a study / fit folder (see :func:`wbsa.report.sources.resolve_sources`).
     out : path
         The HTML file to write (atomically).
-    settings : ReportConfig, optional
+    settings : ReportSettings, optional
         Views of the single-view figures; default: the study's ``[report]`` settings.
     show_progress : bool, optional
         Progress bar over the figures.
@@ -117,7 +120,7 @@ def build_report(sources: ReportSources | str | os.PathLike, out: str | os.PathL
 class _Builder:
     """Fills a :class:`Page` section by section from a :class:`ReportData`."""
 
-    def __init__(self, data: ReportData, settings: ReportConfig) -> None:
+    def __init__(self, data: ReportData, settings: ReportSettings) -> None:
         self.d = data
         self.s = settings
         self.dpi = int(settings.dpi)
@@ -318,7 +321,7 @@ class _Builder:
             raise F.FigureUnavailable(f"the population lacks the body parameters ({', '.join(missing)})")
         try:
             intr = snapshot_intrinsics(d.sources.scan_paths, d.camera)
-            sid = pick_subject(d.population, int(self.s.snapshot_subject))
+            sid = pick_subject(d.population, self.s.snapshot_subject)
             snap = render_snapshot(d.population, sid, intr, az, el, d.distance_m)
         except WbsaError as exc:
             raise F.FigureUnavailable(str(exc)) from None

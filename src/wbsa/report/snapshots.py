@@ -53,9 +53,9 @@ def snapshot_intrinsics(scan_paths: tuple[Path, ...], camera: str):
     raise WbsaError(f"camera {camera!r} is not a preset and no intrinsics.json lies beside the scan")
 
 
-def pick_subject(population: pd.DataFrame, subject_id: int = -1) -> int:
-    """``subject_id`` if given (>= 0), else the subject whose WBSA is the median."""
-    if subject_id >= 0:
+def pick_subject(population: pd.DataFrame, subject_id: int | None = None) -> int:
+    """``subject_id`` if given, else the subject whose WBSA is the median."""
+    if subject_id is not None:
         if not (population["subject_id"] == subject_id).any():
             raise WbsaError(f"snapshot subject {subject_id} is not in the population; set [report] snapshot_subject")
         return int(subject_id)

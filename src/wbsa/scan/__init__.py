@@ -18,6 +18,7 @@ _EXPORTS = {
     "scan_population": "wbsa.scan.engine",
     "run_chunk": "wbsa.scan.engine",
     "ScanSettings": "wbsa.scan.settings",
+    "ScanJob": "wbsa.scan.settings",
     "settings_hash": "wbsa.scan.settings",
     "population_fingerprint": "wbsa.scan.settings",
     "scan_chunk": "wbsa.scan.worker",

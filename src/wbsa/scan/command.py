@@ -5,7 +5,8 @@ from __future__ import annotations
 import argparse
 import sys
 
-from wbsa.scan.settings import DEFAULT_CHUNK_SIZE
+from wbsa.parallel import RunSettings
+from wbsa.scan.settings import ScanSettings
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -20,23 +21,25 @@ def register(subparsers: argparse._SubParsersAction) -> None:
             "they finish, so running the same command again after a crash resumes where it stopped."
         ),
     )
+    d, run = ScanSettings(), RunSettings()
     p.add_argument("population", metavar="POPULATION", help="population table (.parquet) from wbsa population")
-    p.add_argument("--views", default=None, metavar="SPEC",
-                   help="view set: paper (65 views, default), front, sphere:N or grid:STEP")
+    p.add_argument("--views", default=d.views, metavar="SPEC",
+                   help=f"view set: paper (65 views), front, sphere:N or grid:STEP (default {d.views})")
     p.add_argument("--azimuths", default=None, metavar="DEG",
                    help="azimuths instead of --views, e.g. '0,30,90' or '0:180:30' (crossed with --elevations)")
     p.add_argument("--elevations", default=None, metavar="DEG", help="elevations instead of --views, e.g. '0,30'")
-    p.add_argument("--camera", default="kinect-v1", metavar="NAME|JSON",
-                   help="camera preset (kinect-v1, kinect-v2, tum) or Open3D intrinsics JSON (default kinect-v1)")
-    p.add_argument("--distance", type=float, default=4.3, metavar="M",
-                   help="camera distance from the body's centre in metres (default 4.3, the paper's)")
+    p.add_argument("--camera", default=d.camera, metavar="NAME|JSON",
+                   help=f"camera preset (kinect-v1, kinect-v2, tum) or Open3D intrinsics JSON (default {d.camera})")
+    p.add_argument("--distance", type=float, default=d.distances_m[0], metavar="M",
+                   help=f"camera distance from the body's centre in metres (default {d.distances_m[0]:g}, the paper's)")
     p.add_argument("--out", required=True, metavar="DIR",
                    help="scan folder (parts/, scan.parquet, settings.json, intrinsics.json)")
-    p.add_argument("--seed", type=int, default=0, help="root seed of the per-subject sensor noise (default 0)")
-    p.add_argument("--chunk-size", type=int, default=DEFAULT_CHUNK_SIZE, metavar="N",
-                   help=f"subjects per chunk, the unit of parallel work and of resuming (default {DEFAULT_CHUNK_SIZE})")
-    p.add_argument("--workers", type=int, default=None, metavar="N",
-                   help="local worker processes (default: all cores); 1 scans in this process without dask")
+    p.add_argument("--seed", type=int, default=d.seed, help=f"root seed of the per-subject sensor noise (default {d.seed})")
+    p.add_argument("--chunk-size", type=int, default=run.chunk_size, metavar="N",
+                   help="subjects per chunk, the unit of parallel work and of resuming; a folder keeps the chunk "
+                        f"size it was started with (default {run.chunk_size})")
+    p.add_argument("--workers", type=int, default=run.workers, metavar="N",
+                   help="local worker processes (default 0: all cores); 1 scans in this process without dask")
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
                    help="use an existing dask scheduler, e.g. tcp://10.0.0.5:8786 (default: $DASK_SCHEDULER_ADDRESS)")
     p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
@@ -55,36 +58,40 @@ def _add_optional_stage_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def settings_from_args(args: argparse.Namespace):
-    """The :class:`~wbsa.scan.settings.ScanSettings` that the command line asks for.
+    """The :class:`~wbsa.scan.settings.ScanJob` that the command line asks for.
+
+    The camera and view flags set the fields of :class:`~wbsa.scan.settings.ScanSettings` (``--azimuths``
+    and ``--elevations`` replace ``--views``), the sensor flags :class:`~wbsa.sensor.SensorSettings`, the
+    reconstruction flags :class:`~wbsa.surface.ReconstructionSettings`.
 
     Raises
     ------
     WbsaError
         Unknown camera or view set, bad numbers.
     """
-    from wbsa.camera.intrinsics import resolve_camera
-    from wbsa.camera.views import parse_views
-    from wbsa.scan.settings import ScanSettings
+    from wbsa.camera.views import parse_angles
 
-    camera = resolve_camera(args.camera)
-    spec = args.views if (args.views is not None or args.azimuths is not None or args.elevations is not None) else "paper"
-    views = parse_views(spec, azimuths=args.azimuths, elevations=args.elevations, distance_m=args.distance)
-    sensor = None
+    scan = ScanSettings(camera=args.camera, views=args.views,
+                        azimuths_deg=tuple(parse_angles(args.azimuths, "azimuths")) if args.azimuths is not None else (),
+                        elevations_deg=tuple(parse_angles(args.elevations, "elevations"))
+                        if args.elevations is not None else (),
+                        distances_m=(args.distance,), seed=args.seed)
+    sensor = reconstruction = None
     if hasattr(args, "noise"):
-        from wbsa.sensor.cli import sensor_model_from_args
+        from wbsa.sensor.cli import sensor_settings_from_args
 
-        sensor = sensor_model_from_args(args, camera)
-        if sensor.is_ideal:
-            sensor = None
-    methods, reconstruction = (), None
-    if getattr(args, "reconstruct", None):
-        from wbsa.surface.cli import reconstruct_methods_from_args, reconstruction_settings_from_args
+        sensor = sensor_settings_from_args(args)
+    if hasattr(args, "reconstruct"):
+        from wbsa.surface.cli import reconstruction_settings_from_args
 
-        methods = reconstruct_methods_from_args(args)
         reconstruction = reconstruction_settings_from_args(args)
-    return ScanSettings(camera=camera, views=tuple(views), sensor=sensor, reconstruct=methods,
-                        reconstruction=reconstruction, seed=args.seed,
-                        chunk_size=args.chunk_size)
+    return scan.job(args.distance, sensor=sensor, reconstruction=reconstruction)
+
+
+def run_settings_from_args(args: argparse.Namespace) -> RunSettings:
+    """The :class:`~wbsa.parallel.RunSettings` of ``--workers``, ``--scheduler``, ``--chunk-size``, ``--progress``."""
+    return RunSettings(workers=args.workers, scheduler=args.scheduler, chunk_size=args.chunk_size,
+                       progress=args.progress)
 
 
 def handle(args: argparse.Namespace) -> int:
@@ -92,8 +99,9 @@ def handle(args: argparse.Namespace) -> int:
     from wbsa.scan.engine import scan_population
 
     settings = settings_from_args(args)
-    result = scan_population(args.population, settings, args.out, workers=args.workers, scheduler=args.scheduler,
-                             show_progress=args.progress)
+    run = run_settings_from_args(args)
+    result = scan_population(args.population, settings, args.out, workers=run.n_workers, scheduler=run.scheduler,
+                             chunk_size=run.chunk_size, show_progress=run.progress)
     n_subjects = result.table["subject_id"].nunique()
     views_per_s = result.n_views_scanned / result.seconds if result.seconds > 0 else float("nan")
     resumed = f", {result.n_resumed} of {result.n_chunks} chunks resumed" if result.n_resumed else ""

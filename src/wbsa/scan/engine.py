@@ -1,11 +1,12 @@
 """The parallel, resumable scan engine: chunks of subjects, one Parquet part per chunk.
 
 The engine knows nothing about bodies or cameras: it calls a *chunk function*
-``chunk_fn(subjects: DataFrame, settings: ScanSettings) -> DataFrame`` (by default
+``chunk_fn(subjects: DataFrame, settings: ScanJob) -> DataFrame`` (by default
 :func:`wbsa.scan.worker.scan_chunk`) on every unfinished chunk, either in this process
 (``workers=1``) or as one ``dask.distributed`` task per chunk on a local cluster or on an
 existing one (``scheduler=ADDRESS``), and writes each returned table atomically as its own
-part. Rows depend only on the subject and the settings, never on the chunking or the workers.
+part. Rows depend only on the subject and the job, never on the chunking or the workers, so neither
+is part of the folder's settings hash; a folder keeps the chunk size it was started with.
 """
 
 from __future__ import annotations
@@ -22,14 +23,14 @@ import pandas as pd
 from wbsa.core.versions import WBSA_VERSION as __version__
 from wbsa.errors import WbsaError
 from wbsa.io import write_json, write_table
-from wbsa.parallel import default_workers, resolve_scheduler
+from wbsa.parallel import DEFAULT_CHUNK_SIZE, default_workers, resolve_scheduler
 from wbsa.progress import progress
 from wbsa.scan.layout import (INTRINSICS_FILE, SORT_COLUMNS, TABLE_FILE, Chunk, assemble_table, open_scan_folder,
                               part_path, pending_chunks, plan_chunks, remove_stale_temporaries)
-from wbsa.scan.settings import ScanSettings, population_fingerprint, settings_hash
+from wbsa.scan.settings import ScanJob, population_fingerprint, settings_hash
 
 #: ``chunk_fn(subjects, settings) -> rows``: scans the subjects (rows of the population table) at every view.
-ChunkFn = Callable[[pd.DataFrame, ScanSettings], pd.DataFrame]
+ChunkFn = Callable[[pd.DataFrame, ScanJob], pd.DataFrame]
 
 @dataclass(frozen=True)
 class ScanResult:
@@ -59,24 +60,28 @@ class ScanResult:
     seconds: float
 
 
-def scan_population(population: pd.DataFrame | str | os.PathLike, settings: ScanSettings, out_dir: str | os.PathLike,
-                    *, workers: int | None = None, scheduler: str | None = None, chunk_fn: ChunkFn | None = None,
-                    show_progress: bool | None = None) -> ScanResult:
+def scan_population(population: pd.DataFrame | str | os.PathLike, settings: ScanJob, out_dir: str | os.PathLike,
+                    *, workers: int | None = None, scheduler: str | None = None, chunk_size: int | None = None,
+                    chunk_fn: ChunkFn | None = None, show_progress: bool | None = None) -> ScanResult:
     """Scan every subject of a population at every view, in parallel, resuming a killed run.
 
     Parameters
     ----------
     population : DataFrame or path
         Population table (``wbsa.bodies.table.read_population`` format), or its Parquet path.
-    settings : ScanSettings
+    settings : ScanJob
+        What to scan (from :meth:`wbsa.scan.settings.ScanSettings.job`).
     out_dir : path
         Scan folder (see :mod:`wbsa.scan.layout`). If it holds an unfinished scan with the same
-        settings and population, the finished chunks are kept and only the others are scanned.
+        job and population, the finished chunks are kept and only the others are scanned.
     workers : int, optional
         Local worker processes (default: all cores). ``1`` scans in this process, without dask.
     scheduler : str, optional
         Address of an existing dask scheduler (default: ``$DASK_SCHEDULER_ADDRESS`` if set);
         overrides ``workers``.
+    chunk_size : int, optional
+        Subjects per chunk (default :data:`wbsa.parallel.DEFAULT_CHUNK_SIZE`). A folder that already holds
+        a scan keeps the chunk size it was started with, so changing it never re-scans finished chunks.
     chunk_fn : callable, optional
         ``chunk_fn(subjects, settings) -> DataFrame``; default :func:`wbsa.scan.worker.scan_chunk`.
         It must be importable (or picklable) by the dask workers.
@@ -94,7 +99,9 @@ def scan_population(population: pd.DataFrame | str | os.PathLike, settings: Scan
     """
     t0 = time.perf_counter()
     if workers is not None and int(workers) < 1:
-        raise WbsaError(f"--workers must be at least 1, got {workers}")
+        raise WbsaError(f"workers must be at least 1, got {workers}")
+    if chunk_size is not None and int(chunk_size) < 1:
+        raise WbsaError(f"chunk_size must be at least 1 subject, got {chunk_size}")
     out_dir = Path(out_dir)
     population_path = None
     if not isinstance(population, pd.DataFrame):
@@ -115,14 +122,15 @@ def scan_population(population: pd.DataFrame | str | os.PathLike, settings: Scan
                        "n_subjects": len(subjects), "fingerprint": fingerprint},
         "camera": settings.camera_name,
         "n_views": len(settings.views),
+        "chunk_size": int(chunk_size or DEFAULT_CHUNK_SIZE),
         "wbsa_version": __version__,
     }
-    open_scan_folder(out_dir, doc)
+    chunk_size = open_scan_folder(out_dir, doc)
     if hasattr(settings.camera, "to_open3d_json"):
         write_json(settings.camera.to_open3d_json(), out_dir / INTRINSICS_FILE)
     remove_stale_temporaries(out_dir)
 
-    chunks = plan_chunks(subjects["subject_id"].to_numpy(), settings.chunk_size)
+    chunks = plan_chunks(subjects["subject_id"].to_numpy(), chunk_size)
     todo = pending_chunks(out_dir, chunks)
     n_views_todo = sum(c.n_subjects for c in todo) * len(settings.views)
     if todo:
@@ -144,7 +152,7 @@ def scan_population(population: pd.DataFrame | str | os.PathLike, settings: Scan
                       n_views_scanned=n_views_todo, seconds=time.perf_counter() - t0)
 
 
-def run_chunk(chunk_fn: ChunkFn, subjects: pd.DataFrame, settings: ScanSettings) -> pd.DataFrame:
+def run_chunk(chunk_fn: ChunkFn, subjects: pd.DataFrame, settings: ScanJob) -> pd.DataFrame:
     """Scan one chunk and check the rows (runs on the worker).
 
     Raises
@@ -163,7 +171,7 @@ def run_chunk(chunk_fn: ChunkFn, subjects: pd.DataFrame, settings: ScanSettings)
     return rows.reset_index(drop=True)
 
 
-def _run_in_process(subjects: pd.DataFrame, todo: list[Chunk], settings: ScanSettings, chunk_fn: ChunkFn,
+def _run_in_process(subjects: pd.DataFrame, todo: list[Chunk], settings: ScanJob, chunk_fn: ChunkFn,
                     out_dir: Path, bar) -> None:
     for chunk in todo:
         rows = run_chunk(chunk_fn, subjects.iloc[chunk.start:chunk.stop], settings)
@@ -171,7 +179,7 @@ def _run_in_process(subjects: pd.DataFrame, todo: list[Chunk], settings: ScanSet
         bar.update(len(rows))
 
 
-def _run_dask(subjects: pd.DataFrame, todo: list[Chunk], settings: ScanSettings, chunk_fn: ChunkFn, out_dir: Path,
+def _run_dask(subjects: pd.DataFrame, todo: list[Chunk], settings: ScanJob, chunk_fn: ChunkFn, out_dir: Path,
               bar, *, workers: int, scheduler: str | None) -> None:
     """One task per chunk; the parts are written here, so workers need no shared file system."""
     from wbsa.parallel import dask_client, map_unordered

@@ -75,14 +75,20 @@ def plan_chunks(subject_ids: np.ndarray, chunk_size: int) -> list[Chunk]:
             for start in range(0, len(ids), chunk_size)]
 
 
-def open_scan_folder(out_dir: Path, settings_doc: dict) -> None:
+def open_scan_folder(out_dir: Path, settings_doc: dict) -> int:
     """Create ``out_dir`` for a scan, or check that it holds a scan with the same settings hash.
 
     Parameters
     ----------
     out_dir : Path
     settings_doc : dict
-        The content of ``settings.json``; must contain ``settings_hash``.
+        The content of ``settings.json``; must contain ``settings_hash`` and ``chunk_size``.
+
+    Returns
+    -------
+    int
+        The folder's chunk size: the one recorded when the folder was started (its parts follow that
+        plan), else ``settings_doc['chunk_size']``.
 
     Raises
     ------
@@ -92,10 +98,13 @@ def open_scan_folder(out_dir: Path, settings_doc: dict) -> None:
     if out_dir.exists() and not out_dir.is_dir():
         raise WbsaError(f"--out {out_dir} is a file; give a folder for the scan")
     settings_path = out_dir / SETTINGS_FILE
+    chunk_size = int(settings_doc["chunk_size"])
     if settings_path.exists():
         try:
-            old_hash = json.loads(settings_path.read_text()).get("settings_hash")
-        except (OSError, ValueError, AttributeError):
+            old = json.loads(settings_path.read_text())
+            old_hash = old.get("settings_hash")
+            chunk_size = int(old.get("chunk_size", chunk_size))
+        except (OSError, ValueError, TypeError, AttributeError):
             old_hash = None
         if old_hash != settings_doc["settings_hash"]:
             raise WbsaError(f"{out_dir} holds a scan made with other settings or another population "
@@ -107,6 +116,7 @@ def open_scan_folder(out_dir: Path, settings_doc: dict) -> None:
                             "use another --out")
         write_json(settings_doc, settings_path)
     (out_dir / PARTS_DIR).mkdir(parents=True, exist_ok=True)
+    return chunk_size
 
 
 def remove_stale_temporaries(out_dir: Path) -> int:

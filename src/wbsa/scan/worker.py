@@ -17,7 +17,7 @@ import pandas as pd
 
 from wbsa.errors import WbsaError
 from wbsa.parallel import keep_large_allocations, single_threaded_math
-from wbsa.scan.settings import ScanSettings
+from wbsa.scan.settings import ScanJob
 
 _BODY_MODEL = None
 
@@ -67,14 +67,14 @@ def _in_dask_worker() -> bool:
         return False
 
 
-def scan_chunk(subjects: pd.DataFrame, settings: ScanSettings) -> pd.DataFrame:
+def scan_chunk(subjects: pd.DataFrame, settings: ScanJob) -> pd.DataFrame:
     """Scan a chunk of subjects at every view of ``settings``.
 
     Parameters
     ----------
     subjects : DataFrame
         Rows of a population table: ``subject_id`` and the ``p_*`` phenotype columns.
-    settings : ScanSettings
+    settings : ScanJob
 
     Returns
     -------
@@ -91,7 +91,7 @@ def scan_chunk(subjects: pd.DataFrame, settings: ScanSettings) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def scan_subject(mesh, subject_id: int, settings: ScanSettings, *, nthreads: int = 0) -> list[dict[str, Any]]:
+def scan_subject(mesh, subject_id: int, settings: ScanJob, *, nthreads: int = 0) -> list[dict[str, Any]]:
     """All views of one body.
 
     Parameters
@@ -99,7 +99,7 @@ def scan_subject(mesh, subject_id: int, settings: ScanSettings, *, nthreads: int
     mesh : TriangleMesh
         The subject's skin mesh (metres, standing on z = 0).
     subject_id : int
-    settings : ScanSettings
+    settings : ScanJob
     nthreads : int
         Open3D threads per ray cast (0 = all cores).
 

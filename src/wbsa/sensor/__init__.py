@@ -2,7 +2,7 @@
 
 Nguyen et al. 2012 Kinect v1 noise, disparity quantisation, range limits and holes (the paper's
 dropped triangles, random pixel dropout, grazing-angle dropout), all seeded and optional
-(:class:`SensorModel`, :func:`apply_sensor`); depth PNG I/O lives in :mod:`wbsa.core.depth_image`.
+(:class:`SensorSettings`, :func:`apply_sensor`); depth PNG I/O lives in :mod:`wbsa.core.depth_image`.
 
 Names are imported lazily, so ``from wbsa.sensor.cli import add_sensor_arguments`` stays cheap
 for the CLI.
@@ -14,13 +14,13 @@ from wbsa.lazy import lazy_exports
 
 _EXPORTS = {
     "apply_sensor": "wbsa.sensor.apply",
-    "NOISE_MODELS": "wbsa.sensor.model",
-    "SensorModel": "wbsa.sensor.model",
+    "NOISE_MODELS": "wbsa.typing",
+    "SensorSettings": "wbsa.sensor.settings",
     "axial_sigma_m": "wbsa.sensor.nguyen2012",
     "lateral_sigma_m": "wbsa.sensor.nguyen2012",
     "lateral_sigma_px": "wbsa.sensor.nguyen2012",
     "add_sensor_arguments": "wbsa.sensor.cli",
-    "sensor_model_from_args": "wbsa.sensor.cli",
+    "sensor_settings_from_args": "wbsa.sensor.cli",
     "view_rng": "wbsa.sensor.measure",
     "sense_view": "wbsa.sensor.measure",
 }

@@ -10,7 +10,7 @@ from scipy import ndimage
 from wbsa.core.frame import DepthFrame
 from wbsa.errors import WbsaError
 from wbsa.sensor import nguyen2012
-from wbsa.sensor.model import SensorModel
+from wbsa.sensor.settings import SensorSettings
 from wbsa.core.backproject import ray_directions
 
 #: Background pixels within this many pixels of a return may pick it up through lateral noise.
@@ -19,10 +19,10 @@ _LATERAL_REACH_PX = 2
 _SAME_SURFACE_RATIO = 0.05
 
 
-def apply_sensor(frame: DepthFrame, model: SensorModel, rng: np.random.Generator) -> DepthFrame:
+def apply_sensor(frame: DepthFrame, sensor: SensorSettings, rng: np.random.Generator) -> DepthFrame:
     """Simulate a depth sensor on an ideal frame.
 
-    The effects of ``model`` are applied in this order, each drawing from its own child stream of
+    The effects of ``sensor`` are applied in this order, each drawing from its own child stream of
     ``rng`` (so enabling one effect does not change the others' draws):
 
     1. holes: drop ``holes_fraction`` of the visible triangles (exactly ``round(f · n_visible)`` of
@@ -44,7 +44,7 @@ def apply_sensor(frame: DepthFrame, model: SensorModel, rng: np.random.Generator
     frame : DepthFrame
         An ideal frame (from :func:`wbsa.camera.render`, or :func:`wbsa.core.frame_from_depth_image`
         for effects that need no triangle IDs).
-    model : SensorModel
+    sensor : SensorSettings
     rng : numpy.random.Generator
         Source of randomness; same generator state and settings give the same frame.
 
@@ -52,16 +52,16 @@ def apply_sensor(frame: DepthFrame, model: SensorModel, rng: np.random.Generator
     -------
     DepthFrame
         Same contract as the input; lost pixels have depth 0, triangle_id -1 and NaN points/normals.
-        ``settings["sensor"]`` records ``model.to_dict()``.
+        ``settings["sensor"]`` records ``sensor.to_dict()``.
 
     Raises
     ------
     WbsaError
         If triangle holes are asked for on a frame without triangle IDs.
     """
-    settings = {**frame.settings, "sensor": model.to_dict()}
+    settings = {**frame.settings, "sensor": sensor.to_dict()}
     holes_stream, lateral_stream, axial_stream, dropout_stream = rng.spawn(4)
-    if model.is_ideal:
+    if sensor.is_ideal:
         return dataclasses.replace(frame, settings=settings)
 
     h, w = frame.depth_m.shape
@@ -84,25 +84,25 @@ def apply_sensor(frame: DepthFrame, model: SensorModel, rng: np.random.Generator
     depth_changed = False
 
     # 1. the paper's holes: drop a random subset of the visible triangles
-    if model.holes_fraction > 0:
+    if sensor.holes_fraction > 0:
         visible = np.unique(tri[valid])
         visible = visible[visible >= 0]
         if visible.size == 0:
             raise WbsaError("triangle holes need a rendered frame with triangle IDs; "
                             "use pixel_dropout (--pixel-dropout) for depth images")
-        n_drop = int(round(model.holes_fraction * visible.size))
+        n_drop = int(round(sensor.holes_fraction * visible.size))
         dropped = holes_stream.choice(visible, size=n_drop, replace=False)
         valid &= ~np.isin(tri, dropped)
 
     # 2. grazing-angle dropout
     theta = _incidence_rad(normals, rays, valid)
-    grazing_deg = model.effective_grazing_dropout_deg
+    grazing_deg = sensor.effective_grazing_dropout_deg
     if grazing_deg > 0:
         valid &= theta <= np.deg2rad(90.0 - grazing_deg)
 
-    if model.noise == "nguyen2012":
+    if sensor.noise == "nguyen2012":
         # 3. lateral noise: resample the image at jittered positions
-        if model.lateral_noise and min(depth.shape) >= 2:
+        if sensor.lateral_noise and min(depth.shape) >= 2:
             sigma_px = np.where(valid, nguyen2012.lateral_sigma_px(np.where(valid, theta, 0.0)), 0.0)
             reach = 2 * _LATERAL_REACH_PX + 1
             sigma_px = np.where(valid, sigma_px, ndimage.grey_dilation(sigma_px, size=(reach, reach)))
@@ -117,24 +117,24 @@ def apply_sensor(frame: DepthFrame, model: SensorModel, rng: np.random.Generator
         depth_changed = True
 
     # 5. disparity quantisation
-    if model.quantise:
-        fb = float(frame.intrinsics.fx) * model.baseline_m
+    if sensor.quantise:
+        fb = float(frame.intrinsics.fx) * sensor.baseline_m
         with np.errstate(divide="ignore", invalid="ignore"):
-            q = model.disparity_step_px
+            q = sensor.disparity_step_px
             disparity = np.round(fb / np.where(valid, depth, np.inf) / q) * q
             depth = np.where(disparity > 0, fb / disparity, 0.0)
         valid &= depth > 0
         depth_changed = True
 
     # 6. range limits of the camera
-    if model.range_limits:
+    if sensor.range_limits:
         lo = float(getattr(frame.intrinsics, "min_range_m", 0.0))
         hi = float(getattr(frame.intrinsics, "max_range_m", np.inf))
         valid &= (depth >= lo) & (depth <= hi)
 
     # 7. random pixel dropout
-    if model.pixel_dropout > 0:
-        valid &= dropout_stream.random(depth.shape) >= model.pixel_dropout
+    if sensor.pixel_dropout > 0:
+        valid &= dropout_stream.random(depth.shape) >= sensor.pixel_dropout
 
     out_depth = np.zeros((h, w), dtype=np.float32)
     out_depth[crop] = np.where(valid, depth, 0.0)

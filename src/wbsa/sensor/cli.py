@@ -4,10 +4,9 @@ from __future__ import annotations
 
 import argparse
 
-
 from wbsa.cli_types import number_in
-from wbsa.errors import WbsaError
-from wbsa.sensor.model import NOISE_MODELS, SensorModel
+from wbsa.sensor.settings import SensorSettings
+from wbsa.typing import NOISE_MODELS
 
 
 _fraction = number_in(0.0, 1.0, what="a fraction")
@@ -41,8 +40,8 @@ def add_sensor_arguments(parser: argparse.ArgumentParser, *, seed: bool = False)
                        help="seed of the sensor's random effects (default: 0)")
 
 
-def sensor_model_from_args(args: argparse.Namespace, camera=None) -> SensorModel:
-    """The :class:`SensorModel` described by the flags of :func:`add_sensor_arguments`.
+def sensor_settings_from_args(args: argparse.Namespace, camera=None) -> SensorSettings:
+    """The :class:`SensorSettings` described by the flags of :func:`add_sensor_arguments`.
 
     Parameters
     ----------
@@ -52,15 +51,10 @@ def sensor_model_from_args(args: argparse.Namespace, camera=None) -> SensorModel
 
     Raises
     ------
-    WbsaError
+    SettingsError
         If ``--range-limits`` is asked for a camera without a working range.
     """
-    if camera is not None and getattr(args, "range_limits", False):
-        lo, hi = float(getattr(camera, "min_range_m", 0.0)), float(getattr(camera, "max_range_m", float("inf")))
-        if lo <= 0.0 and hi == float("inf"):
-            raise WbsaError(f"camera {getattr(camera, 'name', 'custom')} has no working range for --range-limits; "
-                            "set min_range_m/max_range_m in its JSON or use a preset")
-    return SensorModel(
+    settings = SensorSettings(
         noise=getattr(args, "noise", "none"),
         lateral_noise=getattr(args, "lateral_noise", True),
         quantise=getattr(args, "quantise", False),
@@ -69,3 +63,6 @@ def sensor_model_from_args(args: argparse.Namespace, camera=None) -> SensorModel
         grazing_dropout_deg=getattr(args, "grazing_dropout", None),
         range_limits=getattr(args, "range_limits", False),
     )
+    if camera is not None:
+        settings.check_camera(camera)
+    return settings

@@ -7,7 +7,7 @@
 - lateral: σL(θ) = 0.8 + 0.035 θ/(π/2 − θ) pixels, i.e. σL · z / fx metres.
 
 Both diverge at grazing incidence; implementations drop returns within about 8° of grazing
-(:attr:`wbsa.sensor.SensorModel.grazing_dropout_deg`).
+(:attr:`wbsa.sensor.SensorSettings.grazing_dropout_deg`).
 """
 
 from __future__ import annotations

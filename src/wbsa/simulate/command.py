@@ -124,15 +124,14 @@ def run_view(args: argparse.Namespace) -> int:
     from wbsa.simulate.target import load_target
     from wbsa.io import write_json, write_table
 
-    from wbsa.sensor.cli import sensor_model_from_args
+    from wbsa.sensor.cli import sensor_settings_from_args
     from wbsa.simulate.view import simulate_view
-    from wbsa.surface.cli import reconstruct_methods_from_args, reconstruction_settings_from_args
+    from wbsa.surface.cli import reconstruction_settings_from_args
 
     intrinsics: Intrinsics = intrinsics_from_args(args)
     mesh = load_target(args)
     source = args.mesh or f"{args.population}#subject={args.subject}"
-    sensor = sensor_model_from_args(args, intrinsics)
-    methods = reconstruct_methods_from_args(args)
+    sensor = sensor_settings_from_args(args, intrinsics)
     recon_settings = reconstruction_settings_from_args(args)
     scene = MeshScene(mesh)
     stature = float(scene.bbox_max[2] - scene.bbox_min[2])
@@ -142,7 +141,7 @@ def run_view(args: argparse.Namespace) -> int:
     subject = args.subject if args.population else 0
     for view in views:
         sim = simulate_view(scene, intrinsics, view, sensor=None if sensor.is_ideal else sensor,
-                            seed=args.sensor_seed, subject_id=subject, reconstruct=tuple(methods),
+                            seed=args.sensor_seed, subject_id=subject, reconstruct=recon_settings.methods,
                             reconstruction=recon_settings, keep_frame=out is not None, keep_surfaces=out is not None)
         row = {"mesh": source, "mesh_area_m2": float(scene.triangle_areas_m2.sum()), **sim.row}
         frame, recon = sim.frame, sim.surfaces

@@ -18,7 +18,7 @@ if TYPE_CHECKING:  # pragma: no cover - for type hints only
     from wbsa.camera import Intrinsics, MeshScene, View
     from wbsa.core.frame import DepthFrame
     from wbsa.core.mesh import TriangleMesh
-    from wbsa.sensor.model import SensorModel
+    from wbsa.sensor.settings import SensorSettings
     from wbsa.surface.settings import ReconstructionSettings
 
 
@@ -57,7 +57,7 @@ class SimulatedView:
                 f"{r['distance_m']:.3g} m, {r['n_pixels']} pixels, visible {r['vbsa_visible_m2']:.4f} m²)")
 
 
-def simulate_view(scene: MeshScene, camera: Intrinsics, view: View, *, sensor: SensorModel | None = None,
+def simulate_view(scene: MeshScene, camera: Intrinsics, view: View, *, sensor: SensorSettings | None = None,
                   seed: int = 0, subject_id: int = 0, reconstruct: tuple[str, ...] = (),
                   reconstruction: ReconstructionSettings | None = None, keep_frame: bool = False,
                   keep_surfaces: bool = False) -> SimulatedView:
@@ -69,7 +69,7 @@ def simulate_view(scene: MeshScene, camera: Intrinsics, view: View, *, sensor: S
         The body (its bounding-box centre is the camera's target).
     camera : wbsa.camera.Intrinsics
     view : wbsa.camera.View
-    sensor : wbsa.sensor.SensorModel, optional
+    sensor : wbsa.sensor.SensorSettings, optional
         None: the ray-cast frame as it is (an ideal sensor model still adds its columns).
     seed, subject_id : int
         The sensor's random stream is :func:`wbsa.sensor.measure.view_rng` of (seed, subject, view), so it

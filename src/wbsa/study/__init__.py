@@ -14,6 +14,7 @@ _EXPORTS = {
     "load_settings": "wbsa.study.settings",
     "settings_from_dict": "wbsa.study.settings",
     "StudySettings": "wbsa.study.settings",
+    "StudyInfo": "wbsa.study.settings",
     "Stage": "wbsa.study.stages",
     "stage_key": "wbsa.study.stages",
 }

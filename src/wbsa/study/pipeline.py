@@ -34,7 +34,9 @@ from wbsa.analysis.data import reference_distance
 from wbsa.core.versions import package_versions
 from wbsa.errors import WbsaError
 from wbsa.io import atomic_path, write_json
-from wbsa.study.settings import StudySettings, fit_settings, scan_settings
+from wbsa.parallel import RunSettings
+from wbsa.settings_io import to_table
+from wbsa.study.settings import StudySettings, fit_settings, scan_job
 from wbsa.study.stages import Stage
 
 #: Top-level files of a study folder.
@@ -128,7 +130,7 @@ def run_study(settings: StudySettings, out_dir: str | os.PathLike, *, workers: i
     workers : int, optional
         Scan and population worker processes; overrides ``[run] workers`` (0 = all cores).
     show_progress : bool, optional
-        Progress bars of the long stages (default: when stderr is a terminal).
+        Progress bars of the long stages; overrides ``[run] progress`` (None there: when stderr is a terminal).
     stream : text stream, None or ``'stderr'``
         Where the per-stage lines go (default: the current ``sys.stderr``; None: silent).
     scan_chunk_fn : callable, optional
@@ -141,41 +143,38 @@ def run_study(settings: StudySettings, out_dir: str | os.PathLike, *, workers: i
     t0 = time.perf_counter()
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
-        raise WbsaError(f"--out {out} is a file; give a folder for the study")
+        raise WbsaError(f"study folder {out} is a file; give a folder for the study")
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
-        raise WbsaError(f"cannot create study folder {out}: {exc.strerror}; choose a writable --out") from None
+        raise WbsaError(f"cannot create study folder {out}: {exc.strerror}; choose a writable folder") from None
     log = _Log(sys.stderr if stream == "stderr" else stream)
-    n_workers = settings.run.workers if workers is None else int(workers)
-    if n_workers < 0:
-        raise WbsaError(f"--workers must be 0 (all cores) or more, got {n_workers}")
-    if n_workers == 0:
-        from wbsa.parallel import default_workers
-
-        n_workers = default_workers()
-    scheduler = settings.run.scheduler or None
+    run = settings.run
+    if workers is not None:
+        run = dataclasses.replace(run, workers=int(workers))
+    if show_progress is not None:
+        run = dataclasses.replace(run, progress=show_progress)
     with atomic_path(out / SETTINGS_FILE) as tmp:
         tmp.write_text(settings.to_toml())
     log.line(f"study {settings.study.name!r} -> {out} (settings: {settings.source})")
 
     runs: list[StageRun] = []
-    pop = _population_stage(settings, out, n_workers, scheduler, show_progress)
+    pop = _population_stage(settings, out, run)
     runs.append(pop)
     log.stage(pop)
     scans = []
     for d in settings.scan.distances_m:
-        run = _scan_stage(settings, out, d, pop.stage, n_workers, scheduler, show_progress, scan_chunk_fn)
-        runs.append(run)
-        scans.append(run)
-        log.stage(run)
-    fit = _fit_stage(settings, out, pop.stage, [s.stage for s in scans], show_progress)
+        scan = _scan_stage(settings, out, d, pop.stage, run, scan_chunk_fn)
+        runs.append(scan)
+        scans.append(scan)
+        log.stage(scan)
+    fit = _fit_stage(settings, out, pop.stage, [s.stage for s in scans], run.progress)
     runs.append(fit)
     log.stage(fit)
 
     manifest = _manifest(settings, out, runs, time.perf_counter() - t0)
     write_json(manifest, out / MANIFEST_FILE)
-    rep = _report_stage(settings, out, pop.stage, [s.stage for s in scans], fit.stage, show_progress)
+    rep = _report_stage(settings, out, pop.stage, [s.stage for s in scans], fit.stage, run.progress)
     runs.append(rep)
     log.stage(rep)
 
@@ -191,19 +190,18 @@ def _reused(name: str, stage: Stage) -> StageRun:
     return StageRun(name, stage, True, 0.0, float(rec.get("seconds", 0.0)), rec.get("info", {}).get("summary", ""))
 
 
-def _population_stage(settings: StudySettings, out: Path, workers: int, scheduler: str | None,
-                      show_progress: bool | None) -> StageRun:
+def _population_stage(settings: StudySettings, out: Path, run: RunSettings) -> StageRun:
     cfg = settings.population
-    stage = Stage.create(out, "population", dataclasses.asdict(cfg))
+    stage = Stage.create(out, "population", to_table(cfg))
     if stage.done:
         return _reused("population", stage)
     from wbsa.io import write_table
     from wbsa.bodies.build import build_population
 
     t = time.perf_counter()
-    df = build_population(cfg.kind, n=cfg.n, seed=cfg.seed, density_kg_m3=cfg.density_kg_m3,
-                          variations=cfg.variations, show_progress=show_progress, workers=workers,
-                          scheduler=scheduler)
+    workers = run.n_workers
+    df = build_population(**dataclasses.asdict(cfg), show_progress=run.progress, workers=workers,
+                          scheduler=run.scheduler)
     write_table(df, stage.path / "population.parquet")
     seconds = time.perf_counter() - t
     summary = f"{len(df)} {cfg.kind} subjects"
@@ -213,18 +211,20 @@ def _population_stage(settings: StudySettings, out: Path, workers: int, schedule
     return StageRun("population", stage, False, seconds, seconds, summary)
 
 
-def _scan_stage(settings: StudySettings, out: Path, distance_m: float, pop: Stage, workers: int,
-                scheduler: str | None, show_progress: bool | None, chunk_fn: Callable | None) -> StageRun:
-    ss = scan_settings(settings, distance_m)
+def _scan_stage(settings: StudySettings, out: Path, distance_m: float, pop: Stage, run: RunSettings,
+                chunk_fn: Callable | None) -> StageRun:
+    ss = scan_job(settings, distance_m)
     name = f"scan {distance_m:g} m"
-    stage = Stage.create(out, "scan", ss.to_dict(), {"population": pop.key})
+    stage = Stage.create(out, "scan", ss.to_dict(), {"population": pop.key})  # the job only: no execution knob
     if stage.done:
         return _reused(name, stage)
     from wbsa.scan.engine import scan_population
 
     t = time.perf_counter()
-    result = scan_population(pop.path / "population.parquet", ss, stage.path, workers=workers, scheduler=scheduler,
-                             chunk_fn=chunk_fn, show_progress=show_progress)
+    workers = run.n_workers
+    result = scan_population(pop.path / "population.parquet", ss, stage.path, workers=workers,
+                             scheduler=run.scheduler, chunk_size=run.chunk_size, chunk_fn=chunk_fn,
+                             show_progress=run.progress)
     seconds = time.perf_counter() - t
     n_subjects = int(result.table["subject_id"].nunique())
     rate = result.n_views_scanned / result.seconds if result.seconds > 0 else float("nan")
@@ -243,7 +243,7 @@ def _fit_stage(settings: StudySettings, out: Path, pop: Stage, scans: list[Stage
                show_progress: bool | None) -> StageRun:
     fs = fit_settings(settings)
     ref = reference_distance(settings.scan.distances_m)
-    corr = tuple(float(a) for a in settings.fit.correlation_view_deg)
+    corr = tuple(float(a) for a in fs.correlation_view_deg)
     stage = Stage.create(out, "fit", {"fit": fs.to_dict(), "correlation_view_deg": list(corr),
                                       "correlation_distance_m": ref},
                          {"population": pop.key, "scans": [s.key for s in scans]})
@@ -263,7 +263,7 @@ def _fit_stage(settings: StudySettings, out: Path, pop: Stage, scans: list[Stage
         scan_path = write_table(pd.concat([pd.read_parquet(p) for p in scan_paths], ignore_index=True),
                                 stage.path / "scans.parquet")
         outputs["scans"] = "scans.parquet"
-    result, paths = run_fit(pop.path / "population.parquet", scan_path, stage.path, fs, corr,
+    result, paths = run_fit(pop.path / "population.parquet", scan_path, stage.path, fs,
                             show_progress=show_progress, nearest_correlation_view=True)
     seconds = time.perf_counter() - t
     info = result.info
@@ -278,8 +278,7 @@ def _fit_stage(settings: StudySettings, out: Path, pop: Stage, scans: list[Stage
 
 def _report_stage(settings: StudySettings, out: Path, pop: Stage, scans: list[Stage], fit: Stage,
                   show_progress: bool | None) -> StageRun:
-    rcfg = dataclasses.asdict(settings.report)
-    stage = Stage.create(out, "report", {"report": rcfg, "study": dataclasses.asdict(settings.study)},
+    stage = Stage.create(out, "report", {"report": to_table(settings.report), "study": to_table(settings.study)},
                          {"population": pop.key, "scans": [s.key for s in scans], "fit": fit.key})
     if stage.done:
         return _reused("report", stage)
@@ -313,7 +312,7 @@ def _manifest(settings: StudySettings, out: Path, runs: list[StageRun], seconds:
                        "seconds_this_run": r.seconds, "seconds_computed": r.original_seconds, "summary": r.summary,
                        "inputs": r.stage.inputs})
     return {
-        "study": dataclasses.asdict(settings.study),
+        "study": to_table(settings.study),
         "source": settings.source,
         "settings": settings.to_dict(),
         "reference_distance_m": reference_distance(settings.scan.distances_m),

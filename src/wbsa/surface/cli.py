@@ -5,17 +5,18 @@ from __future__ import annotations
 import argparse
 
 from wbsa.cli_types import number_in
-from wbsa.surface.settings import BOUNDARY_MODELS, DENOISE_METHODS, METHODS, ReconstructionSettings
+from wbsa.surface.settings import ReconstructionSettings
+from wbsa.typing import BOUNDARY_MODELS, DENOISE_METHODS, RECONSTRUCTION_METHODS
 
 
 def _methods(text: str) -> tuple[str, ...]:
     if text.strip().lower() in ("", "none"):
         return ()
     names = tuple(dict.fromkeys(t.strip() for t in text.split(",") if t.strip()))
-    bad = [n for n in names if n not in METHODS]
+    bad = [n for n in names if n not in RECONSTRUCTION_METHODS]
     if bad:
         raise argparse.ArgumentTypeError(f"unknown reconstruction method(s) {', '.join(bad)}; "
-                                         f"use a comma-separated list of {', '.join(METHODS)} or none")
+                                         f"use a comma-separated list of {', '.join(RECONSTRUCTION_METHODS)} or none")
     return names
 
 
@@ -32,7 +33,7 @@ def add_reconstruct_arguments(parser: argparse.ArgumentParser) -> None:
     """
     g = parser.add_argument_group("reconstruction (surface from the depth image)")
     g.add_argument("--reconstruct", type=_methods, default=(), metavar="METHODS",
-                   help=f"comma-separated methods among {', '.join(METHODS)} (default: none); "
+                   help=f"comma-separated methods among {', '.join(RECONSTRUCTION_METHODS)} (default: none); "
                         "adds vbsa_recon_<method>_m2")
     g.add_argument("--denoise", choices=DENOISE_METHODS, default=ReconstructionSettings.denoise,
                    help="depth filter before reconstruction (default: %(default)s, robust local quadrics)")
@@ -48,15 +49,14 @@ def add_reconstruct_arguments(parser: argparse.ArgumentParser) -> None:
                    help="poisson: octree depth (default: %(default)s)")
 
 
-def reconstruct_methods_from_args(args: argparse.Namespace) -> tuple[str, ...]:
-    """The methods named by ``--reconstruct`` (empty when none)."""
-    return tuple(getattr(args, "reconstruct", ()) or ())
-
-
 def reconstruction_settings_from_args(args: argparse.Namespace) -> ReconstructionSettings:
-    """The :class:`ReconstructionSettings` described by the flags of :func:`add_reconstruct_arguments`."""
+    """The :class:`ReconstructionSettings` described by the flags of :func:`add_reconstruct_arguments`.
+
+    ``--reconstruct`` gives ``methods`` (empty when none), the other flags the fields of the same names.
+    """
     d = ReconstructionSettings()
     return ReconstructionSettings(
+        methods=tuple(getattr(args, "reconstruct", ()) or ()),
         denoise=getattr(args, "denoise", d.denoise),
         denoise_sigma_px=getattr(args, "denoise_sigma", d.denoise_sigma_px),
         boundary=getattr(args, "boundary", d.boundary),

@@ -12,7 +12,8 @@ from wbsa.core.mesh import TriangleMesh
 from wbsa.core.backproject import ray_directions
 from wbsa.surface.denoise import denoise_depth
 from wbsa.surface.grid import grid_mesh
-from wbsa.surface.settings import METHODS, ReconstructionSettings
+from wbsa.surface.settings import ReconstructionSettings
+from wbsa.typing import RECONSTRUCTION_METHODS
 
 
 def reconstruct(frame: DepthFrame, method: str = "grid",
@@ -41,8 +42,8 @@ def reconstruct(frame: DepthFrame, method: str = "grid",
         For an unknown method.
     """
     settings = settings or ReconstructionSettings()
-    if method not in METHODS:
-        raise WbsaError(f"unknown reconstruction method {method!r}; use one of {', '.join(METHODS)}")
+    if method not in RECONSTRUCTION_METHODS:
+        raise WbsaError(f"unknown reconstruction method {method!r}; use one of {', '.join(RECONSTRUCTION_METHODS)}")
     k = frame.intrinsics
     depth = denoise_depth(frame.depth_m, settings.denoise, sigma_px=settings.denoise_sigma_px,
                           sigma_depth_m=settings.denoise_sigma_depth_m)

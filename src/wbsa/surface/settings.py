@@ -1,27 +1,24 @@
-"""Settings of surface reconstruction from one depth view."""
+"""Settings of surface reconstruction from one depth view (``[reconstruction]`` of a study)."""
 
 from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
-from typing import Literal
 
-from wbsa.errors import WbsaError
-
-Method = Literal["grid", "ball-pivoting", "poisson"]
-METHODS: tuple[str, ...] = ("grid", "ball-pivoting", "poisson")
-DenoiseMethod = Literal["quadratic", "none", "bilateral", "median"]
-DENOISE_METHODS: tuple[str, ...] = ("quadratic", "none", "bilateral", "median")
-BoundaryModel = Literal["none", "footprint", "contour"]
-BOUNDARY_MODELS: tuple[str, ...] = ("none", "footprint", "contour")
+from wbsa.errors import check_field
+from wbsa.typing import (BOUNDARY_MODELS, DENOISE_METHODS, RECONSTRUCTION_METHODS, SMOOTHING_METHODS, BoundaryModel,
+                         DenoiseMethod, ReconstructionMethod, SmoothingMethod)
 
 
 @dataclass(frozen=True)
 class ReconstructionSettings:
-    """How to turn one depth image into a surface.
+    """Which surfaces to reconstruct from one depth image, and how.
 
     Attributes
     ----------
+    methods : tuple of {'grid', 'ball-pivoting', 'poisson'}
+        Methods a scan or a view runs; each adds a ``vbsa_recon_<method>_m2`` column. Empty (the
+        default): no reconstruction. (:func:`wbsa.surface.reconstruct` takes its method as an argument.)
     denoise : {'quadratic', 'none', 'bilateral', 'median'}
         Depth-image filter applied within the mask before any method (see
         :mod:`wbsa.surface.denoise`). The default robust quadratic filter is applied to ideal
@@ -58,6 +55,7 @@ class ReconstructionSettings:
         (the closed surface is otherwise about twice the visible area).
     """
 
+    methods: tuple[ReconstructionMethod, ...] = ()
     denoise: DenoiseMethod = "quadratic"
     denoise_sigma_px: float = 2.5
     denoise_sigma_depth_m: float = 0.05
@@ -65,7 +63,7 @@ class ReconstructionSettings:
     boundary: BoundaryModel = "contour"
     hole_max_px: int = 16
     voxel_size_m: float = 0.0
-    smoothing: Literal["none", "mls"] = "none"
+    smoothing: SmoothingMethod = "none"
     neighbours: int = 20
     bpa_radii_px: tuple[float, ...] = (1.0, 2.0, 4.0)
     poisson_depth: int = 8
@@ -73,34 +71,34 @@ class ReconstructionSettings:
     crop_distance_px: float = 1.5
 
     def __post_init__(self) -> None:
-        if self.denoise not in DENOISE_METHODS:
-            raise WbsaError(f"unknown denoise filter {self.denoise!r}; use one of {', '.join(DENOISE_METHODS)}")
-        if self.boundary not in BOUNDARY_MODELS:
-            raise WbsaError(f"unknown boundary model {self.boundary!r}; use {', '.join(BOUNDARY_MODELS)}")
-        if self.smoothing not in ("none", "mls"):
-            raise WbsaError(f"unknown smoothing {self.smoothing!r}; use none or mls")
-        if not (self.denoise_sigma_px > 0 and math.isfinite(self.denoise_sigma_px)):
-            raise WbsaError(f"denoise_sigma_px must be positive, got {self.denoise_sigma_px}")
-        if not (self.denoise_sigma_depth_m > 0):
-            raise WbsaError(f"denoise_sigma_depth_m must be positive, got {self.denoise_sigma_depth_m}")
-        if not (0.0 < self.max_angle_deg < 90.0):
-            raise WbsaError(f"max_angle_deg must be in (0, 90), got {self.max_angle_deg}")
-        if self.voxel_size_m < 0 or not math.isfinite(self.voxel_size_m):
-            raise WbsaError(f"voxel_size_m must be >= 0, got {self.voxel_size_m}")
-        if self.neighbours < 3:
-            raise WbsaError(f"neighbours must be at least 3, got {self.neighbours}")
-        if not self.bpa_radii_px or any(not (r > 0) for r in self.bpa_radii_px):
-            raise WbsaError(f"bpa_radii_px must be positive numbers, got {self.bpa_radii_px}")
-        if not (1 <= self.poisson_depth <= 12):
-            raise WbsaError(f"poisson_depth must be in 1..12, got {self.poisson_depth}")
-        if not (0.0 <= self.poisson_trim_quantile < 1.0):
-            raise WbsaError(f"poisson_trim_quantile must be in [0, 1), got {self.poisson_trim_quantile}")
-        if not (self.crop_distance_px > 0):
-            raise WbsaError(f"crop_distance_px must be positive, got {self.crop_distance_px}")
+        object.__setattr__(self, "methods", tuple(self.methods))
+        object.__setattr__(self, "bpa_radii_px", tuple(self.bpa_radii_px))
+        for name, value, valid in (("denoise", self.denoise, DENOISE_METHODS),
+                                   ("boundary", self.boundary, BOUNDARY_MODELS),
+                                   ("smoothing", self.smoothing, SMOOTHING_METHODS)):
+            check_field(value in valid, name, f"must be one of {', '.join(valid)}, got {value!r}")
+        bad = [m for m in self.methods if m not in RECONSTRUCTION_METHODS]
+        check_field(not bad, "methods", f"must be among {', '.join(RECONSTRUCTION_METHODS)}, got {', '.join(map(repr, bad))}")
+        check_field(len(set(self.methods)) == len(self.methods), "methods", f"lists a method twice: {', '.join(self.methods)}")
+        check_field(self.denoise_sigma_px > 0 and math.isfinite(self.denoise_sigma_px), "denoise_sigma_px",
+                    f"must be positive pixels, got {self.denoise_sigma_px}")
+        check_field(self.denoise_sigma_depth_m > 0, "denoise_sigma_depth_m", f"must be positive metres, got {self.denoise_sigma_depth_m}")
+        check_field(0.0 < self.max_angle_deg < 90.0, "max_angle_deg", f"must be degrees in (0, 90), got {self.max_angle_deg}")
+        check_field(self.hole_max_px >= 0, "hole_max_px", f"must be 0 or more pixels, got {self.hole_max_px}")
+        check_field(self.voxel_size_m >= 0 and math.isfinite(self.voxel_size_m), "voxel_size_m",
+                    f"must be 0 (off) or positive metres, got {self.voxel_size_m}")
+        check_field(self.neighbours >= 3, "neighbours", f"must be at least 3, got {self.neighbours}")
+        check_field(bool(self.bpa_radii_px) and all(r > 0 for r in self.bpa_radii_px), "bpa_radii_px",
+                    f"must be positive numbers, got {list(self.bpa_radii_px)}")
+        check_field(1 <= self.poisson_depth <= 12, "poisson_depth", f"must be in 1..12, got {self.poisson_depth}")
+        check_field(0.0 <= self.poisson_trim_quantile < 1.0, "poisson_trim_quantile",
+                    f"must be in [0, 1), got {self.poisson_trim_quantile}")
+        check_field(self.crop_distance_px > 0, "crop_distance_px", f"must be positive, got {self.crop_distance_px}")
 
     def to_dict(self) -> dict:
         """Plain settings for recording in outputs."""
         d = asdict(self)
+        d["methods"] = list(self.methods)
         d["bpa_radii_px"] = list(self.bpa_radii_px)
         return d
 

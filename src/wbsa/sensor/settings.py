@@ -1,15 +1,12 @@
-"""Settings of the simulated depth sensor: which non-ideal effects to apply."""
+"""Settings of the simulated depth sensor (``[sensor]`` of a study): which non-ideal effects to apply."""
 
 from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
-from typing import Literal
 
-from wbsa.errors import WbsaError
-
-NoiseModel = Literal["none", "nguyen2012"]
-NOISE_MODELS: tuple[str, ...] = ("none", "nguyen2012")
+from wbsa.errors import check_field
+from wbsa.typing import NOISE_MODELS, NoiseModel
 
 #: Returns closer than this to grazing are dropped by default when Nguyen noise is on (facts.md).
 NGUYEN_GRAZING_DROPOUT_DEG = 8.0
@@ -19,7 +16,7 @@ KINECT_V1_DISPARITY_STEP_PX = 1.0 / 8.0
 
 
 @dataclass(frozen=True)
-class SensorModel:
+class SensorSettings:
     """What a simulated depth sensor does to an ideal ray-cast frame. Every effect is optional.
 
     With the defaults the sensor is ideal and :func:`~wbsa.sensor.apply_sensor` returns the frame's
@@ -58,18 +55,34 @@ class SensorModel:
     range_limits: bool = False
 
     def __post_init__(self) -> None:
-        if self.noise not in NOISE_MODELS:
-            raise WbsaError(f"unknown sensor noise model {self.noise!r}; use one of {', '.join(NOISE_MODELS)}")
+        check_field(self.noise in NOISE_MODELS, "noise", f"must be one of {', '.join(NOISE_MODELS)}, got {self.noise!r}")
         for name in ("holes_fraction", "pixel_dropout"):
             value = getattr(self, name)
-            if not (0.0 <= value <= 1.0):
-                raise WbsaError(f"{name} must be a fraction in [0, 1], got {value}; e.g. --holes 0.1")
-        if self.grazing_dropout_deg is not None and not (0.0 <= self.grazing_dropout_deg < 90.0):
-            raise WbsaError(f"grazing_dropout_deg must be in [0, 90), got {self.grazing_dropout_deg}")
-        if not (self.baseline_m > 0 and math.isfinite(self.baseline_m)):
-            raise WbsaError(f"baseline_m must be positive, got {self.baseline_m}")
-        if not (self.disparity_step_px > 0 and math.isfinite(self.disparity_step_px)):
-            raise WbsaError(f"disparity_step_px must be positive, got {self.disparity_step_px}")
+            check_field(0.0 <= value <= 1.0, name, f"must be a fraction in [0, 1], got {value:g}")
+        check_field(self.grazing_dropout_deg is None or 0.0 <= self.grazing_dropout_deg < 90.0, "grazing_dropout_deg",
+                    f"must be degrees in [0, 90) (or left out: the noise model's default), got {self.grazing_dropout_deg}")
+        check_field(self.baseline_m > 0 and math.isfinite(self.baseline_m), "baseline_m",
+                    f"must be positive metres, got {self.baseline_m}")
+        check_field(self.disparity_step_px > 0 and math.isfinite(self.disparity_step_px), "disparity_step_px",
+                    f"must be positive pixels, got {self.disparity_step_px}")
+
+    def check_camera(self, camera) -> None:
+        """Check that ``camera`` suits these settings: ``range_limits`` needs a finite working range.
+
+        Parameters
+        ----------
+        camera : wbsa.camera.Intrinsics
+
+        Raises
+        ------
+        SettingsError
+            ``range_limits`` with a camera that has no working range.
+        """
+        if self.range_limits:
+            lo, hi = float(getattr(camera, "min_range_m", 0.0)), float(getattr(camera, "max_range_m", math.inf))
+            check_field(lo > 0.0 or hi != math.inf, "range_limits",
+                        f"needs a camera with a working range; camera {getattr(camera, 'name', 'custom')} has none "
+                        "(set min_range_m/max_range_m in its JSON or use a preset)")
 
     @property
     def effective_grazing_dropout_deg(self) -> float:

@@ -1,0 +1,38 @@
+"""The named choices of wbsa's settings, declared once as ``Literal`` types.
+
+Every stage's settings dataclass annotates its choice fields with these types; the tuples of
+valid values (for argparse ``choices``, messages and checks) are derived from them with
+:func:`typing.get_args`, so a choice is added in one place.
+"""
+
+from __future__ import annotations
+
+from typing import Literal, get_args
+
+#: How a population is made: ``random`` (paper: Virtual Random), ``survey`` (paper: Virtual NHANES),
+#: ``table`` (phenotypes read from a file).
+PopulationKind = Literal["random", "survey", "table"]
+#: Depth noise of the simulated sensor.
+NoiseModel = Literal["none", "nguyen2012"]
+#: Surface reconstruction methods (each adds a ``vbsa_recon_<method>_m2`` column).
+ReconstructionMethod = Literal["grid", "ball-pivoting", "poisson"]
+#: Depth-image filters applied before reconstruction.
+DenoiseMethod = Literal["quadratic", "none", "bilateral", "median"]
+#: Boundary skirts of the ``grid`` reconstruction.
+BoundaryModel = Literal["none", "footprint", "contour"]
+#: Point smoothing of the point-cloud reconstructions.
+SmoothingMethod = Literal["none", "mls"]
+#: Regression model kinds of the fit.
+ModelKind = Literal["linear", "quadratic", "loglog", "wls"]
+#: Subject groups, in report order.
+GroupName = Literal["all", "males", "females", "kids", "adults", "small", "normal", "big", "obese", "underweight",
+                    "tall"]
+
+POPULATION_KINDS: tuple[str, ...] = get_args(PopulationKind)
+NOISE_MODELS: tuple[str, ...] = get_args(NoiseModel)
+RECONSTRUCTION_METHODS: tuple[str, ...] = get_args(ReconstructionMethod)
+DENOISE_METHODS: tuple[str, ...] = get_args(DenoiseMethod)
+BOUNDARY_MODELS: tuple[str, ...] = get_args(BoundaryModel)
+SMOOTHING_METHODS: tuple[str, ...] = get_args(SmoothingMethod)
+MODEL_KINDS: tuple[str, ...] = get_args(ModelKind)
+GROUP_NAMES: tuple[str, ...] = get_args(GroupName)

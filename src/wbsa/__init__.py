@@ -49,7 +49,7 @@ if TYPE_CHECKING:  # pragma: no cover - real types for IDEs and type checkers
     from wbsa.errors import WbsaError
     from wbsa.estimation import Estimate, estimate
     from wbsa.formulae.compute import bsa
-    from wbsa.sensor.model import SensorModel
+    from wbsa.sensor.settings import SensorSettings
     from wbsa.simulate.view import SimulatedView, render
     from wbsa.study.study import Study
 
@@ -66,7 +66,7 @@ _EXPORTS = {
     "DepthFrame": "wbsa.core.frame",
     "Intrinsics": "wbsa.camera.intrinsics",
     "View": "wbsa.camera.views",
-    "SensorModel": "wbsa.sensor.model",
+    "SensorSettings": "wbsa.sensor.settings",
     "WbsaModel": "wbsa.analysis.model_file",
     "WbsaError": "wbsa.errors",
 }

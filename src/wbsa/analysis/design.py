@@ -25,6 +25,7 @@ from typing import Mapping
 import numpy as np
 
 from wbsa.errors import WbsaError
+from wbsa.analysis.settings import check_model_kinds  # noqa: F401 - re-exported for the analysis modules
 from wbsa.typing import MODEL_KINDS, ModelKind  # noqa: F401 - re-exported for the analysis modules
 
 #: Short description of every model kind, for tables and the report.
@@ -34,13 +35,6 @@ MODEL_DESCRIPTIONS: dict[str, str] = {
     "loglog": "OLS on logs: log WBSA = c0 + c1*log VBSA (+ c_j*log x_j)",
     "wls": "WLS, weights 1/VBSA^2: WBSA = c0 + c1*VBSA (+ c_j*x_j)",
 }
-
-
-def check_model_kinds(names: tuple[str, ...] | list[str], field: str | None = None) -> tuple[str, ...]:
-    """Validate model kind names; raise :class:`WbsaError` naming the valid ones (see ``check_names``)."""
-    from wbsa.analysis.groups import check_names
-
-    return check_names(names, MODEL_KINDS, "model", field)
 
 
 def term_names(model: str, predictors: tuple[str, ...] | list[str]) -> tuple[str, ...]:

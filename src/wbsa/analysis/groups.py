@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from wbsa.analysis.settings import PAPER_GROUPS, GroupSpec  # noqa: F401 - re-exported: the groups' settings
-from wbsa.errors import SettingsError, WbsaError
+from wbsa.analysis.settings import PAPER_GROUPS, GroupSpec, check_group_names  # noqa: F401 - re-exported
+from wbsa.errors import WbsaError
 from wbsa.typing import GROUP_NAMES, GroupName  # noqa: F401 - GroupName re-exported for the analysis modules
 
 #: Groups of the formulae comparison (issue: overall, kids, adults, BMI >= 30, big stature) plus the rest.
@@ -19,23 +19,6 @@ CLAIM_GROUPS: tuple[str, ...] = ("all", "adults", "kids", "obese", "underweight"
 GROUP_COLUMNS: tuple[str, ...] = ("sex", "age_years", "stature_m", "bmi")
 
 
-def check_names(names: tuple[str, ...] | list[str], valid: tuple[str, ...], what: str,
-                field: str | None = None) -> tuple[str, ...]:
-    """``names`` without repeats, in order, if all are in ``valid``; else a WbsaError naming the valid ones.
-
-    With ``field`` the error is a :class:`~wbsa.errors.SettingsError` of that settings field.
-    """
-    bad = [n for n in names if n not in valid]
-    problem = (f"unknown {what}(s) {', '.join(bad)}; choose from {', '.join(valid)}" if bad
-               else f"no {what} given; choose from {', '.join(valid)}" if not names else "")
-    if problem:
-        raise SettingsError(field, "has " + problem) if field else WbsaError(problem)
-    return tuple(dict.fromkeys(names))
-
-
-def check_group_names(names: tuple[str, ...] | list[str], field: str | None = None) -> tuple[str, ...]:
-    """Validate group names; raise :class:`WbsaError` naming the valid ones (see :func:`check_names`)."""
-    return check_names(names, GROUP_NAMES, "group", field)
 
 
 def assign_groups(population: pd.DataFrame, spec: GroupSpec = GroupSpec()) -> pd.DataFrame:

@@ -9,7 +9,7 @@ import math
 from dataclasses import asdict, dataclass, field, fields
 
 from wbsa.errors import SettingsError, WbsaError, check_field
-from wbsa.typing import GroupName, ModelKind
+from wbsa.typing import GROUP_NAMES, MODEL_KINDS, GroupName, ModelKind
 
 #: The groups of the paper (section 2.5): all, males/females, kids/adults, small/normal/big stature.
 PAPER_GROUPS: tuple[str, ...] = ("all", "males", "females", "kids", "adults", "small", "normal", "big")
@@ -17,6 +17,30 @@ PAPER_GROUPS: tuple[str, ...] = ("all", "males", "females", "kids", "adults", "s
 #: Thresholds used only by the claim groups; :meth:`GroupSpec.to_dict` records them only when changed, so fit
 #: records written before these groups existed stay byte-identical.
 _CLAIM_ONLY_FIELDS: tuple[str, ...] = ("underweight_max_bmi", "tall_min_stature_m")
+
+
+def check_names(names: tuple[str, ...] | list[str], valid: tuple[str, ...], what: str,
+                field: str | None = None) -> tuple[str, ...]:
+    """``names`` without repeats, in order, if all are in ``valid``; else a WbsaError naming the valid ones.
+
+    With ``field`` the error is a :class:`~wbsa.errors.SettingsError` of that settings field.
+    """
+    bad = [n for n in names if n not in valid]
+    problem = (f"unknown {what}(s) {', '.join(bad)}; choose from {', '.join(valid)}" if bad
+               else f"no {what} given; choose from {', '.join(valid)}" if not names else "")
+    if problem:
+        raise SettingsError(field, "has " + problem) if field else WbsaError(problem)
+    return tuple(dict.fromkeys(names))
+
+
+def check_group_names(names: tuple[str, ...] | list[str], field: str | None = None) -> tuple[str, ...]:
+    """Validate group names; raise :class:`WbsaError` naming the valid ones (see :func:`check_names`)."""
+    return check_names(names, GROUP_NAMES, "group", field)
+
+
+def check_model_kinds(names: tuple[str, ...] | list[str], field: str | None = None) -> tuple[str, ...]:
+    """Validate model kind names; raise :class:`WbsaError` naming the valid ones (see :func:`check_names`)."""
+    return check_names(names, MODEL_KINDS, "model", field)
 
 
 @dataclass(frozen=True)
@@ -141,8 +165,6 @@ class FitSettings:
 
     def __post_init__(self) -> None:
         from wbsa.analysis.data import resolve_vbsa_column
-        from wbsa.analysis.design import check_model_kinds
-        from wbsa.analysis.groups import check_group_names
 
         check_field(int(self.k) >= 2, "k", f"must be at least 2 folds (paper: 10), got {self.k}")
         check_field(int(self.qq_points) >= 2, "qq_points", f"must be at least 2, got {self.qq_points}")

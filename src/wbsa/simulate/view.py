@@ -107,7 +107,7 @@ def simulate_view(scene: MeshScene, camera: Intrinsics, view: View, *, sensor: S
     return SimulatedView(row=row, frame=frame if keep_frame else None, surfaces=surfaces)
 
 
-def render(mesh: Any, camera: Any = "kinect-v1", view: Any = (0.0, 0.0, 4.3), *, sensor: SensorModel | None = None,
+def render(mesh: Any, camera: Any = "kinect-v1", view: Any = (0.0, 0.0, 4.3), *, sensor: SensorSettings | None = None,
            reconstruct: tuple[str, ...] = (), seed: int = 0) -> SimulatedView:
     """Look at a mesh with the virtual depth camera: the depth image, the visible areas, the reconstructions.
 
@@ -121,7 +121,7 @@ def render(mesh: Any, camera: Any = "kinect-v1", view: Any = (0.0, 0.0, 4.3), *,
     view : View or (azimuth_deg, elevation_deg) or (azimuth_deg, elevation_deg, distance_m)
         The paper's convention: azimuth 0 = in front, 90 = at the subject's left; elevation +90 = above;
         distance from the camera to the mesh's centre (default 4.3 m).
-    sensor : SensorModel, optional
+    sensor : SensorSettings, optional
         The simulated sensor (noise, quantisation, holes); None: the ideal ray cast.
     reconstruct : tuple of {'grid', 'ball-pivoting', 'poisson'}
         Surfaces to reconstruct from the (sensed) depth image.

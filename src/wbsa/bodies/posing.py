@@ -17,7 +17,8 @@ from dataclasses import dataclass
 import numpy as np
 
 
-#: Segments of one side, in :attr:`Rig.weights` column order; a segment is a set of bones moving rigidly.
+#: Segments of one side, in skinning-weight column order (:class:`SkinWeights`); a segment is a set of bones
+#: moving rigidly.
 SEGMENTS = ("upperarm01", "upperarm02", "forearm", "leg", "foot")
 #: Bones whose heads are the joints of one side (anny names without the ``.L``/``.R`` suffix).
 JOINT_BONES = {"shoulder": "upperarm01", "elbow": "lowerarm01", "wrist": "wrist", "hip": "upperleg01",
@@ -28,32 +29,77 @@ _SIDE_SIGN = {"l": 1.0, "r": -1.0}
 
 
 @dataclass(frozen=True)
+class SkinWeights:
+    """Some vertices and their summed skinning weight on each segment, kept sparse.
+
+    Attributes
+    ----------
+    vertices : (k,) intp
+        Vertex indices into the body.
+    rows : tuple of (r_s,) intp
+        Per segment, the positions in ``vertices`` with a weight on it.
+    weights : tuple of (r_s,) float64
+        Per segment, those weights.
+    """
+
+    vertices: np.ndarray
+    rows: tuple[np.ndarray, ...]
+    weights: tuple[np.ndarray, ...]
+
+    @classmethod
+    def from_dense(cls, vertices: np.ndarray, dense: np.ndarray) -> "SkinWeights":
+        """From the ``(k, s)`` weights of ``vertices`` on every segment."""
+        rows = tuple(np.flatnonzero(dense[:, s] > 0) for s in range(dense.shape[1]))
+        return cls(np.asarray(vertices, dtype=np.intp), rows, tuple(dense[r, s] for s, r in enumerate(rows)))
+
+    def blend(self, rest_vertices: np.ndarray, transforms: list) -> np.ndarray:
+        """Linear blend skinning of these vertices: ``p + Σ_s w_s (T_s p − p)``.
+
+        Parameters
+        ----------
+        rest_vertices : (n, 3) float64
+            The whole body at rest.
+        transforms : list of (R, t) or None
+            :func:`segment_transforms`; None entries (segments that do not move) add nothing.
+
+        Returns
+        -------
+        (k, 3) float64
+            The posed positions of :attr:`vertices`.
+        """
+        points = rest_vertices[self.vertices]
+        out = points.copy()
+        for rows, w, t in zip(self.rows, self.weights, transforms):
+            if t is not None:
+                p = points[rows]
+                out[rows] += w[:, None] * (p @ t[0].T + t[1] - p)
+        return out
+
+
+@dataclass(frozen=True)
 class Rig:
     """What posing needs from anny's skeleton, fixed for a body model.
 
     Attributes
     ----------
-    moving : (k,) intp
-        Vertices with a skinning weight on a posed bone (the others never move).
-    weights : (k, 10) float64
-        Summed skinning weight of each segment at each moving vertex: :data:`SEGMENTS` of the left
-        side, then of the right.
+    skin : SkinWeights
+        The vertices with a skinning weight on a posed bone (the others never move) and their weights
+        on the segments: :data:`SEGMENTS` of the left side, then of the right.
     joints : dict of str to dict of str to int
         Per side (``l``, ``r``), the bone index whose head is each joint of :data:`JOINT_BONES`.
-    arm_query, leg_query : dict of str to (q,) intp
+    arm_query, leg_query : dict of str to SkinWeights
         Per side, the vertices moved by that arm (or leg) alone (summed weight >= 0.999), whose
         depth inside the rest of the body is checked.
     arm_target, leg_target : dict of str to (t, 3) int32
         Per side, the closed-shell triangles an arm must stay out of (those neither arm moves: trunk,
-        head, legs) and those that leg does not move; each a closed surface but for the holes where
-        the limbs join it.
+        head, legs), and those of the other leg (every vertex weighted to it); each a closed surface
+        but for the holes where the limbs join it, above the points tested.
     """
 
-    moving: np.ndarray
-    weights: np.ndarray
+    skin: SkinWeights
     joints: dict[str, dict[str, int]]
-    arm_query: dict[str, np.ndarray]
-    leg_query: dict[str, np.ndarray]
+    arm_query: dict[str, SkinWeights]
+    leg_query: dict[str, SkinWeights]
     arm_target: dict[str, np.ndarray]
     leg_target: dict[str, np.ndarray]
 
@@ -115,14 +161,19 @@ class Rig:
         k = len(SEGMENTS)
         arm_query, leg_query, arm_target, leg_target = {}, {}, {}, {}
         both_arms = seg_weight[:, [0, 1, 2, k, k + 1, k + 2]].sum(1)
+        leg_of = {side: seg_weight[:, si * k + 3:(si + 1) * k].sum(1) for si, side in enumerate(("l", "r"))}
         for si, side in enumerate(("l", "r")):
             w = seg_weight[:, si * k:(si + 1) * k]
             arm, leg = w[:, :3].sum(1), w[:, 3:].sum(1)
             arm_query[side] = np.flatnonzero(arm >= 0.999)
+            arm_query[side] = SkinWeights.from_dense(arm_query[side], seg_weight[arm_query[side]])
             leg_query[side] = np.flatnonzero(leg >= 0.999)
+            leg_query[side] = SkinWeights.from_dense(leg_query[side], seg_weight[leg_query[side]])
             arm_target[side] = faces[(both_arms[faces] == 0).all(axis=1)]
-            leg_target[side] = faces[(leg[faces] == 0).all(axis=1)]
-        return cls(moving=moving, weights=seg_weight[moving], joints=joints, arm_query=arm_query,
+        for side, other in (("l", "r"), ("r", "l")):
+            # the other leg alone: open only at the hip, above every point of this leg
+            leg_target[side] = faces[(leg_of[other][faces] > 0).all(axis=1)]
+        return cls(skin=SkinWeights.from_dense(moving, seg_weight[moving]), joints=joints, arm_query=arm_query,
                    leg_query=leg_query, arm_target=arm_target, leg_target=leg_target)
 
 
@@ -217,36 +268,10 @@ def pose_vertices(rest_vertices: np.ndarray, bone_heads: np.ndarray, angles_deg:
     transforms = segment_transforms(bone_heads, angles_deg, rig)
     if all(t is None for t in transforms):
         return v
-    v[rig.moving] = blend(v[rig.moving], rig.weights, transforms)
+    v[rig.skin.vertices] = rig.skin.blend(v, transforms)
     if floor:
         v[:, 2] -= v[:, 2].min()
     return v
-
-
-def blend(points: np.ndarray, weights: np.ndarray, transforms: list) -> np.ndarray:
-    """Linear blend skinning of some rest points: ``p + Σ_k w_k (T_k p − p)``.
-
-    Parameters
-    ----------
-    points : (k, 3) float64
-        Rest positions.
-    weights : (k, s) float64
-        Their summed skinning weight on each segment (rows of :attr:`Rig.weights`).
-    transforms : list of (R, t) or None
-        :func:`segment_transforms`; None entries (segments that do not move) add nothing.
-
-    Returns
-    -------
-    (k, 3) float64
-    """
-    out = points.copy()
-    for k, t in enumerate(transforms):
-        if t is not None:
-            w = weights[:, k]
-            hit = np.flatnonzero(w > 0)
-            p = points[hit]
-            out[hit] += w[hit, None] * (p @ t[0].T + t[1] - p)
-    return out
 
 
 class SinkTest:
@@ -281,11 +306,15 @@ class SinkTest:
         self.side = float(side)
         self.cut = float((side * points[:, 0]).min()) - margin
         faces = np.asarray(faces)
-        keep = (side * vertices[faces, 0]).max(axis=1) >= self.cut
+        x = side * vertices[:, 0]
+        kept = faces[np.maximum(np.maximum(x[faces[:, 0]], x[faces[:, 1]]), x[faces[:, 2]]) >= self.cut]
+        used = np.zeros(len(vertices), dtype=bool)
+        used[kept] = True
+        local = np.cumsum(used, dtype=np.uint32) - 1  # new index of each kept vertex
         self.scene = o3d.t.geometry.RaycastingScene()
-        if keep.any():
-            self.scene.add_triangles(o3d.core.Tensor(np.ascontiguousarray(vertices, dtype=np.float32)),
-                                     o3d.core.Tensor(np.ascontiguousarray(faces[keep], dtype=np.uint32)))
+        if len(kept):
+            self.scene.add_triangles(o3d.core.Tensor(np.ascontiguousarray(vertices[used], dtype=np.float32)),
+                                     o3d.core.Tensor(np.ascontiguousarray(local[kept])))
 
     def depth_m(self, points: np.ndarray) -> float:
         """The largest depth of ``points`` inside the surface, metres (0 when none is inside).
@@ -320,6 +349,6 @@ def limb_sink_depths_m(vertices: np.ndarray, rig: Rig) -> dict[str, float]:
     out = {}
     for limb, query, target in (("arm", rig.arm_query, rig.arm_target), ("leg", rig.leg_query, rig.leg_target)):
         for side in ("l", "r"):
-            points = vertices[query[side]]
+            points = vertices[query[side].vertices]
             out[f"{limb}_{side}"] = SinkTest(vertices, target[side], points, _SIDE_SIGN[side]).depth_m(points)
     return out

@@ -248,7 +248,7 @@ def settle_posture(rest_vertices: np.ndarray, bone_heads: np.ndarray, angles_deg
     vertices : (n, 3) float64
         The posed body standing on z = 0 (:func:`~wbsa.bodies.posing.pose_vertices` of ``angles``).
     """
-    from wbsa.bodies.posing import SinkTest, blend, pose_vertices, segment_transforms
+    from wbsa.bodies.posing import SinkTest, pose_vertices, segment_transforms
 
     angles = np.array(angles_deg, dtype=np.float64)
     hips = list(_HIP)
@@ -256,28 +256,31 @@ def settle_posture(rest_vertices: np.ndarray, bone_heads: np.ndarray, angles_deg
         allowed = None
         for _ in range(SETTLE_MAX_STEPS):
             v = pose_vertices(rest_vertices, bone_heads, angles, rig, floor=False)
-            points = v[rig.leg_query["l"]]
+            points = v[rig.leg_query["l"].vertices]
             depth = SinkTest(v, rig.leg_target["l"], points, 1.0).depth_m(points)
             if depth <= SETTLE_TOLERANCE_M:
                 break
             if allowed is None:
-                rest = rest_vertices[rig.leg_query["l"]]
+                rest = rest_vertices[rig.leg_query["l"].vertices]
                 allowed = SinkTest(rest_vertices, rig.leg_target["l"], rest, 1.0).depth_m(rest) + SETTLE_TOLERANCE_M
             if depth <= allowed:
                 break
             angles[hips] += SETTLE_STEP_DEG / 2
     per_side = len(JOINT_MOTIONS)
+    settled = angles.copy()
     v = pose_vertices(rest_vertices, bone_heads, angles, rig, floor=False)
     for si, side in enumerate(SIDES):
         if not angles[si * per_side:si * per_side + 4].any():
             continue
-        rows = np.searchsorted(rig.moving, rig.arm_query[side])
-        rest_points, weights = rest_vertices[rig.arm_query[side]], rig.weights[rows]
-        test = SinkTest(v, rig.arm_target[side], v[rig.arm_query[side]], 1.0 if side == "l" else -1.0)
+        query = rig.arm_query[side]
+        test = SinkTest(v, rig.arm_target[side], v[query.vertices], 1.0 if side == "l" else -1.0)
         for _ in range(SETTLE_MAX_STEPS):
-            points = blend(rest_points, weights, segment_transforms(bone_heads, angles, rig))
+            points = query.blend(rest_vertices, segment_transforms(bone_heads, angles, rig))
             if test.depth_m(points) <= SETTLE_TOLERANCE_M:
                 break
             angles[_ABDUCTION[side]] += SETTLE_STEP_DEG
-    v = pose_vertices(rest_vertices, bone_heads, angles, rig)
+    if not np.array_equal(angles, settled):
+        v = pose_vertices(rest_vertices, bone_heads, angles, rig, floor=False)
+    if angles.any():
+        v[:, 2] -= v[:, 2].min()
     return angles, v

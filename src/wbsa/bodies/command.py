@@ -25,6 +25,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="body density for mass = volume × density (default 980 kg/m³, as anny)")
     p.add_argument("--params", help="(--kind table) Parquet/CSV with p_gender, p_age, ... columns in [0, 1]")
     p.add_argument("--variations", type=int, default=0, help="(--kind survey) weight/muscle variations per person")
+    p.add_argument("--posture", default="a-pose", metavar="NAME",
+                   help="a-pose (default: every body in the paper's rest A-pose), mixed (a random posture per "
+                        "subject) or one of arms-down, arms-wide, hands-on-hips, elbows-bent, feet-together, "
+                        "feet-apart; each with random joint jitter, recorded as posture columns")
     p.add_argument("--survey-weights", action="store_true", help="(--kind survey) select people by exam weights")
     p.add_argument("--workers", type=int, default=None,
                    help="worker processes (default: all cores; 1 = in this process)")
@@ -52,7 +56,7 @@ def run_population(args: argparse.Namespace) -> int:
     out = Path(args.out)
     fmt = args.format or _format_of(out)
     df = build_population(kind=args.kind, n=args.n, seed=args.seed, density_kg_m3=args.density,
-                          params_path=args.params, variations=args.variations,
+                          params_path=args.params, variations=args.variations, posture=args.posture,
                           survey_weights=args.survey_weights, show_progress=args.progress,
                           workers=args.workers or default_workers(), scheduler=args.scheduler)
     write_table(df, out, fmt)

@@ -46,11 +46,11 @@ passing through it), and legs that sink into each other are spread the same way.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Literal
 
 import numpy as np
 import pandas as pd
 
+from wbsa.bodies.posture_names import POSTURE_NAMES, PostureChoice
 from wbsa.errors import WbsaError
 
 #: The two sides: ``l`` is the subject's left (+X), ``r`` its right (−X).
@@ -68,10 +68,6 @@ SETTLE_STEP_DEG = 2.0
 #: Largest depth (m) a forearm, hand or leg may sink into the rest of the body before it is raised.
 SETTLE_TOLERANCE_M = 0.005
 
-PostureName = Literal["a-pose", "arms-down", "arms-wide", "hands-on-hips", "elbows-bent", "feet-together",
-                      "feet-apart"]
-PostureChoice = Literal["a-pose", "mixed", "arms-down", "arms-wide", "hands-on-hips", "elbows-bent",
-                        "feet-together", "feet-apart"]
 
 
 @dataclass(frozen=True)
@@ -211,7 +207,7 @@ def posture_angles(table: pd.DataFrame) -> np.ndarray | None:
     bad = ~np.isfinite(angles) | (np.abs(angles) > 180.0)
     if bad.any():
         row, col = np.argwhere(bad)[0]
-        raise WbsaError(f"posture angle {ANGLE_COLUMNS[col]} = {angles[row, col]!r} in row {row} is not a "
+        raise WbsaError(f"posture angle {ANGLE_COLUMNS[col]} = {float(angles[row, col])!r} in row {row} is not a "
                         "finite angle within ±180 degrees")
     return angles
 

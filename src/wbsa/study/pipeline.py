@@ -194,7 +194,10 @@ def _reused(name: str, stage: Stage) -> StageRun:
 def _population_stage(settings: StudySettings, out: Path, workers: int, scheduler: str | None,
                       show_progress: bool | None) -> StageRun:
     cfg = settings.population
-    stage = Stage.create(out, "population", dataclasses.asdict(cfg))
+    content = dataclasses.asdict(cfg)
+    if cfg.posture == "a-pose":  # the rest pose keeps the address the stage had before postures existed
+        del content["posture"]
+    stage = Stage.create(out, "population", content)
     if stage.done:
         return _reused("population", stage)
     from wbsa.io import write_table
@@ -202,8 +205,8 @@ def _population_stage(settings: StudySettings, out: Path, workers: int, schedule
 
     t = time.perf_counter()
     df = build_population(cfg.kind, n=cfg.n, seed=cfg.seed, density_kg_m3=cfg.density_kg_m3,
-                          variations=cfg.variations, show_progress=show_progress, workers=workers,
-                          scheduler=scheduler)
+                          variations=cfg.variations, posture=cfg.posture, show_progress=show_progress,
+                          workers=workers, scheduler=scheduler)
     write_table(df, stage.path / "population.parquet")
     seconds = time.perf_counter() - t
     summary = f"{len(df)} {cfg.kind} subjects"

@@ -22,6 +22,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any, Literal, Union, get_args, get_origin
 
+from wbsa.bodies.posture_names import PostureChoice
 from wbsa.errors import WbsaError
 
 #: Columns of the pinned population table that can be extra predictors (``sex`` via the alias ``sex``).
@@ -69,6 +70,9 @@ class PopulationConfig:
         Body density for mass = volume × density.
     variations : int
         (survey) weight/muscle variations per person, >= 0.
+    posture : str
+        ``a-pose`` (the paper: every body at rest), ``mixed`` (a random posture per subject) or one
+        posture name of :data:`wbsa.bodies.posture.POSTURES`; with random joint jitter.
     """
 
     kind: PopulationKind = "random"
@@ -76,6 +80,7 @@ class PopulationConfig:
     seed: int = 0
     density_kg_m3: float = 980.0
     variations: int = 0
+    posture: PostureChoice = "a-pose"
 
     def __post_init__(self) -> None:
         _check(self.n >= 1, "n", f"must be at least 1, got {self.n}")

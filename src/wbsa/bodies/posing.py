@@ -5,8 +5,8 @@ the vertices the posed bones move and their skinning weights, summed per rigid *
 lower upper arm, forearm and hand, leg, foot; per side), and the joints whose heads are the pivots.
 :func:`pose_vertices` turns one body's rest vertices into the posed ones for a row of joint angles
 (:data:`~wbsa.bodies.posture.ANGLE_COLUMNS`); all angles 0 returns the rest vertices unchanged, bit for
-bit. :func:`limb_sink_depths_m` measures how deep the forearms and hands sink into the rest of the
-body, and the legs into each other (the rough self-intersection check that
+bit. :class:`SinkTest` and :func:`limb_sink_depths_m` measure how deep an arm lies inside the trunk,
+head and legs, and a leg inside the other leg (the self-intersection check that
 :func:`~wbsa.bodies.posture.settle_posture` uses).
 """
 
@@ -17,6 +17,10 @@ from dataclasses import dataclass
 import numpy as np
 
 
+#: The two sides: ``l`` is the subject's left (+X), ``r`` its right (−X).
+SIDES = ("l", "r")
+#: Joint motions of one side, in the order of a side's angles (``<joint>_<side>_<motion>_deg`` in tables).
+JOINT_MOTIONS = ("shoulder_abduction", "shoulder_flexion", "shoulder_rotation", "elbow_flexion", "hip_abduction")
 #: Segments of one side, in skinning-weight column order (:class:`SkinWeights`); a segment is a set of bones
 #: moving rigidly.
 SEGMENTS = ("upperarm01", "upperarm02", "forearm", "leg", "foot")
@@ -199,7 +203,8 @@ def _unit(v: np.ndarray) -> np.ndarray:
     return v / np.linalg.norm(v)
 
 
-def segment_transforms(bone_heads: np.ndarray, angles_deg: np.ndarray, rig: Rig) -> list[tuple[np.ndarray, np.ndarray] | None]:
+def segment_transforms(bone_heads: np.ndarray, angles_deg: np.ndarray,
+                       rig: Rig) -> list[tuple[np.ndarray, np.ndarray] | None]:
     """The rigid transform of every segment of one body (None where it does not move).
 
     Parameters
@@ -207,7 +212,8 @@ def segment_transforms(bone_heads: np.ndarray, angles_deg: np.ndarray, rig: Rig)
     bone_heads : (j, 3) float64
         The body's rest joint positions.
     angles_deg : (10,) float64
-        Joint angles in :data:`~wbsa.bodies.posture.ANGLE_COLUMNS` order.
+        Joint angles: :data:`JOINT_MOTIONS` of the left side, then of the right
+        (:data:`~wbsa.bodies.posture.ANGLE_COLUMNS` order).
     rig : Rig
 
     Returns
@@ -215,8 +221,6 @@ def segment_transforms(bone_heads: np.ndarray, angles_deg: np.ndarray, rig: Rig)
     list of (R, t) or None
         ``2 * len(SEGMENTS)`` entries (left side, then right): ``x -> R x + t``, ``R`` (3, 3), ``t`` (3,).
     """
-    from wbsa.bodies.posture import JOINT_MOTIONS
-
     out: list[tuple[np.ndarray, np.ndarray] | None] = []
     a = np.radians(np.asarray(angles_deg, dtype=np.float64)).reshape(2, len(JOINT_MOTIONS))
     for si, side in enumerate(("l", "r")):

@@ -38,7 +38,7 @@ rotation keep the identity, so a vertex weighted only to the trunk does not move
 Named postures (:data:`POSTURES`) give each angle a nominal value and a uniform jitter half-width;
 :func:`draw_postures` draws every subject's angles from its own stream
 ``SeedSequence([seed, subject_id, POSTURE_STREAM])``. :func:`settle_posture` then keeps the limbs out
-of the body: an arm whose forearm or hand sinks into the trunk or legs is raised sideways in steps of
+of the body: an arm that sinks into the trunk, head or legs is raised sideways in steps of
 :data:`SETTLE_STEP_DEG` until it no longer does (the arm of a heavy body rests on its side instead of
 passing through it), and legs that sink into each other are spread the same way.
 """
@@ -46,17 +46,15 @@ passing through it), and legs that sink into each other are spread the same way.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import get_args
 
 import numpy as np
 import pandas as pd
 
-from wbsa.bodies.posture_names import POSTURE_NAMES, PostureChoice
+from wbsa.bodies.posing import JOINT_MOTIONS, SIDES, SinkTest, pose_vertices, segment_transforms
+from wbsa.bodies.posture_names import PostureChoice
 from wbsa.errors import WbsaError
 
-#: The two sides: ``l`` is the subject's left (+X), ``r`` its right (−X).
-SIDES = ("l", "r")
-#: Joint angles of one side, in column order (``<joint>_<side>_<motion>_deg`` in the tables).
-JOINT_MOTIONS = ("shoulder_abduction", "shoulder_flexion", "shoulder_rotation", "elbow_flexion", "hip_abduction")
 #: Angle columns of a postured population table, degrees, changes from the rest A-pose.
 ANGLE_COLUMNS = tuple(f"{m.split('_')[0]}_{s}_{m.split('_')[1]}_deg" for s in SIDES for m in JOINT_MOTIONS)
 #: Every posture column: the posture's name, then :data:`ANGLE_COLUMNS`.
@@ -67,7 +65,6 @@ POSTURE_STREAM = 0x9057E
 SETTLE_STEP_DEG = 2.0
 #: Largest depth (m) a forearm, hand or leg may sink into the rest of the body before it is raised.
 SETTLE_TOLERANCE_M = 0.005
-
 
 
 @dataclass(frozen=True)
@@ -134,9 +131,9 @@ class PostureSettings:
     mix: tuple[str, ...] = tuple(POSTURES)
 
     def __post_init__(self) -> None:
-        choices = ("a-pose", "mixed", *POSTURES)
+        choices = get_args(PostureChoice)
         if self.posture not in choices:
-            raise WbsaError(f"posture {self.posture!r} is unknown; use one of {', '.join(dict.fromkeys(choices))}")
+            raise WbsaError(f"posture {self.posture!r} is unknown; use one of {', '.join(choices)}")
         if not isinstance(self.seed, (int, np.integer)) or self.seed < 0:
             raise WbsaError(f"posture seed must be an integer >= 0, got {self.seed!r}")
         unknown = [name for name in self.mix if name not in POSTURES]
@@ -219,7 +216,8 @@ _HIP = tuple(ANGLE_COLUMNS.index(f"hip_{side}_abduction_deg") for side in SIDES)
 SETTLE_MAX_STEPS = 40
 
 
-def settle_posture(rest_vertices: np.ndarray, bone_heads: np.ndarray, angles_deg: np.ndarray, rig) -> tuple[np.ndarray, np.ndarray]:
+def settle_posture(rest_vertices: np.ndarray, bone_heads: np.ndarray, angles_deg: np.ndarray,
+                   rig) -> tuple[np.ndarray, np.ndarray]:
     """Keep the limbs out of the body: spread the legs, then raise each arm, until none sinks in.
 
     Legs that sink into each other deeper than at rest plus :data:`SETTLE_TOLERANCE_M` both have their
@@ -244,8 +242,6 @@ def settle_posture(rest_vertices: np.ndarray, bone_heads: np.ndarray, angles_deg
     vertices : (n, 3) float64
         The posed body standing on z = 0 (:func:`~wbsa.bodies.posing.pose_vertices` of ``angles``).
     """
-    from wbsa.bodies.posing import SinkTest, pose_vertices, segment_transforms
-
     angles = np.array(angles_deg, dtype=np.float64)
     hips = list(_HIP)
     if angles[hips].min() < 0:

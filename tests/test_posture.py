@@ -166,9 +166,12 @@ def test_bad_posture_settings_name_the_field():
         PostureSettings("dancing")
     with pytest.raises(WbsaError, match="posture mix"):
         PostureSettings("mixed", mix=("twirl",))
-    from wbsa.study.settings import PopulationConfig
+    from wbsa.study.settings import PopulationConfig, settings_from_dict
 
     assert PopulationConfig().posture == "a-pose"
+    assert settings_from_dict({"population": {"posture": "mixed"}}).population.posture == "mixed"
+    with pytest.raises(WbsaError, match=r"\[population\] posture must be one of 'a-pose', 'mixed', .* got 'sit'"):
+        settings_from_dict({"population": {"posture": "sit"}})
 
 
 def test_population_cli_posture(tmp_path, capsys):

@@ -21,6 +21,10 @@ survey matcher matched 31 % of adults with BMI <= 40 within all four tolerances)
 four extra unknowns it matches 94.9 % (see ``docs/survey.md``). With every local change 0 a body is
 exactly the phenotype-only body.
 
+A body stands in anny's rest A-pose unless its table row has posture columns
+(``wbsa population --posture``): then :meth:`BodyModel.skin_meshes` poses it by skinning
+(:mod:`wbsa.bodies.posture`, :mod:`wbsa.bodies.posing`); every measure, WBSA included, is taken at rest.
+
 The first ``anny.Anny()`` with this configuration in a fresh cache builds its data (60–120 s,
 about 0.8 GB cached in ``ANNY_CACHE_DIR``, default ``~/.cache/anny``); later builds are fast.
 """

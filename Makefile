@@ -44,6 +44,7 @@ test-quick: $(STAMP)
 
 bench: $(STAMP)
 	$(VENV)/bin/python benchmarks/bench_population.py
+	$(VENV)/bin/python benchmarks/bench_posture.py --n 300
 	OPENBLAS_NUM_THREADS=1 $(VENV)/bin/python benchmarks/bench_raycast.py --anny --accuracy
 	$(VENV)/bin/python benchmarks/bench_scan.py --subjects 24 --chunk-size 6
 	$(VENV)/bin/python benchmarks/bench_reconstruction.py

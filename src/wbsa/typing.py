@@ -27,6 +27,12 @@ ModelKind = Literal["linear", "quadratic", "loglog", "wls"]
 #: Subject groups, in report order.
 GroupName = Literal["all", "males", "females", "kids", "adults", "small", "normal", "big", "obese", "underweight",
                     "tall"]
+#: A named standing posture (:data:`wbsa.bodies.posture.POSTURES` has one entry per name, in this order).
+PostureName = Literal["a-pose", "arms-down", "arms-wide", "hands-on-hips", "elbows-bent", "feet-together",
+                      "feet-apart"]
+#: A population's ``posture`` setting: a posture name, or ``mixed`` (a random name per subject).
+PostureChoice = Literal["a-pose", "mixed", "arms-down", "arms-wide", "hands-on-hips", "elbows-bent",
+                        "feet-together", "feet-apart"]
 
 POPULATION_KINDS: tuple[str, ...] = get_args(PopulationKind)
 NOISE_MODELS: tuple[str, ...] = get_args(NoiseModel)
@@ -36,3 +42,5 @@ BOUNDARY_MODELS: tuple[str, ...] = get_args(BoundaryModel)
 SMOOTHING_METHODS: tuple[str, ...] = get_args(SmoothingMethod)
 MODEL_KINDS: tuple[str, ...] = get_args(ModelKind)
 GROUP_NAMES: tuple[str, ...] = get_args(GroupName)
+POSTURE_NAMES: tuple[str, ...] = get_args(PostureName)
+POSTURE_CHOICES: tuple[str, ...] = get_args(PostureChoice)

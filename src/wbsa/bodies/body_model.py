@@ -21,6 +21,10 @@ survey matcher matched 31 % of adults with BMI <= 40 within all four tolerances)
 four extra unknowns it matches 94.9 % (see ``docs/survey.md``). With every local change 0 a body is
 exactly the phenotype-only body.
 
+A body stands in anny's rest A-pose unless its table row has posture columns
+(``wbsa population --posture``): then :meth:`BodyModel.skin_meshes` poses it by skinning
+(:mod:`wbsa.bodies.posture`, :mod:`wbsa.bodies.posing`); every measure, WBSA included, is taken at rest.
+
 The first ``anny.Anny()`` with this configuration in a fresh cache builds its data (60–120 s,
 about 0.8 GB cached in ``ANNY_CACHE_DIR``, default ``~/.cache/anny``); later builds are fast.
 """
@@ -265,9 +269,41 @@ class BodyModel:
         return RestBodies(v, h)
 
     def skin_meshes(self, params: pd.DataFrame | dict) -> list[TriangleMesh]:
-        """Skin-only triangle meshes, one per row of ``params`` (see :meth:`rest_bodies`)."""
-        bodies = self.rest_bodies(params)
-        return [TriangleMesh(v, self.skin_faces) for v in bodies.vertices]
+        """Skin-only triangle meshes, one per row of ``params``, as the rows stand (see :meth:`posed_vertices`)."""
+        return [TriangleMesh(v, self.skin_faces) for v in self.posed_vertices(params)]
+
+    def posed_vertices(self, params: pd.DataFrame | dict) -> np.ndarray:
+        """Every body in its table row's posture, standing on z = 0.
+
+        Parameters
+        ----------
+        params
+            As for :meth:`rest_bodies`, optionally with the posture angle columns
+            (:data:`wbsa.bodies.posture.ANGLE_COLUMNS`, written by ``wbsa population --posture``).
+
+        Returns
+        -------
+        (b, n, 3) float64
+            Without posture columns, or for a row whose angles are all 0: the rest vertices, bit for bit.
+            Otherwise the body posed by :func:`wbsa.bodies.posing.pose_vertices` with the row's angles.
+        """
+        from wbsa.bodies.posing import pose_vertices
+        from wbsa.bodies.posture import posture_angles
+
+        table = params if isinstance(params, pd.DataFrame) else pd.DataFrame(params)
+        angles = posture_angles(table)
+        bodies = self.rest_bodies(table)
+        if angles is None:
+            return bodies.vertices
+        return np.stack([pose_vertices(v, h, a, self.rig)
+                         for v, h, a in zip(bodies.vertices, bodies.bone_heads, angles)]).reshape(bodies.vertices.shape)
+
+    @functools.cached_property
+    def rig(self):
+        """The :class:`wbsa.bodies.posing.Rig` of this model (skeleton and skinning weights for posing)."""
+        from wbsa.bodies.posing import Rig
+
+        return Rig.from_model(self)
 
     def skin_mesh(self, vertices: np.ndarray) -> TriangleMesh:
         """The skin mesh over one body's ``(n, 3)`` vertices."""

@@ -12,7 +12,7 @@ from wbsa.typing import PopulationKind
 
 def build_population(kind: PopulationKind, n: int | None = None, seed: int = 0, *,
                      density_kg_m3: float = DEFAULT_DENSITY_KG_M3, params_path: str | None = None,
-                     variations: int = 0, survey_weights: bool = False,
+                     variations: int = 0, survey_weights: bool = False, posture: str = "a-pose",
                      show_progress: bool | None = None, workers: int = 1,
                      scheduler: str | None = None) -> pd.DataFrame:
     """Build a population table.
@@ -27,9 +27,27 @@ def build_population(kind: PopulationKind, n: int | None = None, seed: int = 0, 
         NHANES people, paper's Virtual NHANES) or ``table`` (phenotypes read from ``params_path``).
     n
         Subjects (random) or survey people (survey).
+    posture
+        ``a-pose`` (every body at rest, no posture columns: the paper), ``mixed`` (a random named
+        posture per subject) or one name of :data:`wbsa.bodies.posture.POSTURES`; drawn with ``seed``
+        (see :func:`wbsa.bodies.posture_table.add_postures`).
     workers, scheduler
         Parallel body building (see :mod:`wbsa.parallel`); the table does not depend on them.
     """
+    from wbsa.bodies.posture import PostureSettings
+    from wbsa.bodies.posture_table import add_postures
+
+    postures = PostureSettings(posture, seed)  # checked before any body is built
+    table = _build_table(kind, n, seed, density_kg_m3=density_kg_m3, params_path=params_path,
+                         variations=variations, survey_weights=survey_weights, show_progress=show_progress,
+                         workers=workers, scheduler=scheduler)
+    return add_postures(table, postures, show_progress=show_progress, workers=workers, scheduler=scheduler)
+
+
+def _build_table(kind: PopulationKind, n: int | None, seed: int, *, density_kg_m3: float,
+                 params_path: str | None, variations: int, survey_weights: bool,
+                 show_progress: bool | None, workers: int, scheduler: str | None) -> pd.DataFrame:
+    """The population table of ``kind`` in the rest pose (see :func:`build_population`)."""
     from wbsa.bodies.table import measure_population
 
     PopulationSettings(kind=kind, n=n, seed=seed, density_kg_m3=density_kg_m3, variations=variations,

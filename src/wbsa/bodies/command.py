@@ -33,6 +33,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--params", help="(--kind table) Parquet/CSV with p_gender, p_age, ... columns in [0, 1]")
     p.add_argument("--variations", type=int, default=d.variations,
                    help="(--kind survey) weight/muscle variations per person")
+    p.add_argument("--posture", default=d.posture, metavar="NAME",
+                   help="a-pose (default: every body in the paper's rest A-pose), mixed (a random posture per "
+                        "subject) or one of arms-down, arms-wide, hands-on-hips, elbows-bent, feet-together, "
+                        "feet-apart; each with random joint jitter, recorded as posture columns")
     p.add_argument("--survey-weights", action="store_true", help="(--kind survey) select people by exam weights")
     p.add_argument("--workers", type=int, default=0,
                    help="worker processes (default 0: all cores; 1 = in this process)")
@@ -56,7 +60,8 @@ def settings_from_args(args: argparse.Namespace):
     from wbsa.bodies.settings import PopulationSettings
 
     return PopulationSettings(kind=args.kind, n=args.n, seed=args.seed, density_kg_m3=args.density,
-                              variations=args.variations, survey_weights=args.survey_weights, params_path=args.params)
+                              variations=args.variations, survey_weights=args.survey_weights, params_path=args.params,
+                              posture=args.posture)
 
 
 def run_population(args: argparse.Namespace) -> int:

@@ -6,7 +6,7 @@ import math
 from dataclasses import dataclass
 
 from wbsa.errors import check_field
-from wbsa.typing import POPULATION_KINDS, PopulationKind
+from wbsa.typing import POPULATION_KINDS, POSTURE_CHOICES, PopulationKind, PostureChoice
 
 #: Default body density (kg/m³), as anny's own ``Anthropometry``.
 DEFAULT_DENSITY_KG_M3 = 980.0
@@ -36,6 +36,9 @@ class PopulationSettings:
         (survey) select people by their exam weights.
     params_path : str or None
         (table) Parquet/CSV file with ``p_gender, p_age, ...`` columns in [0, 1].
+    posture : {'a-pose', 'mixed', 'arms-down', 'arms-wide', 'hands-on-hips', 'elbows-bent', 'feet-together', 'feet-apart'}
+        ``a-pose`` (the paper: every body at rest, no posture columns), ``mixed`` (a random posture per
+        subject) or one posture name; drawn with random joint jitter (:mod:`wbsa.bodies.posture`).
     """
 
     kind: PopulationKind = "random"
@@ -45,6 +48,7 @@ class PopulationSettings:
     variations: int = 0
     survey_weights: bool = False
     params_path: str | None = None
+    posture: PostureChoice = "a-pose"
 
     def __post_init__(self) -> None:
         check_field(self.kind in POPULATION_KINDS, "kind", f"must be one of {', '.join(POPULATION_KINDS)}, got {self.kind!r}")
@@ -57,6 +61,8 @@ class PopulationSettings:
         check_field(math.isfinite(self.density_kg_m3) and 500 <= self.density_kg_m3 <= 2000, "density_kg_m3",
                     f"must be a body density in 500–2000 kg/m³, got {self.density_kg_m3:g}")
         check_field(self.variations >= 0, "variations", f"must be 0 or more, got {self.variations}")
+        check_field(self.posture in POSTURE_CHOICES, "posture",
+                    f"must be one of {', '.join(POSTURE_CHOICES)}, got {self.posture!r}")
         if self.kind == "table":
             check_field(bool(self.params_path), "params_path",
                         "must name a phenotype table (p_gender, p_age, ... columns) for kind 'table'")

@@ -192,7 +192,10 @@ def _reused(name: str, stage: Stage) -> StageRun:
 
 def _population_stage(settings: StudySettings, out: Path, run: RunSettings) -> StageRun:
     cfg = settings.population
-    stage = Stage.create(out, "population", to_table(cfg))
+    content = to_table(cfg)
+    if content.get("posture") == "a-pose":  # the rest pose keeps the address the stage had before postures existed
+        del content["posture"]
+    stage = Stage.create(out, "population", content)
     if stage.done:
         return _reused("population", stage)
     from wbsa.io import write_table

@@ -183,7 +183,7 @@ def test_parse_sex():
 
 
 def test_schlich_needs_sex_and_unknown_key():
-    with pytest.raises(WbsaError, match="--sex male or --sex female"):
+    with pytest.raises(WbsaError, match="give the sex, male or female"):
         bsa("schlich", 170, 70)
     with pytest.raises(WbsaError, match="unknown BSA formula 'du_boys'.*dubois"):
         bsa("du_boys", 170, 70)

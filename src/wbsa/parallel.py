@@ -45,7 +45,7 @@ def dask_client(workers: int, scheduler: str | None = None) -> Iterator[Any]:
     from distributed import Client, LocalCluster
 
     if workers < 1:
-        raise WbsaError(f"--workers must be at least 1, got {workers}")
+        raise WbsaError(f"workers must be at least 1, got {workers}")
     cluster = None
     if scheduler is None:
         cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",

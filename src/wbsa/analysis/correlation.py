@@ -78,7 +78,7 @@ def spearman_matrix(population: pd.DataFrame, scan: pd.DataFrame, vbsa_column: s
     """
     vcol = resolve_vbsa_column(vbsa_column)
     if vcol not in scan.columns:
-        raise WbsaError(f"scan table has no column {vcol}; choose another --vbsa")
+        raise WbsaError(f"scan table has no column {vcol}; choose another VBSA column")
     rows = view_rows(scan, azimuth_deg, elevation_deg, distance_m, camera)
     if require_in_frame and "fits_in_frame" in rows.columns:
         rows = rows[rows["fits_in_frame"].fillna(False).astype(bool)]

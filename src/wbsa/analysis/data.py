@@ -114,7 +114,7 @@ def join_tables(population: pd.DataFrame, scan: pd.DataFrame, vbsa_columns: tupl
             if what == "scan" and any(c.startswith("vbsa") for c in missing):
                 have = [c for c in df.columns if c.startswith("vbsa")]
                 hint = f" (it has {', '.join(have) or 'no VBSA column'})"
-            raise WbsaError(f"{what} table lacks column(s) {', '.join(missing)}{hint}; check the file and --vbsa")
+            raise WbsaError(f"{what} table lacks column(s) {', '.join(missing)}{hint}; check the file and the VBSA column")
     if population["subject_id"].duplicated().any():
         raise WbsaError("population table has duplicate subject_id values; regenerate it with wbsa population")
     if scan.duplicated(["subject_id", *VIEW_KEYS]).any():

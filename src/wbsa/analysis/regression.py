@@ -254,7 +254,7 @@ def fit_view(df: pd.DataFrame, vbsa_col: str, predictors: tuple[str, ...] | list
     cols = ["subject_id", wbsa_col, vbsa_col, *predictors]
     missing = [c for c in cols if c not in df.columns]
     if missing:
-        raise WbsaError(f"table lacks column(s) {', '.join(missing)}; check the VBSA column and --predictors")
+        raise WbsaError(f"table lacks column(s) {', '.join(missing)}; check the VBSA column and the predictors")
     sub = df[cols].dropna()
     if sub["subject_id"].duplicated().any():
         raise WbsaError("several rows per subject; pass the rows of one view only")

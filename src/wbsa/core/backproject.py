@@ -163,7 +163,7 @@ def frame_from_depth_image(depth_m: np.ndarray, intrinsics, *, pose=None, settin
     h, w = depth.shape
     iw, ih = getattr(intrinsics, "width", w), getattr(intrinsics, "height", h)
     if (int(iw), int(ih)) != (w, h):
-        raise WbsaError(f"depth image is {w}x{h} but the camera intrinsics are {iw}x{ih}; use the matching --camera")
+        raise WbsaError(f"depth image is {w}x{h} but the camera intrinsics are {iw}x{ih}; give the camera that took the image")
     depth = np.where(np.isfinite(depth) & (depth > 0), depth, 0.0).astype(np.float32)
     valid = depth > 0
     points = backproject_depth(depth, intrinsics)

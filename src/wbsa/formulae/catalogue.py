@@ -81,7 +81,7 @@ _schlich_female = _power_law(0.000975482, 0.46, 1.08)
 
 def _schlich(height_cm: np.ndarray, weight_kg: np.ndarray, female: np.ndarray | None = None) -> np.ndarray:
     if female is None:
-        raise WbsaError("the Schlich formula differs by sex; give --sex male or --sex female")
+        raise WbsaError("the Schlich formula differs by sex; give the sex, male or female")
     return np.where(female, _schlich_female(height_cm, weight_kg), _schlich_male(height_cm, weight_kg))
 
 

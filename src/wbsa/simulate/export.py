@@ -54,7 +54,7 @@ def write_point_cloud(frame: DepthFrame, path: str | os.PathLike,
     path = Path(path)
     with atomic_path(path, keep_suffix=True) as tmp:
         if not o3d.io.write_point_cloud(str(tmp), cloud, write_ascii=False):
-            raise WbsaError(f"could not write {path}; choose a writable --out")
+            raise WbsaError(f"could not write {path}; choose a writable output folder")
     return path
 
 
@@ -112,7 +112,7 @@ def write_view_outputs(frame: DepthFrame, out_dir: str | os.PathLike, summary: d
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
-        raise WbsaError(f"cannot create output folder {out}: {exc.strerror}; choose a writable --out") from None
+        raise WbsaError(f"cannot create output folder {out}: {exc.strerror}; choose a writable output folder") from None
     paths = {key: out / name for key, name in FILES.items()}
     write_depth_png(frame, paths["depth"])
     write_point_cloud(frame, paths["points"], coordinates)

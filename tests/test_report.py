@@ -20,7 +20,7 @@ from wbsa.analysis.outputs import run_fit
 from helpers.synthetic import synthetic_population, synthetic_scan
 from wbsa.cli import main
 from wbsa.errors import WbsaError
-from wbsa.report import figures as F
+from wbsa.report.figures import one_view as F
 from wbsa.report.build import build_report
 from wbsa.report.data import load_report_data, nearest_view, select
 from wbsa.report.sources import fit_dir_sources, resolve_sources

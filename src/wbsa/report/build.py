@@ -15,7 +15,7 @@ from wbsa.core.versions import WBSA_VERSION as __version__
 from wbsa.errors import WbsaError
 from wbsa.io import atomic_path
 from wbsa.progress import progress
-from wbsa.report import figures as F
+from wbsa.report.figures import one_view as F
 from wbsa.report.claim import comparisons_display, compute_claim, group_spec_of, headline_display, method_text
 from wbsa.report.data import ReportData, load_report_data, select
 from wbsa.report.html import Page, png_bytes

@@ -1,0 +1,1 @@
+"""The report's figures (being split into one module per figure family)."""

@@ -15,28 +15,21 @@ from wbsa.core.versions import WBSA_VERSION as __version__
 from wbsa.errors import WbsaError
 from wbsa.io import atomic_path
 from wbsa.progress import progress
-from wbsa.report.figures import one_view as F
 from wbsa.report.claim import comparisons_display, compute_claim, group_spec_of, headline_display, method_text
 from wbsa.report.data import ReportData, load_report_data, select
+from wbsa.report.figures.by_view import coefficients_by_view, group_errors, model_comparison
+from wbsa.report.figures.distance import distance_effect
+from wbsa.report.figures.formulae import formulae_comparison
+from wbsa.report.figures.one_view import nonlinear_view, vbsa_wbsa_scatter
+from wbsa.report.figures.point_cloud import point_cloud_snapshots
+from wbsa.report.figures.population import wbsa_distribution
+from wbsa.report.figures.reconstruction import reconstruction_by_view
+from wbsa.report.figures.residuals import residual_diagnostics
+from wbsa.report.figures.style import GROUP_LABELS, FigureUnavailable, predictors_title
 from wbsa.report.html import Page, png_bytes
 from wbsa.report.sources import ReportSources, resolve_sources
 from wbsa.report.settings import ReportSettings
 from wbsa.settings_io import from_table
-
-#: Figures of the report in order: id -> what it reproduces.
-FIGURES: dict[str, str] = {
-    "fig-wbsa-distribution": "paper Fig 5",
-    "fig-vbsa-wbsa": "paper Fig 10 and S1 Fig",
-    "fig-view-<group>": "paper Figs 11, 13, 14",
-    "fig-group-errors": "paper Fig 12",
-    "fig-models": "paper section 4.2",
-    "fig-nonlinear": "paper Fig 16",
-    "fig-residuals": "paper S2 Fig",
-    "fig-snapshots": "paper Fig 8",
-    "fig-reconstruction": "paper Figs 15 and 17",
-    "fig-distance": "paper section 3.4",
-    "fig-formulae": "formulae comparison",
-}
 
 
 @dataclass
@@ -138,7 +131,7 @@ class _Builder:
     def _figure(self, fig_id: str, what: str, draw: Callable, caption: str) -> None:
         try:
             fig = draw()
-        except F.FigureUnavailable as exc:
+        except FigureUnavailable as exc:
             self.unavailable[fig_id] = str(exc)
             self.page.unavailable(fig_id, what, str(exc))
             return
@@ -204,7 +197,7 @@ class _Builder:
                 continue
             best, worst = part.loc[part["cv_rmse_m2"].idxmin()], part.loc[part["cv_rmse_m2"].idxmax()]
             for which, row in (("best", best), ("worst", worst)):
-                rows.append((f"all subjects, {F.predictors_title(lab)}: CV RMSE (m²) and CV MAPE (%), {which} view",
+                rows.append((f"all subjects, {predictors_title(lab)}: CV RMSE (m²) and CV MAPE (%), {which} view",
                              f"{row['cv_rmse_m2']:.4f} m² ({row['cv_mape_pct']:.2f} %) at θ = {row['azimuth_deg']:g}°, "
                              f"φ = {row['elevation_deg']:g}°"))
         rows.append(("paper (Virtual Random, 19,995 subjects)",
@@ -216,7 +209,7 @@ class _Builder:
         d, p = self.d, self.page
         p.section("population", "Population",
                   "The virtual population the study scanned; WBSA is the area of each body's skin mesh.")
-        self._figure("fig-wbsa-distribution", "WBSA distribution", lambda: F.wbsa_distribution(d.population, self.dpi),
+        self._figure("fig-wbsa-distribution", "WBSA distribution", lambda: wbsa_distribution(d.population, self.dpi),
                      "Distribution of WBSA, stacked by sex (left), and WBSA against stature coloured by BMI (right) "
                      "(paper Fig 5).")
         p.table("tab-population", population_table(d.population, d.fit_info),
@@ -226,8 +219,8 @@ class _Builder:
         d, p = self.d, self.page
         p.section("vbsa-wbsa", "VBSA and WBSA")
         self._figure("fig-vbsa-wbsa", "VBSA–WBSA scatter",
-                     lambda: F.vbsa_wbsa_scatter(d.population, d.scan, d.fits, view=tuple(self.s.scatter_view_deg),
-                                                 vbsa_column=d.vbsa_column, model=d.model, **self.common),
+                     lambda: vbsa_wbsa_scatter(d.population, d.scan, d.fits, view=tuple(self.s.scatter_view_deg),
+                                               vbsa_column=d.vbsa_column, model=d.model, **self.common),
                      "View body surface area against whole body surface area at one view with the all-subjects fit "
                      "(paper Fig 10 and S1 Fig).")
         if not d.correlation.empty:
@@ -244,17 +237,17 @@ class _Builder:
     def view_figure(self, group: str) -> None:
         d = self.d
         self._figure(f"fig-view-{group}", f"coefficients by view, {group}",
-                     lambda: F.coefficients_by_view(d.fits, group=group, model=d.model, vbsa_column=d.vbsa_column,
-                                                    predictor_labels=d.predictor_labels, **self.common),
-                     f"{F.GROUP_LABELS.get(group, group).capitalize()}: CV RMSE (left) and VBSA coefficient c1 "
+                     lambda: coefficients_by_view(d.fits, group=group, model=d.model, vbsa_column=d.vbsa_column,
+                                                  predictor_labels=d.predictor_labels, **self.common),
+                     f"{GROUP_LABELS.get(group, group).capitalize()}: CV RMSE (left) and VBSA coefficient c1 "
                      "(right) against azimuth, without and with stature (paper Figs 11, 13, 14).")
 
     def groups(self) -> None:
         d, p = self.d, self.page
         p.section("groups", "Groups")
         self._figure("fig-group-errors", "errors by group",
-                     lambda: F.group_errors(d.fits, model=d.model, vbsa_column=d.vbsa_column,
-                                            predictor_labels=d.predictor_labels, **self.common),
+                     lambda: group_errors(d.fits, model=d.model, vbsa_column=d.vbsa_column,
+                                          predictor_labels=d.predictor_labels, **self.common),
                      "CV RMSE of the WBSA prediction at elevation 0 for every group fitted on its own, without and "
                      "with stature (paper Fig 12).")
         p.table("tab-groups", group_table(d), "CV RMSE (m²) over all views per group and predictor set.")
@@ -271,12 +264,12 @@ class _Builder:
         d, p = self.d, self.page
         p.section("nonlinear", "Non-linearity and alternative models")
         self._figure("fig-nonlinear", "non-linear view",
-                     lambda: F.nonlinear_view(d.population, d.scan, d.fits, view=tuple(self.s.nonlinear_view_deg),
-                                              vbsa_column=d.vbsa_column, **self.common),
+                     lambda: nonlinear_view(d.population, d.scan, d.fits, view=tuple(self.s.nonlinear_view_deg),
+                                            vbsa_column=d.vbsa_column, **self.common),
                      "The VBSA–WBSA relation at an occluded view with the linear and power-law fits, and the linear "
                      "fit's residuals against WBSA (paper Fig 16).")
         self._figure("fig-models", "model comparison",
-                     lambda: F.model_comparison(d.fits, vbsa_column=d.vbsa_column, **self.common),
+                     lambda: model_comparison(d.fits, vbsa_column=d.vbsa_column, **self.common),
                      "Cross-validated RMSE of every model kind at elevation 0 (left) and its ratio to the first "
                      "model at every view (right).")
         if not d.model_summary.empty:
@@ -299,8 +292,8 @@ class _Builder:
         d, p = self.d, self.page
         p.section("residuals", "Residual analysis")
         self._figure("fig-residuals", "residual analysis",
-                     lambda: F.residual_diagnostics(d.residuals, d.qq, view=tuple(self.s.scatter_view_deg),
-                                                    model=d.model, vbsa_column=d.vbsa_column, **self.common),
+                     lambda: residual_diagnostics(d.residuals, d.qq, view=tuple(self.s.scatter_view_deg),
+                                                  model=d.model, vbsa_column=d.vbsa_column, **self.common),
                      "Residuals of the all-subjects VBSA-only fit: (a) normal QQ plot, (b) residuals against fitted "
                      "values, (c) histogram, (d) scale–location (paper S2 Fig).")
 
@@ -318,23 +311,23 @@ class _Builder:
         az, el = (float(x) for x in self.s.snapshot_view_deg)
         missing = [c for c in ("p_gender", "p_age", "p_weight", "p_height") if c not in d.population.columns]
         if missing:
-            raise F.FigureUnavailable(f"the population lacks the body parameters ({', '.join(missing)})")
+            raise FigureUnavailable(f"the population lacks the body parameters ({', '.join(missing)})")
         try:
             intr = snapshot_intrinsics(d.sources.scan_paths, d.camera)
             sid = pick_subject(d.population, self.s.snapshot_subject)
             snap = render_snapshot(d.population, sid, intr, az, el, d.distance_m)
         except WbsaError as exc:
-            raise F.FigureUnavailable(str(exc)) from None
-        return F.point_cloud_snapshots(snap.points_world, snap.depth_m, snap.body_vertices, view=(az, el),
-                                       distance_m=d.distance_m, subject_id=sid, camera=d.camera, dpi=self.dpi)
+            raise FigureUnavailable(str(exc)) from None
+        return point_cloud_snapshots(snap.points_world, snap.depth_m, snap.body_vertices, view=(az, el),
+                                     distance_m=d.distance_m, subject_id=sid, camera=d.camera, dpi=self.dpi)
 
     def reconstruction(self) -> None:
         d, p = self.d, self.page
         p.section("reconstruction", "Surface reconstruction")
         ref = d.vbsa_column if not d.vbsa_column.startswith("vbsa_recon_") else "vbsa_visible_m2"
         self._figure("fig-reconstruction", "reconstruction by view",
-                     lambda: F.reconstruction_by_view(d.scan, d.fits, model=d.model, reference_column=ref,
-                                                      **self.common),
+                     lambda: reconstruction_by_view(d.scan, d.fits, model=d.model, reference_column=ref,
+                                                    **self.common),
                      "Reconstructed against ideal view area by azimuth at elevation 0: relative VBSA error, CV RMSE "
                      "and c1 with each VBSA (paper Figs 15 and 17).")
 
@@ -343,7 +336,7 @@ class _Builder:
         p.section("distance", "Camera distance")
         common = {k: v for k, v in self.common.items() if k != "distance_m"}
         self._figure("fig-distance", "camera distance",
-                     lambda: F.distance_effect(d.fits, d.scan, model=d.model, vbsa_column=d.vbsa_column, **common),
+                     lambda: distance_effect(d.fits, d.scan, model=d.model, vbsa_column=d.vbsa_column, **common),
                      "CV RMSE and c1 against the camera distance at a few views, and the share of bodies inside the "
                      "frame (paper section 3.4).")
         if len(d.distances_m) > 1:
@@ -354,7 +347,7 @@ class _Builder:
         d, p = self.d, self.page
         p.section("formulae", "Classical formulae")
         self._figure("fig-formulae", "formulae comparison",
-                     lambda: F.formulae_comparison(d.formulae, model=d.model, vbsa_column=d.vbsa_column, **self.common),
+                     lambda: formulae_comparison(d.formulae, model=d.model, vbsa_column=d.vbsa_column, **self.common),
                      "MAPE (%) of the classical BSA formulae (height and weight) against the mesh WBSA, and below "
                      "them the all-subjects single-view model's cross-validated MAPE at its best and worst view in "
                      "each group; one column per group.")

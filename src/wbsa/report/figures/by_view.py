@@ -61,7 +61,6 @@ def coefficients_by_view(fits: pd.DataFrame, *, group: str, model: str, vbsa_col
     return fig
 
 
-
 def group_errors(fits: pd.DataFrame, *, model: str, vbsa_column: str, distance_m: float, camera: str,
                  predictor_labels: list[str], elevation_deg: float = 0.0, dpi: int = 100) -> Figure:
     """CV RMSE against azimuth for every group at one elevation (paper Fig 12), without and with stature.

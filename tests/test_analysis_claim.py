@@ -4,18 +4,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from wbsa.analysis.claim import (
-    HW_KEY,
-    TOO_FEW,
-    ClaimSettings,
-    ape_pct,
-    evaluate_claim,
-    hw_law_fit,
-    hw_law_oof,
-    paired_bootstrap,
-    verdict,
-    view_roles,
-)
+from wbsa.analysis.bootstrap import TOO_FEW, ape_pct, paired_bootstrap, verdict
+from wbsa.analysis.claim import HW_KEY, ClaimSettings, evaluate_claim, view_roles
+from wbsa.analysis.hw_law import hw_law_fit, hw_law_oof
 from wbsa.analysis.cv import cv_predict, fold_ids
 from wbsa.analysis.fit_views import FitSettings, fit_all
 from helpers.synthetic import synthetic_population, synthetic_scan

@@ -20,9 +20,16 @@ from wbsa.analysis.outputs import run_fit
 from helpers.synthetic import synthetic_population, synthetic_scan
 from wbsa.cli import main
 from wbsa.errors import WbsaError
-from wbsa.report import figures as F
 from wbsa.report.build import build_report
 from wbsa.report.data import load_report_data, nearest_view, select
+from wbsa.report.figures.by_view import coefficients_by_view, group_errors
+from wbsa.report.figures.distance import distance_effect
+from wbsa.report.figures.formulae import formulae_comparison
+from wbsa.report.figures.one_view import vbsa_wbsa_scatter, view_table
+from wbsa.report.figures.population import wbsa_distribution
+from wbsa.report.figures.reconstruction import reconstruction_by_view
+from wbsa.report.figures.residuals import residual_diagnostics
+from wbsa.report.figures.style import FigureUnavailable
 from wbsa.report.sources import fit_dir_sources, resolve_sources
 
 VIEWS = [(a, e) for e in (0.0, 60.0) for a in (0.0, 60.0, 90.0, 180.0)]
@@ -107,10 +114,10 @@ def test_report_command_embeds_every_figure_as_png_and_every_table(cli_report):
 
 
 def test_scatter_draws_the_measured_points_and_the_fitted_line(data):
-    fig = F.vbsa_wbsa_scatter(data.population, data.scan, data.fits, view=(0, 0), distance_m=4.3,
-                              camera=data.camera, vbsa_column="vbsa_visible_m2")
+    fig = vbsa_wbsa_scatter(data.population, data.scan, data.fits, view=(0, 0), distance_m=4.3,
+                            camera=data.camera, vbsa_column="vbsa_visible_m2")
     ax = fig.axes[0]
-    t = F.view_table(data.population, data.scan, "vbsa_visible_m2", 0.0, 0.0, 4.3, data.camera)
+    t = view_table(data.population, data.scan, "vbsa_visible_m2", 0.0, 0.0, 4.3, data.camera)
     inside = t[t["fits_in_frame"]]
     pts = ax.collections[0].get_offsets()
     np.testing.assert_allclose(np.sort(pts[:, 0]), np.sort(inside["vbsa_m2"] * 100))
@@ -125,8 +132,8 @@ def test_scatter_draws_the_measured_points_and_the_fitted_line(data):
 
 
 def test_coefficient_figure_lines_are_the_fit_table(data):
-    fig = F.coefficients_by_view(data.fits, group="all", model="linear", vbsa_column="vbsa_visible_m2",
-                                 distance_m=4.3, camera=data.camera, predictor_labels=data.predictor_labels)
+    fig = coefficients_by_view(data.fits, group="all", model="linear", vbsa_column="vbsa_visible_m2",
+                               distance_m=4.3, camera=data.camera, predictor_labels=data.predictor_labels)
     axes = fig.axes
     assert len(axes) == 4  # (VBSA only, VBSA + stature) x (CV RMSE, c1)
     for row, label in enumerate(["vbsa", "vbsa+stature_m"]):
@@ -142,7 +149,7 @@ def test_coefficient_figure_lines_are_the_fit_table(data):
 
 
 def test_wbsa_histogram_counts_every_subject(data):
-    fig = F.wbsa_distribution(data.population)
+    fig = wbsa_distribution(data.population)
     ax = fig.axes[0]
     top = {}
     for patch in ax.patches:  # stacked: the top of each bin's last bar is the bin's total
@@ -152,8 +159,8 @@ def test_wbsa_histogram_counts_every_subject(data):
 
 
 def test_group_errors_show_each_group_at_elevation_zero(data):
-    fig = F.group_errors(data.fits, model="linear", vbsa_column="vbsa_visible_m2", distance_m=4.3,
-                         camera=data.camera, predictor_labels=data.predictor_labels)
+    fig = group_errors(data.fits, model="linear", vbsa_column="vbsa_visible_m2", distance_m=4.3,
+                       camera=data.camera, predictor_labels=data.predictor_labels)
     ax = fig.axes[0]
     sub = select(data.fits, model="linear", predictors="vbsa", vbsa_column="vbsa_visible_m2", distance_m=4.3,
                  elevation_deg=0.0)
@@ -164,8 +171,8 @@ def test_group_errors_show_each_group_at_elevation_zero(data):
 
 
 def test_distance_figure_shows_the_share_of_bodies_in_frame(data):
-    fig = F.distance_effect(data.fits, data.scan, model="linear", vbsa_column="vbsa_visible_m2", camera=data.camera,
-                            views=[(0.0, 0.0)])
+    fig = distance_effect(data.fits, data.scan, model="linear", vbsa_column="vbsa_visible_m2", camera=data.camera,
+                          views=[(0.0, 0.0)])
     share_ax = fig.axes[2]
     rows = select(data.scan, azimuth_deg=0.0, elevation_deg=0.0)
     expected = rows.groupby("distance_m")["fits_in_frame"].mean() * 100
@@ -178,7 +185,7 @@ def test_distance_figure_shows_the_share_of_bodies_in_frame(data):
 
 
 def test_reconstruction_figure_shows_the_relative_area_error(data):
-    fig = F.reconstruction_by_view(data.scan, data.fits, model="linear", distance_m=4.3, camera=data.camera)
+    fig = reconstruction_by_view(data.scan, data.fits, model="linear", distance_m=4.3, camera=data.camera)
     err_ax = fig.axes[0]
     sc = select(data.scan, distance_m=4.3, elevation_deg=0.0)
     sc = sc[sc["fits_in_frame"]]
@@ -190,14 +197,14 @@ def test_reconstruction_figure_shows_the_relative_area_error(data):
 
 def test_figures_without_their_data_say_why(data):
     one_distance = select(data.fits, distance_m=4.3)
-    with pytest.raises(F.FigureUnavailable, match="single camera distance"):
-        F.distance_effect(one_distance, data.scan, model="linear", vbsa_column="vbsa_visible_m2", camera=data.camera)
-    with pytest.raises(F.FigureUnavailable, match="no reconstruction columns"):
-        F.reconstruction_by_view(data.scan.drop(columns="vbsa_recon_grid_m2"), data.fits, model="linear",
-                                 distance_m=4.3, camera=data.camera)
-    with pytest.raises(F.FigureUnavailable, match="no per-subject residuals"):
-        F.residual_diagnostics(pd.DataFrame(), data.qq, view=(0, 0), model="linear", vbsa_column="vbsa_visible_m2",
+    with pytest.raises(FigureUnavailable, match="single camera distance"):
+        distance_effect(one_distance, data.scan, model="linear", vbsa_column="vbsa_visible_m2", camera=data.camera)
+    with pytest.raises(FigureUnavailable, match="no reconstruction columns"):
+        reconstruction_by_view(data.scan.drop(columns="vbsa_recon_grid_m2"), data.fits, model="linear",
                                distance_m=4.3, camera=data.camera)
+    with pytest.raises(FigureUnavailable, match="no per-subject residuals"):
+        residual_diagnostics(pd.DataFrame(), data.qq, view=(0, 0), model="linear", vbsa_column="vbsa_visible_m2",
+                             distance_m=4.3, camera=data.camera)
 
 
 def test_nearest_view_is_on_the_sphere():
@@ -279,8 +286,8 @@ def test_summary_uses_one_area_unit_and_printing_shows_every_row(report_html):
 
 
 def test_formulae_grid_is_one_readable_panel_with_the_table_numbers(data):
-    fig = F.formulae_comparison(data.formulae, model="linear", vbsa_column="vbsa_visible_m2", distance_m=4.3,
-                                camera=data.camera, dpi=100)
+    fig = formulae_comparison(data.formulae, model="linear", vbsa_column="vbsa_visible_m2", distance_m=4.3,
+                              camera=data.camera, dpi=100)
     ax = fig.axes[0]
     assert len(fig.axes) == 2  # the grid and its colour bar
     assert min(t.get_fontsize() for t in ax.get_yticklabels()) >= 9

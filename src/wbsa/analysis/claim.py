@@ -9,28 +9,27 @@ refitted law's, subject by subject, and puts a paired-bootstrap interval on each
 (MAPE, in percentage points). The single view *wins* when the whole interval lies below 0, *loses*
 when it lies above 0, and *ties* otherwise.
 
-Everything here is a pure function of the tables; the report draws the result.
+Everything here is a pure function of the tables; the report draws the result. This module assembles
+the comparison and headline tables; the paired bootstrap and the verdicts are in
+:mod:`wbsa.analysis.bootstrap`, the refitted law in :mod:`wbsa.analysis.hw_law` and the sentences in
+:mod:`wbsa.analysis.claim_sentences`.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from typing import Literal
+from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
 
-from wbsa.analysis.cv import cv_predict, fit_statsmodels, fold_ids
+from wbsa.analysis.bootstrap import TOO_FEW, ape_pct, paired_bootstrap
+from wbsa.analysis.claim_sentences import group_sentences
+from wbsa.analysis.cv import fold_ids
 from wbsa.analysis.data import VIEW_KEYS
-from wbsa.analysis.design import design_matrix
 from wbsa.analysis.formulae_comparison import formula_labels, formula_values
 from wbsa.analysis.groups import CLAIM_GROUPS, GROUP_NAMES, GroupSpec, assign_groups, check_group_names
+from wbsa.analysis.hw_law import hw_law_fit, hw_law_oof
 from wbsa.errors import WbsaError
-
-Verdict = Literal["wins", "ties", "loses"]
-
-#: Verdict of a group with fewer subjects than :attr:`ClaimSettings.min_subjects`.
-TOO_FEW = "too few subjects"
 
 #: Comparator key and label of the refitted height/weight law.
 HW_KEY = "hw_refit"
@@ -74,7 +73,8 @@ class ClaimSettings:
     groups : tuple of str
         Groups tested, in table order (:data:`wbsa.analysis.groups.CLAIM_GROUPS`).
     min_subjects : int
-        Groups with fewer subjects at a view get no interval and the verdict :data:`TOO_FEW`.
+        Groups with fewer subjects at a view get no interval and the verdict
+        :data:`~wbsa.analysis.bootstrap.TOO_FEW`.
     """
 
     resamples: int = 2000
@@ -99,153 +99,6 @@ class ClaimSettings:
         check_group_names(self.groups)
 
 
-@dataclass(frozen=True)
-class BootstrapDiff:
-    """Paired-bootstrap differences of mean APE, A − B, one entry per comparator B.
-
-    Attributes
-    ----------
-    diff, lo, hi : (m,) float64
-        Observed difference of MAPE (percentage points) and its percentile interval.
-    """
-
-    diff: np.ndarray
-    lo: np.ndarray
-    hi: np.ndarray
-
-    @property
-    def verdicts(self) -> list[str]:
-        """:func:`verdict` of every interval."""
-        return [verdict(lo, hi) for lo, hi in zip(self.lo, self.hi)]
-
-
-def verdict(lo: float, hi: float) -> Verdict:
-    """``wins`` if the interval of (A − B) lies below 0, ``loses`` if above 0, else ``ties``."""
-    if hi < 0:
-        return "wins"
-    if lo > 0:
-        return "loses"
-    return "ties"
-
-
-def paired_bootstrap(ape_a: np.ndarray, ape_b: np.ndarray, resamples: int = 2000, level: float = 0.95,
-                     seed: int | list[int] | np.random.SeedSequence = 0) -> BootstrapDiff:
-    """Percentile interval of mean(ape_a) − mean(ape_b), resampling subjects with replacement.
-
-    Both predictors are evaluated on the same resampled subjects (paired), so what they share (a body
-    that is hard for both) cancels. Every comparator uses the same resamples.
-
-    Parameters
-    ----------
-    ape_a : (n,) float64
-        Absolute percentage errors of predictor A (e.g. the single view), one per subject.
-    ape_b : (n,) or (n, m) float64
-        Those of one or ``m`` comparators, on the same subjects in the same order.
-    resamples : int
-        Bootstrap resamples.
-    level : float
-        Interval level.
-    seed : int, list of int or SeedSequence
-        Seed of ``numpy.random.default_rng``.
-
-    Returns
-    -------
-    BootstrapDiff
-        ``(m,)`` arrays (``m = 1`` for a 1-D ``ape_b``).
-    """
-    a = np.asarray(ape_a, dtype=float)
-    b = np.asarray(ape_b, dtype=float)
-    if b.ndim == 1:
-        b = b[:, None]
-    if a.ndim != 1 or b.shape[0] != a.shape[0]:
-        raise WbsaError(f"paired bootstrap needs errors of the same subjects: got {a.shape} and {b.shape}")
-    n = a.shape[0]
-    if n < 2:
-        raise WbsaError(f"paired bootstrap needs at least 2 subjects, got {n}")
-    if not (np.isfinite(a).all() and np.isfinite(b).all()):
-        raise WbsaError("paired bootstrap got non-finite errors; drop the subjects without a prediction first")
-    d = a[:, None] - b  # (n, m)
-    rng = np.random.default_rng(seed)
-    means = np.empty((int(resamples), d.shape[1]))
-    chunk = max(1, min(int(resamples), 4_000_000 // n))  # bounded memory: a (chunk, n) count matrix at a time
-    p = np.full(n, 1.0 / n)
-    for start in range(0, int(resamples), chunk):
-        stop = min(int(resamples), start + chunk)
-        counts = rng.multinomial(n, p, size=stop - start)  # same law as drawing n subjects with replacement
-        means[start:stop] = counts @ d / n
-    q = np.quantile(means, [(1 - level) / 2, (1 + level) / 2], axis=0)
-    return BootstrapDiff(diff=d.mean(axis=0), lo=q[0], hi=q[1])
-
-
-def ape_pct(pred_m2: np.ndarray, wbsa_m2: np.ndarray) -> np.ndarray:
-    """Absolute percentage error 100·|pred − WBSA|/WBSA, shape of the inputs (broadcast)."""
-    y = np.asarray(wbsa_m2, dtype=float)
-    return 100.0 * np.abs(np.asarray(pred_m2, dtype=float) - y) / y
-
-
-# -------------------------------------------------------------------------------------------------------------------
-# the height/weight law refitted on the virtual bodies
-
-
-def hw_law_fit(stature_m: np.ndarray, mass_kg: np.ndarray, wbsa_m2: np.ndarray) -> dict[str, float]:
-    """Fit log WBSA = a + b·log H + c·log W by OLS (statsmodels).
-
-    Parameters
-    ----------
-    stature_m, mass_kg, wbsa_m2 : (n,) float64
-
-    Returns
-    -------
-    dict
-        ``a``, ``b``, ``c`` and their standard errors ``a_se``, ``b_se``, ``c_se``; ``r2`` (log scale);
-        ``resid_sd_pct`` = 100·(residual SD on the log scale), about the relative scatter at fixed H and W;
-        ``n``. WBSA = e^a · H^b · W^c, H in m and W in kg.
-    """
-    y = np.log(np.asarray(wbsa_m2, dtype=float))
-    X = _hw_design(stature_m, mass_kg)
-    res = fit_statsmodels(y, X, None)
-    a, b, c = (float(v) for v in res.params)
-    a_se, b_se, c_se = (float(v) for v in res.bse)
-    return {"a": a, "b": b, "c": c, "a_se": a_se, "b_se": b_se, "c_se": c_se, "r2": float(res.rsquared),
-            "resid_sd_pct": 100.0 * float(np.sqrt(res.scale)), "n": int(len(y))}
-
-
-def hw_law_oof(stature_m: np.ndarray, mass_kg: np.ndarray, wbsa_m2: np.ndarray, folds: np.ndarray) -> np.ndarray:
-    """Out-of-fold predictions (m²) of the refitted H/W law: each fold predicted by the law fitted on the others.
-
-    Parameters
-    ----------
-    stature_m, mass_kg, wbsa_m2 : (n,) float64
-    folds : (n,) int64
-        Fold of every subject (:func:`wbsa.analysis.cv.fold_ids`), the same as the single-view model's.
-
-    Returns
-    -------
-    (n,) float64
-        exp of the log-scale prediction (the conditional median, as the ``loglog`` view model).
-    """
-    # the log-log model design with stature in the VBSA slot and mass as the extra predictor is exactly
-    # [1, log H, log W]: reuse the fitted models' cross-validation rather than a second loop
-    _check_hw_inputs(stature_m, mass_kg, wbsa_m2)
-    return cv_predict("loglog", np.asarray(wbsa_m2, float), np.asarray(stature_m, float),
-                      {"mass_kg": np.asarray(mass_kg, float)}, np.asarray(folds))
-
-
-def _hw_design(stature_m: np.ndarray, mass_kg: np.ndarray) -> np.ndarray:
-    _check_hw_inputs(stature_m, mass_kg)
-    return design_matrix("loglog", np.asarray(stature_m, float), {"mass_kg": np.asarray(mass_kg, float)})
-
-
-def _check_hw_inputs(*arrays: np.ndarray) -> None:
-    for x in arrays:
-        x = np.asarray(x, dtype=float)
-        if not (np.isfinite(x).all() and (x > 0).all()):
-            raise WbsaError("the H/W law needs positive, finite stature, mass and WBSA for every subject")
-
-
-# -------------------------------------------------------------------------------------------------------------------
-# the claim table
-
 
 @dataclass
 class ClaimResult:
@@ -257,7 +110,7 @@ class ClaimResult:
         :data:`COMPARISON_COLUMNS`: one row per group × VBSA column × view role × comparator (the refitted
         H/W law first, then every published formula). ``diff_pct_points`` = view MAPE − comparator MAPE
         (negative: the view is better), ``diff_lo``/``diff_hi`` its paired-bootstrap interval,
-        ``verdict`` wins / ties / loses (or :data:`TOO_FEW`).
+        ``verdict`` wins / ties / loses (or :data:`~wbsa.analysis.bootstrap.TOO_FEW`).
     headline : DataFrame
         One row per group × VBSA column × view role: ``n``, the view's MAPE, the refitted law's MAPE and
         the difference with its interval and verdict, the best published formula in the group (label,
@@ -265,7 +118,8 @@ class ClaimResult:
     sentences : dict
         Group -> one plain sentence.
     hw_law : dict
-        :func:`hw_law_fit` on all subjects of the population (coefficients, R², residual SD in %).
+        :func:`~wbsa.analysis.hw_law.hw_law_fit` on all subjects of the population (coefficients, R², residual
+        SD in %).
     settings : ClaimSettings
     model : str
         Model kind of the single view.
@@ -476,63 +330,3 @@ def headline_table(comparisons: pd.DataFrame) -> pd.DataFrame:
         })
     return pd.DataFrame(out, columns=cols)
 
-
-#: Plain names of the claim groups in sentences.
-GROUP_PLAIN: dict[str, str] = {
-    "all": "All subjects", "adults": "Adults", "kids": "Children", "obese": "Obese subjects",
-    "underweight": "Underweight adults", "small": "Small subjects", "tall": "Tall subjects", "females": "Women",
-    "males": "Men", "normal": "Subjects of normal stature", "big": "Very tall subjects (paper's big)",
-}
-
-
-def vbsa_plain(column: str) -> str:
-    """``vbsa_visible_m2`` -> 'ideal visible area'; ``vbsa_recon_grid_m2`` -> 'sensor + grid reconstruction'."""
-    if column == "vbsa_visible_m2":
-        return "ideal visible area"
-    if column == "vbsa_hit_m2":
-        return "ideal hit triangles"
-    if column.startswith("vbsa_recon_"):
-        return f"sensor + {column.removeprefix('vbsa_recon_').removesuffix('_m2').replace('_', '-')} reconstruction"
-    return column
-
-
-#: Verb of each verdict in the sentences.
-_VERB = {"wins": "beats", "ties": "ties with", "loses": "loses to"}
-
-
-def group_sentences(headline: pd.DataFrame) -> dict[str, str]:
-    """One plain sentence per group: does each view beat, tie with or lose to the H/W law refitted on the
-    same bodies and the group's best published formula (the numbers are in the headline table)."""
-    out = {}
-    for g, part in headline.groupby("group", sort=False):
-        n = int(part["n"].max())
-        if (part["verdict_vs_hw"] == TOO_FEW).all():
-            out[g] = f"{GROUP_PLAIN.get(g, g)} (n = {n}): too few subjects to test."
-            continue
-        clauses = []
-        for vcol, pv in part.groupby("vbsa_column", sort=False):
-            views = []
-            for i, (_, row) in enumerate(pv.iterrows()):
-                name = _role_plain(row)
-                v_hw, v_f = row["verdict_vs_hw"], row["verdict_vs_formula"]
-                if v_hw == TOO_FEW:
-                    views.append(f"the {name} has too few subjects")
-                elif v_hw == v_f:
-                    both = f"both the refitted H/W law and {row['best_formula']}" if i == 0 else "both"
-                    views.append(f"the {name} {_VERB[v_hw]} {both}")
-                else:
-                    law, formula = (("the refitted H/W law", row["best_formula"]) if i == 0
-                                    else ("the law", "the formula"))
-                    views.append(f"the {name} {_VERB[v_hw]} {law} and {_VERB[v_f]} {formula}")
-            clauses.append(f"with the {vbsa_plain(vcol)} " + ", ".join(views))
-        out[g] = f"{GROUP_PLAIN.get(g, g)} (n = {n}): " + "; ".join(clauses) + "."
-    return out
-
-
-def _role_plain(row: pd.Series) -> str:
-    role = str(row["role"])
-    if role == "best":
-        return f"best view (θ = {row['azimuth_deg']:g}°, φ = {row['elevation_deg']:g}°)"
-    if role.endswith("= best"):
-        return f"{role.removesuffix(' = best')} view (the best)"
-    return f"{role} view"

@@ -7,7 +7,9 @@ import re
 import numpy as np
 import pandas as pd
 
-from wbsa.analysis.claim import GROUP_PLAIN, TOO_FEW, ClaimResult, ClaimSettings, evaluate_claim, vbsa_plain
+from wbsa.analysis.bootstrap import TOO_FEW
+from wbsa.analysis.claim import ClaimResult, ClaimSettings, evaluate_claim
+from wbsa.analysis.claim_sentences import GROUP_PLAIN, vbsa_plain
 from wbsa.analysis.groups import GroupSpec
 from wbsa.report.data import ReportData
 

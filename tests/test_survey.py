@@ -189,6 +189,29 @@ def test_known_bodies_are_matched_back_within_tolerance(tools):
     assert fit["fit_converged"].all()
 
 
+def test_known_bodies_are_matched_back_at_their_own_density(tools):
+    """With ``target_density_kg_m3`` each person's mass is volume × its own density in the fit."""
+    from wbsa.bodies.survey_match import DENSITY_COLUMN, match_bodies
+
+    model, meter, measurer = tools
+    params = _bodies().iloc[:2]
+    own = meter.measure(model.rest_bodies(params))
+    density = np.array([1065.0, 1010.0])
+    targets = params[["p_gender", "p_age", "p_african", "p_asian", "p_caucasian"]].copy()
+    for name in ("stature_m", "waist_circ_m", "hip_circ_m"):
+        targets[f"target_{name}"] = own[name].to_numpy()
+    targets["target_mass_kg"] = own["volume_m3"].to_numpy() * density
+    targets[DENSITY_COLUMN] = density
+    fit = match_bodies(targets, measurer, _small_settings(max_iterations=25), show_progress=False)
+    back = meter.measure(model.rest_bodies(fit))
+    assert np.all(np.abs(back["volume_m3"].to_numpy() * density - targets["target_mass_kg"].to_numpy()) <= 1.0)
+    np.testing.assert_allclose(fit["fit_mass_kg"], back["volume_m3"].to_numpy() * density, rtol=1e-9)
+    assert np.all(np.abs(back["stature_m"] - own["stature_m"]) <= 0.01)
+    targets[DENSITY_COLUMN] = [1000.0, -1.0]
+    with pytest.raises(WbsaError, match=DENSITY_COLUMN):
+        match_bodies(targets, measurer, _small_settings(max_iterations=1), show_progress=False)
+
+
 def test_phenotype_only_match_keeps_local_changes_at_zero(tools):
     from wbsa.bodies.survey_match import match_bodies
 

@@ -8,12 +8,14 @@ import pandas as pd
 
 from wbsa.errors import WbsaError
 from wbsa.bodies.anthropometry import DEFAULT_DENSITY_KG_M3
+from wbsa.bodies.composition import CompositionSettings, DensityModel
 
 PopulationKind = Literal["random", "survey", "table"]
 
 
 def build_population(kind: PopulationKind, n: int | None = None, seed: int = 0, *,
-                     density_kg_m3: float = DEFAULT_DENSITY_KG_M3, params_path: str | None = None,
+                     density_kg_m3: float = DEFAULT_DENSITY_KG_M3, density_model: DensityModel = "constant",
+                     params_path: str | None = None,
                      variations: int = 0, survey_weights: bool = False,
                      show_progress: bool | None = None, workers: int = 1,
                      scheduler: str | None = None) -> pd.DataFrame:
@@ -26,10 +28,17 @@ def build_population(kind: PopulationKind, n: int | None = None, seed: int = 0, 
         NHANES people, paper's Virtual NHANES) or ``table`` (phenotypes read from ``params_path``).
     n
         Subjects (random) or survey people (survey).
+    density_kg_m3, density_model
+        Body density: ``constant`` (every body ``density_kg_m3``, anny's 980 kg/m³ by default: the
+        paper's tables) or a composition model (``deurenberg-siri``, ``deurenberg-brozek``: each
+        body's density from its fat fraction, see :mod:`wbsa.bodies.composition`; residuals seeded
+        with ``seed``).
     workers, scheduler
         Parallel body building (see :mod:`wbsa.parallel`); the table does not depend on them.
     """
     from wbsa.bodies.table import measure_population
+
+    composition = CompositionSettings(model=density_model, density_kg_m3=density_kg_m3, seed=seed)
 
     if kind == "random":
         from wbsa.bodies.random_population import RandomPopulationSettings, sample_random_parameters
@@ -37,10 +46,10 @@ def build_population(kind: PopulationKind, n: int | None = None, seed: int = 0, 
         if n is None:
             raise WbsaError("--kind random needs --n, the number of subjects")
         params = sample_random_parameters(RandomPopulationSettings(n=n, seed=seed))
-        return measure_population(params, density_kg_m3=density_kg_m3, show_progress=show_progress,
+        return measure_population(params, composition=composition, show_progress=show_progress,
                                   workers=workers, scheduler=scheduler)
     if kind == "table":
-        return measure_population(_read_params(params_path), density_kg_m3=density_kg_m3,
+        return measure_population(_read_params(params_path), composition=composition,
                                   show_progress=show_progress, workers=workers, scheduler=scheduler)
     if kind == "survey":
         try:
@@ -49,7 +58,7 @@ def build_population(kind: PopulationKind, n: int | None = None, seed: int = 0, 
             raise WbsaError("the survey population is not available in this build") from None
         if n is None:
             raise WbsaError("--kind survey needs --n, the number of survey people")
-        return build_survey_population(n=n, variations=variations, seed=seed, density_kg_m3=density_kg_m3,
+        return build_survey_population(n=n, variations=variations, seed=seed, composition=composition,
                                        survey_weights=survey_weights, show_progress=show_progress)
     raise WbsaError(f"unknown population kind {kind!r}; use random, survey or table")
 

@@ -22,7 +22,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--out", required=True, help="output table (.parquet, .csv or .xlsx)")
     p.add_argument("--format", choices=("parquet", "csv", "xlsx"), help="table format (default: from --out's suffix)")
     p.add_argument("--density", type=float, default=980.0, metavar="KG_M3",
-                   help="body density for mass = volume × density (default 980 kg/m³, as anny)")
+                   help="(--density-model constant) body density for mass = volume × density "
+                        "(default 980 kg/m³, as anny)")
+    p.add_argument("--density-model", choices=("constant", "deurenberg-siri", "deurenberg-brozek"),
+                   default="constant",
+                   help="constant: every body --density (the paper's tables); deurenberg-siri/-brozek: each body's "
+                        "fat fraction from its BMI, age and sex (Deurenberg 1991, with its scatter) and its density "
+                        "by Siri's/Brozek's equation; adds fat_fraction and density_kg_m3 columns")
     p.add_argument("--params", help="(--kind table) Parquet/CSV with p_gender, p_age, ... columns in [0, 1]")
     p.add_argument("--variations", type=int, default=0, help="(--kind survey) weight/muscle variations per person")
     p.add_argument("--survey-weights", action="store_true", help="(--kind survey) select people by exam weights")
@@ -52,6 +58,7 @@ def run_population(args: argparse.Namespace) -> int:
     out = Path(args.out)
     fmt = args.format or _format_of(out)
     df = build_population(kind=args.kind, n=args.n, seed=args.seed, density_kg_m3=args.density,
+                          density_model=args.density_model,
                           params_path=args.params, variations=args.variations,
                           survey_weights=args.survey_weights, show_progress=args.progress,
                           workers=args.workers or default_workers(), scheduler=args.scheduler)

@@ -29,6 +29,7 @@ import pandas as pd
 from wbsa.errors import WbsaError
 from wbsa.bodies.age import years_to_param
 from wbsa.bodies.anthropometry import DEFAULT_DENSITY_KG_M3
+from wbsa.bodies.composition import COMPOSITION_COLUMNS, CompositionSettings
 from wbsa.bodies.survey_match import MatchSettings, torch_threads
 
 #: Columns a survey population has beyond the random population's.
@@ -93,7 +94,7 @@ class SurveyPopulationSettings:
 
 def build_survey_population(n: int, variations: int = 0, seed: int = 0, *,
                             density_kg_m3: float = DEFAULT_DENSITY_KG_M3, survey_weights: bool = False,
-                            show_progress: bool | None = None,
+                            composition: CompositionSettings | None = None, show_progress: bool | None = None,
                             settings: SurveyPopulationSettings | None = None) -> pd.DataFrame:
     """Build the survey-matched population table.
 
@@ -106,7 +107,12 @@ def build_survey_population(n: int, variations: int = 0, seed: int = 0, *,
     seed
         Seed of the draw and of the variations.
     density_kg_m3
-        Body density for mass = volume × density, in the fit and in the table.
+        Body density for mass = volume × density, in the fit and in the table (when
+        ``composition`` is None or ``constant``).
+    composition
+        Density model. Other than ``constant``, each person is fitted at the density its
+        survey BMI, age and sex give (with the person's residual deviate), and the table's
+        bodies get their own density by :func:`~wbsa.bodies.table.with_composition`.
     survey_weights
         Draw people with probability proportional to their exam weight (the survey's
         population weights) instead of uniformly.
@@ -124,12 +130,14 @@ def build_survey_population(n: int, variations: int = 0, seed: int = 0, *,
     from wbsa.bodies.anthropometry import Anthropometer
     from wbsa.bodies.body_model import BodyModel
     from wbsa.bodies.survey_data import load_survey, select_people
-    from wbsa.bodies.survey_match import match_bodies
+    from wbsa.bodies.survey_match import DENSITY_COLUMN, match_bodies
     from wbsa.bodies.survey_measures import TorchMeasurer
     from wbsa.bodies.survey_start import StartTable
     from wbsa.bodies.table import measure_population
 
     s = settings or SurveyPopulationSettings()
+    if composition is not None and composition.constant:
+        density_kg_m3, composition = composition.density_kg_m3, None
     if not isinstance(variations, (int, np.integer)) or variations < 0:
         raise WbsaError(f"--variations {variations} must be a whole number >= 0 (the paper used 25)")
     clock = _Clock()
@@ -144,11 +152,15 @@ def build_survey_population(n: int, variations: int = 0, seed: int = 0, *,
     with torch_threads(s.match.threads):
         table = StartTable.build(measurer, s.match.start)
     clock.lap("start_table")
-    fit = match_bodies(survey_targets(people), measurer, s.match, table=table, show_progress=show_progress)
+    targets = survey_targets(people)
+    if composition is not None:
+        targets[DENSITY_COLUMN] = person_density(people, composition)
+    fit = match_bodies(targets, measurer, s.match, table=table, show_progress=show_progress)
     clock.lap("match")
 
     params = _with_variations(people, fit, variations, seed, s)
-    table = measure_population(params, density_kg_m3=density_kg_m3, model=model, show_progress=show_progress)
+    table = measure_population(params, density_kg_m3=density_kg_m3, composition=composition, model=model,
+                               show_progress=show_progress)
     table = _add_match_columns(table, s.match)
     clock.lap("measure")
     summary = {
@@ -181,6 +193,19 @@ def survey_targets(people: pd.DataFrame) -> pd.DataFrame:
         "target_waist_circ_m": people["waist_circ_m"].to_numpy(),
         "target_hip_circ_m": people["hip_circ_m"].to_numpy(),
     })
+
+
+def person_density(people: pd.DataFrame, composition: CompositionSettings) -> np.ndarray:
+    """Density (kg/m³) of each survey person at its own BMI, age and sex, ``(n,) float64``.
+
+    The residual deviate is the one the person's matched body (variation 0) gets in the table
+    (:func:`~wbsa.bodies.table.residual_keys`), so fit and table use the same composition.
+    """
+    from wbsa.bodies.composition import density_at_bmi, residual_z
+
+    keys = np.stack([people["survey_id"].to_numpy(dtype=np.int64), np.zeros(len(people), dtype=np.int64)], axis=1)
+    return density_at_bmi(composition, people["bmi"].to_numpy(), people["age_years"].to_numpy(),
+                          (people["sex"] == "male").to_numpy(), residual_z(composition.seed, keys))
 
 
 def _with_variations(people: pd.DataFrame, fit: pd.DataFrame, k: int, seed: int,
@@ -243,7 +268,7 @@ def _add_match_columns(table: pd.DataFrame, m: MatchSettings) -> pd.DataFrame:
     for column, ok in (("matched", everything), ("matched_stature_mass", stature_mass)):
         # the matched body's flag, on all of its person's rows
         out[column] = pd.Series(np.where(first, ok, True)).groupby(person).transform("all").to_numpy()
-    return out[[*TABLE_COLUMNS, *SURVEY_COLUMNS]]
+    return out[[*TABLE_COLUMNS, *[c for c in COMPOSITION_COLUMNS if c in out.columns], *SURVEY_COLUMNS]]
 
 
 def match_rates(table: pd.DataFrame) -> dict[str, object]:

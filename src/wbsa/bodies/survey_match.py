@@ -45,6 +45,9 @@ from wbsa.progress import progress
 
 #: Target columns :func:`match_bodies` reads (NaN waist/hip = not measured).
 TARGET_COLUMNS = ("target_stature_m", "target_mass_kg", "target_waist_circ_m", "target_hip_circ_m")
+#: Optional target column: each person's body density (kg/m³) for mass = volume × density
+#: (absent: the measurer's one density).
+DENSITY_COLUMN = "target_density_kg_m3"
 #: Fixed phenotype columns :func:`match_bodies` reads.
 FIXED_COLUMNS = ("p_gender", "p_age", "p_african", "p_asian", "p_caucasian")
 #: Free body parameters, in fit order (``p_cupsize`` only for women, the ``l_*`` local changes
@@ -142,7 +145,8 @@ def match_bodies(targets: pd.DataFrame, measurer: TorchMeasurer, settings: Match
     ----------
     targets
         :data:`FIXED_COLUMNS` (in [0, 1]) and :data:`TARGET_COLUMNS` (SI units; waist and hip
-        may be NaN, stature and mass must be finite and positive).
+        may be NaN, stature and mass must be finite and positive), optionally
+        :data:`DENSITY_COLUMN`, the density each person's mass is computed with.
     measurer
         Differentiable measures of the body model.
     settings
@@ -167,6 +171,12 @@ def match_bodies(targets: pd.DataFrame, measurer: TorchMeasurer, settings: Match
     if not (np.isfinite(goal[:, :2]).all() and (goal[:, :2] > 0).all()):
         raise WbsaError("every match target needs a finite, positive stature and mass")
     n = len(targets)
+    if DENSITY_COLUMN in targets.columns:
+        density = targets[DENSITY_COLUMN].to_numpy(dtype=np.float64)
+        if not (np.isfinite(density).all() and (density > 0).all()):
+            raise WbsaError(f"{DENSITY_COLUMN} must be finite and positive for every match target")
+    else:
+        density = np.full(n, measurer.density_kg_m3)
     phen = np.zeros((n, len(BODY_PARAMETER_COLUMNS)))
     fit = np.full((n, 4), np.nan)
     iters = np.zeros(n, dtype=np.int64)
@@ -176,8 +186,8 @@ def match_bodies(targets: pd.DataFrame, measurer: TorchMeasurer, settings: Match
         with progress(total=n, desc="matching", unit="person", enabled=show_progress) as bar:
             for start in range(0, n, settings.batch_size):
                 sl = slice(start, start + settings.batch_size)
-                phen[sl], fit[sl], iters[sl], done[sl] = _match_batch(fixed[sl], goal[sl], measurer, settings,
-                                                                      table)
+                phen[sl], fit[sl], iters[sl], done[sl] = _match_batch(fixed[sl], goal[sl], density[sl], measurer,
+                                                                      settings, table)
                 bar.update(len(fixed[sl]))
     out = pd.DataFrame(phen, columns=list(BODY_PARAMETER_COLUMNS), index=targets.index)
     for j, name in enumerate(FIT_MEASURES):
@@ -205,7 +215,8 @@ def torch_threads(n: int | None) -> Iterator[None]:
 class _Problem:
     """One batch: fixed phenotypes, targets, and the map from unknowns to residuals."""
 
-    def __init__(self, fixed: np.ndarray, goal: np.ndarray, measurer: TorchMeasurer, settings: MatchSettings):
+    def __init__(self, fixed: np.ndarray, goal: np.ndarray, density: np.ndarray, measurer: TorchMeasurer,
+                 settings: MatchSettings):
         import torch
 
         self.torch = torch
@@ -236,6 +247,8 @@ class _Problem:
                     self.kinks.append((j, float(a)))
         self.goal = torch.as_tensor(np.nan_to_num(goal, nan=0.0), dtype=measurer.dtype)
         self.has = torch.as_tensor(np.isfinite(goal))
+        #: (b,) each person's body density, kg/m³
+        self.density = torch.as_tensor(np.array(density, dtype=np.float64), dtype=measurer.dtype)
         self.tol = torch.as_tensor(settings.tolerances, dtype=measurer.dtype)
         weight = np.asarray(settings.weights, dtype=np.float64)
         #: residual unit of each measure: its tolerance over its weight
@@ -290,7 +303,7 @@ class _Problem:
         with torch.set_grad_enabled(jacobian):
             ph, free = sub.phenotypes(uu)
             coeffs = self.m.coefficients(ph)
-        ev = self.m.evaluate(self.m.vertices(coeffs), gradient=jacobian)
+        ev = self.m.evaluate(self.m.vertices(coeffs), gradient=jacobian, density_kg_m3=sub.density)
         values = ev.values
         has = sub.has & torch.isfinite(values)
         err = torch.where(has, (values - sub.goal) / self.unit, torch.zeros_like(values))
@@ -318,6 +331,7 @@ class _SubProblem:
         self.free_mask = p.free_mask[rows]
         self.goal = p.goal[rows]
         self.has = p.has[rows]
+        self.density = p.density[rows]
 
     def phenotypes(self, u):
         torch = self.p.torch
@@ -329,10 +343,16 @@ class _SubProblem:
         return ph, free
 
 
-def _start(problem: _Problem, table: StartTable, fixed: np.ndarray, goal: np.ndarray,
+def _start(problem: _Problem, table: StartTable, fixed: np.ndarray, goal: np.ndarray, density: np.ndarray,
            muscle_side: str = "any") -> np.ndarray:
-    """Starting unknowns ``(b, d)`` from the tabulated inverse (cup size at 0.5, no local change)."""
+    """Starting unknowns ``(b, d)`` from the tabulated inverse (cup size at 0.5, no local change).
+
+    The table's bodies were weighed at the measurer's density: a person of another density is
+    looked up by the mass its volume would have there.
+    """
     free = np.full((len(fixed), len(FREE_PHENOTYPES)), 0.5)
+    goal = goal.copy()
+    goal[:, 1] *= problem.m.density_kg_m3 / density
     free[:, :4] = table.start(fixed, goal, problem.s.tolerances, muscle_side)
     return np.clip(free, *problem.s.bounds)
 
@@ -370,8 +390,8 @@ def _box_step(r, jac, u, mu, free, bounds):
     return step
 
 
-def _match_batch(fixed: np.ndarray, goal: np.ndarray, measurer: TorchMeasurer, s: MatchSettings,
-                 table: StartTable):
+def _match_batch(fixed: np.ndarray, goal: np.ndarray, density: np.ndarray, measurer: TorchMeasurer,
+                 s: MatchSettings, table: StartTable):
     """Fit one batch; returns body parameters (b, 15), fit measures (b, 4), iterations (b,), converged (b,).
 
     People whose stature or mass is still off after the first fit are fitted again from the
@@ -379,8 +399,8 @@ def _match_batch(fixed: np.ndarray, goal: np.ndarray, measurer: TorchMeasurer, s
     side), and keep the better of the two fits.
     """
     torch = measurer.torch
-    problem = _Problem(fixed, goal, measurer, s)
-    u0 = torch.as_tensor(_start(problem, table, fixed, goal), dtype=measurer.dtype)
+    problem = _Problem(fixed, goal, density, measurer, s)
+    u0 = torch.as_tensor(_start(problem, table, fixed, goal, density), dtype=measurer.dtype)
     u, r, values, iters = _fit(problem, u0, torch.arange(len(fixed)))
     err = (values - problem.goal).abs() / problem.tol
     retry = torch.nonzero((err[:, :2] > 1.0).any(dim=1)).flatten()
@@ -388,8 +408,8 @@ def _match_batch(fixed: np.ndarray, goal: np.ndarray, measurer: TorchMeasurer, s
         rows = retry.numpy()
         low = (u0[retry, FREE_PHENOTYPES.index("p_muscle")] > 0.5).numpy()
         start = np.where(low[:, None],
-                         _start(problem, table, fixed[rows], goal[rows], "low"),
-                         _start(problem, table, fixed[rows], goal[rows], "high"))
+                         _start(problem, table, fixed[rows], goal[rows], density[rows], "low"),
+                         _start(problem, table, fixed[rows], goal[rows], density[rows], "high"))
         u2, r2, values2, iters2 = _fit(problem, torch.as_tensor(start, dtype=measurer.dtype), retry)
         better = (r2**2).sum(dim=1) < (r[retry] ** 2).sum(dim=1)
         keep = retry[better]

@@ -33,6 +33,7 @@ POPULATION_TABLE_COLUMNS: tuple[str, ...] = (
 SHIPPED_CONFIGS: tuple[str, ...] = ("default", "paper", "distance-sweep", "reconstruction")
 
 PopulationKind = Literal["random", "survey"]
+DensityModel = Literal["constant", "deurenberg-siri", "deurenberg-brozek"]
 NoiseModel = Literal["none", "nguyen2012"]
 ReconstructionMethod = Literal["grid", "ball-pivoting", "poisson"]
 ModelKind = Literal["linear", "quadratic", "loglog", "wls"]
@@ -66,7 +67,10 @@ class PopulationConfig:
     seed : int
         Seed of the parameter draw, >= 0.
     density_kg_m3 : float
-        Body density for mass = volume × density.
+        Body density for mass = volume × density (``density_model = "constant"``).
+    density_model : {'constant', 'deurenberg-siri', 'deurenberg-brozek'}
+        ``constant`` (the paper's tables, anny's 980 kg/m³) or each body's density from its fat
+        fraction (:mod:`wbsa.bodies.composition`).
     variations : int
         (survey) weight/muscle variations per person, >= 0.
     """
@@ -75,6 +79,7 @@ class PopulationConfig:
     n: int = 300
     seed: int = 0
     density_kg_m3: float = 980.0
+    density_model: DensityModel = "constant"
     variations: int = 0
 
     def __post_init__(self) -> None:

@@ -11,11 +11,12 @@ from wbsa.bodies.anthropometry import DEFAULT_DENSITY_KG_M3
 from wbsa.bodies.composition import CompositionSettings, DensityModel
 
 PopulationKind = Literal["random", "survey", "table"]
+Sampling = Literal["paper", "varied"]
 
 
 def build_population(kind: PopulationKind, n: int | None = None, seed: int = 0, *,
                      density_kg_m3: float = DEFAULT_DENSITY_KG_M3, density_model: DensityModel = "constant",
-                     params_path: str | None = None,
+                     sampling: Sampling = "paper", params_path: str | None = None,
                      variations: int = 0, survey_weights: bool = False,
                      show_progress: bool | None = None, workers: int = 1,
                      scheduler: str | None = None) -> pd.DataFrame:
@@ -33,6 +34,10 @@ def build_population(kind: PopulationKind, n: int | None = None, seed: int = 0, 
         paper's tables) or a composition model (``deurenberg-siri``, ``deurenberg-brozek``: each
         body's density from its fat fraction, see :mod:`wbsa.bodies.composition`; residuals seeded
         with ``seed``).
+    sampling
+        (random) ``paper``: the paper's uniform macro parameters, no local change; ``varied``:
+        local changes, anny's whole range and a high-adiposity half
+        (:meth:`~wbsa.bodies.random_population.RandomPopulationSettings.varied`).
     workers, scheduler
         Parallel body building (see :mod:`wbsa.parallel`); the table does not depend on them.
     """
@@ -45,7 +50,11 @@ def build_population(kind: PopulationKind, n: int | None = None, seed: int = 0, 
 
         if n is None:
             raise WbsaError("--kind random needs --n, the number of subjects")
-        params = sample_random_parameters(RandomPopulationSettings(n=n, seed=seed))
+        if sampling not in ("paper", "varied"):
+            raise WbsaError(f"sampling {sampling!r} is unknown; use paper or varied")
+        settings = (RandomPopulationSettings.varied(n=n, seed=seed) if sampling == "varied"
+                    else RandomPopulationSettings(n=n, seed=seed))
+        params = sample_random_parameters(settings)
         return measure_population(params, composition=composition, show_progress=show_progress,
                                   workers=workers, scheduler=scheduler)
     if kind == "table":

@@ -29,6 +29,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="constant: every body --density (the paper's tables); deurenberg-siri/-brozek: each body's "
                         "fat fraction from its BMI, age and sex (Deurenberg 1991, with its scatter) and its density "
                         "by Siri's/Brozek's equation; adds fat_fraction and density_kg_m3 columns")
+    p.add_argument("--sampling", choices=("paper", "varied"), default="paper",
+                   help="(--kind random) paper: uniform macro parameters, no local change (the paper's Virtual "
+                        "Random); varied: local changes, anny's whole range, an obese half of the adults, ages 7-80 "
+                        "(docs/population.md)")
     p.add_argument("--params", help="(--kind table) Parquet/CSV with p_gender, p_age, ... columns in [0, 1]")
     p.add_argument("--variations", type=int, default=0, help="(--kind survey) weight/muscle variations per person")
     p.add_argument("--survey-weights", action="store_true", help="(--kind survey) select people by exam weights")
@@ -58,7 +62,7 @@ def run_population(args: argparse.Namespace) -> int:
     out = Path(args.out)
     fmt = args.format or _format_of(out)
     df = build_population(kind=args.kind, n=args.n, seed=args.seed, density_kg_m3=args.density,
-                          density_model=args.density_model,
+                          density_model=args.density_model, sampling=args.sampling,
                           params_path=args.params, variations=args.variations,
                           survey_weights=args.survey_weights, show_progress=args.progress,
                           workers=args.workers or default_workers(), scheduler=args.scheduler)

@@ -274,7 +274,8 @@ def _add_match_columns(table: pd.DataFrame, m: MatchSettings) -> pd.DataFrame:
 def match_rates(table: pd.DataFrame) -> dict[str, object]:
     """Match rates and error quantiles of a survey population's matched bodies.
 
-    Groups: all people, and adults (18+) with survey BMI ≤ 40 (the target group).
+    Groups: all people, adults (18+) with survey BMI ≤ 40 (the target group), and adults with
+    survey BMI in (40, 50] (beyond anny's reach for many women).
 
     Returns
     -------
@@ -286,6 +287,8 @@ def match_rates(table: pd.DataFrame) -> dict[str, object]:
     groups = {
         "all": first,
         "adults_bmi_le_40": first[(first["survey_age_years"] >= 18) & (first["survey_bmi"] <= 40)],
+        "adults_bmi_40_50": first[(first["survey_age_years"] >= 18) & (first["survey_bmi"] > 40)
+                                  & (first["survey_bmi"] <= 50)],
     }
     out: dict[str, object] = {}
     for name, g in groups.items():

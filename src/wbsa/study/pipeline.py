@@ -202,7 +202,7 @@ def _population_stage(settings: StudySettings, out: Path, workers: int, schedule
 
     t = time.perf_counter()
     df = build_population(cfg.kind, n=cfg.n, seed=cfg.seed, density_kg_m3=cfg.density_kg_m3,
-                          density_model=cfg.density_model,
+                          density_model=cfg.density_model, sampling=cfg.sampling,
                           variations=cfg.variations, show_progress=show_progress, workers=workers,
                           scheduler=scheduler)
     write_table(df, stage.path / "population.parquet")

@@ -34,6 +34,7 @@ SHIPPED_CONFIGS: tuple[str, ...] = ("default", "paper", "distance-sweep", "recon
 
 PopulationKind = Literal["random", "survey"]
 DensityModel = Literal["constant", "deurenberg-siri", "deurenberg-brozek"]
+Sampling = Literal["paper", "varied"]
 NoiseModel = Literal["none", "nguyen2012"]
 ReconstructionMethod = Literal["grid", "ball-pivoting", "poisson"]
 ModelKind = Literal["linear", "quadratic", "loglog", "wls"]
@@ -71,6 +72,9 @@ class PopulationConfig:
     density_model : {'constant', 'deurenberg-siri', 'deurenberg-brozek'}
         ``constant`` (the paper's tables, anny's 980 kg/m³) or each body's density from its fat
         fraction (:mod:`wbsa.bodies.composition`).
+    sampling : {'paper', 'varied'}
+        (random) ``paper``: the paper's uniform macro parameters; ``varied``: local changes, anny's
+        whole range, an obese half of the adults, ages 7–80 (``docs/population.md``).
     variations : int
         (survey) weight/muscle variations per person, >= 0.
     """
@@ -80,6 +84,7 @@ class PopulationConfig:
     seed: int = 0
     density_kg_m3: float = 980.0
     density_model: DensityModel = "constant"
+    sampling: Sampling = "paper"
     variations: int = 0
 
     def __post_init__(self) -> None:

@@ -12,7 +12,7 @@ from wbsa.errors import WbsaError
 
 
 def test_deurenberg_equations_give_the_published_values():
-    """Deurenberg 1991: adults 1.20 BMI + 0.23 age − 10.8 sex − 5.4; children 1.51 BMI − 0.70 age − 3.6 sex + 1.4."""
+    """Deurenberg 1991: adults 1.20 BMI + 0.23 age − 10.8 sex − 5.4; children 1.51 BMI − 0.70 age − 3.6 sex + 1.4"""
     got = predicted_fat_percent(np.array([25.0, 25.0, 18.0, 18.0]), np.array([40.0, 40.0, 10.0, 10.0]),
                                 np.array([True, False, True, False]))
     np.testing.assert_allclose(got, [23.0, 33.8, 17.98, 21.58], atol=1e-12)

@@ -17,7 +17,8 @@ def _table(n: int = 4000, noise: float = 0.0, female_effect: float = 0.0, seed: 
     stature = rng.uniform(1.2, 2.0, n)
     mass = rng.uniform(20, 140, n)
     female = rng.random(n) < 0.5
-    area = 0.2 * stature**0.7 * mass**0.43 * np.where(female, 1 + female_effect, 1.0) * np.exp(noise * rng.standard_normal(n))
+    area = (0.2 * stature**0.7 * mass**0.43 * np.where(female, 1 + female_effect, 1.0)
+            * np.exp(noise * rng.standard_normal(n)))
     return pd.DataFrame({
         "subject_id": np.arange(n), "sex": np.where(female, "female", "male"), "age_years": rng.uniform(7, 80, n),
         "stature_m": stature, "mass_kg": mass, "bmi": mass / stature**2, "wbsa_m2": area, "volume_m3": mass / 980.0,

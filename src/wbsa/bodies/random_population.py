@@ -85,16 +85,19 @@ class RandomPopulationSettings:
           short and very tall bodies, and the proportions and cup sizes the survey matcher gives real
           adults (their 5th–95th percentiles span 0–1);
         * half of the adults in the corner weight 0.75–1, muscle 0–0.25: where the survey matcher
-          puts real adults with BMI ≥ 30 (5th–95th percentiles of the matched NHANES adults: weight
-          0.75–1 for men, 0.90–1 for women; muscle 0–0.21), so that obese bodies are common, as
-          among real adults (38 % of the matched NHANES adults; a uniform draw gives about 3 %).
-          Children are not: the matched NHANES children spread over the whole weight range;
-        * local changes over [−1, 1] for adults, ±0.5 for children, from two shared factors with
-          weight 2/3: the local changes the matcher needs to reach real adults' waist and hip span
-          almost the whole range (5th–95th percentiles about −0.7…0.9), and correlate in two pairs,
-          waist with belly (r ≈ 0.7) and hips with buttocks (r ≈ 0.8), hardly across (≈ 0.1–0.3):
+          puts real adults with BMI ≥ 30 (5th–95th percentiles of the matched NHANES adults at
+          their own density: weight 0.75–1 for men, 0.90–1 for women; muscle 0–0.21 and 0–0.08),
+          so that obese bodies are common, as among real adults (38 % of the matched NHANES adults;
+          the paper's uniform draw: 8 of the default study's 186 adults). Children are not: the matched NHANES children
+          spread over the whole weight range;
+        * local changes over [−1, 1] for adults, from two shared factors with weight 2/3: the local
+          changes the matcher needs to reach real adults' waist and hip span almost the whole range
+          (5th–95th percentiles about −0.7…0.8 waist, −1…1 hips, −1…0.7 belly, −1…0.5 buttocks), and
+          correlate in two pairs, waist with belly (r = 0.69) and hips with buttocks (r = 0.77):
           abdominal and gluteal fat. Two equal uniform parts in the ratio 2 : 1 correlate at 0.8.
-          Matched children need about half the adults' range.
+          The correlation across the pairs (0.2–0.5 in the matches) is left at 0, so apple and pear
+          shapes are spread more evenly than among real adults. Children get ±0.5: matched children
+          need −0.9…+0.5 (5th–95th percentiles), mostly negative.
         """
         return cls(n=n, seed=seed, age_years=(7.0, 80.0), weight=(0.0, 1.0), muscle=(0.0, 1.0),
                    height=(0.0, 1.0), proportions=(0.0, 1.0), cupsize=(0.0, 1.0), shape="varied")

@@ -7,7 +7,7 @@ to the baseline measured in the same run: measuring the same bodies exactly (the
 ``measure_population``).
 
     .venv/bin/python benchmarks/bench_survey_match.py --n 500 --seed 0 [--threads 1] [--out matches.parquet]
-        [--phenotypes-only] [--density-model deurenberg-siri]
+        [--phenotypes-only] [--density-model deurenberg-siri] [--girth-rescue auto|on|off]
 
 ``--phenotypes-only`` keeps the body model's local changes at 0 (the matcher before they were
 fitted), for comparison.
@@ -35,6 +35,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--density-model", default="constant",
                         choices=("constant", "deurenberg-siri", "deurenberg-brozek"),
                         help="body density: constant 980 kg/m³ (default) or from each person's fat fraction")
+    parser.add_argument("--girth-rescue", choices=("auto", "on", "off"), default="auto",
+                        help="refit people matched in stature and mass but not in a girth, mass weighted like a "
+                             "girth (auto: with a composition model only, the library default)")
     parser.add_argument("--out", help="write the matched table here (.parquet)")
     args = parser.parse_args(argv)
 
@@ -45,7 +48,8 @@ def main(argv: list[str] | None = None) -> int:
     from wbsa.bodies.survey_match import MatchSettings
 
     settings = SurveyPopulationSettings(match=MatchSettings(threads=args.threads or None,
-                                                                    free_local_changes=not args.phenotypes_only))
+                                                            free_local_changes=not args.phenotypes_only),
+                                        girth_rescue={"auto": None, "on": True, "off": False}[args.girth_rescue])
     threads = args.threads or torch.get_num_threads()
     load0 = os.getloadavg()[0]
     t0, c0 = time.perf_counter(), time.process_time()
@@ -61,6 +65,7 @@ def main(argv: list[str] | None = None) -> int:
 
     print(f"survey match benchmark: n={args.n} seed={args.seed} weighted={args.weighted} "
           f"local changes {'fixed at 0' if args.phenotypes_only else 'fitted'} density {args.density_model} "
+          f"girth rescue {args.girth_rescue} "
           f"torch threads while matching={threads} cpus={os.cpu_count()} "
           f"load average {load0:.1f} -> {os.getloadavg()[0]:.1f}")
     print(f"{'stage':<12} {'wall s':>8} {'cpu s':>8}")

@@ -109,7 +109,13 @@ def test_composition_population_has_real_densities_and_consistent_mass(body_mode
     a = build_population("random", n=24, seed=2, density_model="deurenberg-siri", show_progress=False)
     b = build_population("random", n=24, seed=2, density_model="deurenberg-brozek", show_progress=False)
     c = build_population("random", n=24, seed=2, show_progress=False)
-    assert list(a.columns[-2:]) == ["fat_fraction", "density_kg_m3"]
+    assert list(a.columns[-3:]) == ["fat_fraction", "density_kg_m3", "fat_residual_z"]
+    # a table carrying each subject's deviate rebuilds the same composition
+    from wbsa.bodies.composition import CompositionSettings
+    from wbsa.bodies.table import with_composition
+
+    again = with_composition(a.assign(mass_kg=0.0, fat_residual_z=a["fat_residual_z"]), CompositionSettings("deurenberg-siri", seed=99))
+    pd.testing.assert_frame_equal(again, a)
     np.testing.assert_allclose(a["mass_kg"], a["volume_m3"] * a["density_kg_m3"], rtol=1e-15)
     # same bodies, heavier than at 980 kg/m³: typical densities 1.00–1.09 g/cm³
     np.testing.assert_array_equal(a["wbsa_m2"], c["wbsa_m2"])

@@ -42,8 +42,10 @@ from wbsa.errors import WbsaError
 DensityModel = Literal["constant", "deurenberg-siri", "deurenberg-brozek"]
 #: Every density model, for checks and CLI choices.
 DENSITY_MODELS: tuple[str, ...] = ("constant", "deurenberg-siri", "deurenberg-brozek")
-#: Columns a composition model adds to a population table (absent with ``constant``).
-COMPOSITION_COLUMNS = ("fat_fraction", "density_kg_m3")
+#: Columns a composition model adds to a population table (absent with ``constant``): the fat
+#: fraction, the density, and the subject's standard-normal residual deviate (drawn from its stream,
+#: or fitted by the survey matcher), which with its BMI, age and sex gives the fat fraction.
+COMPOSITION_COLUMNS = ("fat_fraction", "density_kg_m3", "fat_residual_z")
 #: anny's own density (kg/m³): the constant model's default.
 ANNY_DENSITY_KG_M3 = 980.0
 

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import time
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pandas as pd
@@ -62,6 +62,10 @@ _MATCHED = (
 _VARIATION_STREAM = 0x7A21A7
 
 
+#: Residual weights of the girth-rescue fit: the mass weighs no more than a girth.
+RESCUE_WEIGHTS = (3.0, 0.1, 0.1, 0.1)
+
+
 class SurveyMatchWarning(UserWarning):
     """Some survey people could not be matched within the tolerances (they are flagged)."""
 
@@ -79,12 +83,18 @@ class SurveyPopulationSettings:
         body's values (the interval cut to [0, 1]); everything else stays the match's.
     survey_path
         Survey CSV; None = the copy shipped in the package.
+    girth_rescue
+        Refit the people matched in stature and mass but not in a girth with
+        :data:`RESCUE_WEIGHTS` (:attr:`MatchSettings.rescue_weights`). None: on with a composition
+        model, off at constant density, so that constant-density tables stay those of the
+        matcher without it.
     """
 
     match: MatchSettings = field(default_factory=MatchSettings)
     weight_spread: float = 0.2
     muscle_spread: float = 0.3
     survey_path: str | None = None
+    girth_rescue: bool | None = None
 
     def __post_init__(self) -> None:
         for name in ("weight_spread", "muscle_spread"):
@@ -155,7 +165,9 @@ def build_survey_population(n: int, variations: int = 0, seed: int = 0, *,
     targets = survey_targets(people)
     if composition is not None:
         targets[DENSITY_COLUMN] = person_density(people, composition)
-    fit = match_bodies(targets, measurer, s.match, table=table, show_progress=show_progress)
+    rescue = s.girth_rescue if s.girth_rescue is not None else composition is not None
+    match = replace(s.match, rescue_weights=RESCUE_WEIGHTS) if rescue and s.match.rescue_weights is None else s.match
+    fit = match_bodies(targets, measurer, match, table=table, show_progress=show_progress)
     clock.lap("match")
 
     params = _with_variations(people, fit, variations, seed, s)

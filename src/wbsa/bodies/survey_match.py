@@ -31,7 +31,7 @@ who else is in the batch (up to floating-point rounding of the batched products)
 from __future__ import annotations
 
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Iterator
 
 import numpy as np
@@ -88,6 +88,13 @@ class MatchSettings:
     prior_weight
         Weight of the pull of each free phenotype towards 0.5 (in tolerance units per unit
         of phenotype).
+    rescue_weights
+        None, or the residual weights of a second fit for the people whose stature and mass
+        are matched but a girth is not: weighted as above, the fit meets the mass to a few
+        grams and leaves the girths off where anny cannot reach both (heavy women at weight 1,
+        muscle 0); with the mass weighted like a girth, the second fit may use the mass
+        tolerance to bring the girths in. Its result is kept only where all four measures are
+        then within tolerance (the first fit's otherwise).
     max_iterations
         Levenberg–Marquardt iterations per person at most.
     converge_fraction
@@ -111,6 +118,7 @@ class MatchSettings:
     free_local_changes: bool = True
     weights: tuple[float, float, float, float] = (3.0, 1.0, 0.1, 0.1)
     prior_weight: float = 0.05
+    rescue_weights: tuple[float, float, float, float] | None = None
     max_iterations: int = 40
     converge_fraction: float = 0.25
     batch_size: int = 256
@@ -124,8 +132,10 @@ class MatchSettings:
         for name in ("stature_tol_m", "mass_tol_kg", "girth_tol_m"):
             if not getattr(self, name) > 0:
                 raise WbsaError(f"match tolerance {name} = {getattr(self, name)} must be positive")
-        if len(self.weights) != 4 or not all(w > 0 for w in self.weights):
-            raise WbsaError(f"match weights {self.weights} must be four positive numbers (stature, mass, waist, hip)")
+        for name in ("weights", "rescue_weights"):
+            w = getattr(self, name)
+            if w is not None and (len(w) != 4 or not all(x > 0 for x in w)):
+                raise WbsaError(f"match {name} {w} must be four positive numbers (stature, mass, waist, hip)")
         if self.threads is not None and self.threads < 1:
             raise WbsaError(f"match threads = {self.threads} must be >= 1 (or None for torch's default)")
         if self.max_iterations < 0 or self.batch_size < 1:
@@ -415,6 +425,17 @@ def _match_batch(fixed: np.ndarray, goal: np.ndarray, density: np.ndarray, measu
         keep = retry[better]
         u[keep], r[keep], values[keep] = u2[better], r2[better], values2[better]
         iters[retry] += iters2
+    if s.rescue_weights is not None:
+        err = (values - problem.goal).abs() / problem.tol
+        girth_off = ((err[:, 2:] > 1.0) & problem.has[:, 2:]).any(dim=1)
+        rescue = torch.nonzero((err[:, :2] <= 1.0).all(dim=1) & girth_off).flatten()
+        if len(rescue):
+            second = _Problem(fixed, goal, density, measurer, replace(s, weights=s.rescue_weights))
+            u3, _, values3, iters3 = _fit(second, u[rescue], rescue)
+            err3 = (values3 - problem.goal[rescue]).abs() / problem.tol
+            ok = ((err3 <= 1.0) | ~problem.has[rescue]).all(dim=1)
+            u[rescue[ok]], values[rescue[ok]] = u3[ok], values3[ok]
+            iters[rescue] += iters3
     ph, _ = problem.phenotypes(u)
     return ph.detach().numpy(), values.numpy(), iters.numpy(), _converged(problem, values).numpy()
 

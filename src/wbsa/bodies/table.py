@@ -43,9 +43,8 @@ def measure_population(params: pd.DataFrame, *, density_kg_m3: float = DEFAULT_D
         Body density for mass = volume × density (when ``composition`` is None or ``constant``).
     composition
         Density model (:mod:`~wbsa.bodies.composition`). Other than ``constant``, mass and BMI
-        come from each body's own density, and ``fat_fraction`` and ``density_kg_m3`` are added;
-        each subject's residual deviate is keyed on ``(survey_id, variation)`` where the table has
-        them (survey populations), else on ``subject_id``.
+        come from each body's own density, and the composition columns are added (see
+        :func:`with_composition`).
     workers, scheduler
         Local worker processes (used from :data:`PARALLEL_MIN_BODIES` bodies up), or a dask
         scheduler address (see :mod:`wbsa.parallel`); the table is the same whatever the worker count.
@@ -55,7 +54,8 @@ def measure_population(params: pd.DataFrame, *, density_kg_m3: float = DEFAULT_D
     pandas.DataFrame
         ``params`` (missing optional ``p_*`` columns filled with 0.5) followed by
         :data:`~wbsa.bodies.anthropometry.MEASURE_COLUMNS`, the ``l_*`` local changes
-        (missing ones 0) and, with a composition model, ``fat_fraction`` and ``density_kg_m3``.
+        (missing ones 0) and, with a composition model,
+        :data:`~wbsa.bodies.composition.COMPOSITION_COLUMNS`.
     """
     from wbsa.parallel import dask_client, map_unordered, resolve_scheduler
 
@@ -93,7 +93,9 @@ def measure_population(params: pd.DataFrame, *, density_kg_m3: float = DEFAULT_D
 def with_composition(table: pd.DataFrame, settings: CompositionSettings) -> pd.DataFrame:
     """``table`` with mass and BMI from each body's own density, and the composition columns.
 
-    Uses ``volume_m3``, ``stature_m``, ``age_years`` and ``sex``; see
+    Uses ``volume_m3``, ``stature_m``, ``age_years``, ``sex`` and each subject's residual deviate:
+    the table's ``fat_residual_z`` where it has one (the survey matcher's fitted deviates), else
+    drawn from the subject's stream (keys: :func:`residual_keys`); see
     :func:`~wbsa.bodies.composition.solve_composition`. The constant model gives the table back
     unchanged.
     """
@@ -101,7 +103,10 @@ def with_composition(table: pd.DataFrame, settings: CompositionSettings) -> pd.D
 
     if settings.constant:
         return table
-    z = residual_z(settings.seed, residual_keys(table))
+    if "fat_residual_z" in table.columns:
+        z = table["fat_residual_z"].to_numpy(dtype=np.float64)
+    else:
+        z = residual_z(settings.seed, residual_keys(table))
     comp = solve_composition(settings, table["volume_m3"].to_numpy(), table["stature_m"].to_numpy(),
                              table["age_years"].to_numpy(), (table["sex"] == "male").to_numpy(), z)
     out = table.drop(columns=[c for c in COMPOSITION_COLUMNS if c in table.columns])
@@ -110,6 +115,7 @@ def with_composition(table: pd.DataFrame, settings: CompositionSettings) -> pd.D
     at = out.columns.get_loc(LOCAL_CHANGE_COLUMNS[-1]) + 1 if LOCAL_CHANGE_COLUMNS[-1] in out else len(out.columns)
     out.insert(at, "fat_fraction", comp.fat_fraction)
     out.insert(at + 1, "density_kg_m3", comp.density_kg_m3)
+    out.insert(at + 2, "fat_residual_z", z)
     return out
 
 

@@ -288,8 +288,30 @@ def test_survey_population_end_to_end(tmp_path):
     for sid in (0, 4):
         assert subject_mesh(read_population(path), sid).area_m2 == pytest.approx(table.loc[sid, "wbsa_m2"], rel=1e-12)
 
+    # with a composition model: each body its own density, the person fitted at its own density
+    from wbsa.bodies.composition import COMPOSITION_COLUMNS, CompositionSettings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", SurveyMatchWarning)
+        dense = build_survey_population(2, variations=1, seed=5, settings=settings, show_progress=False,
+                                        composition=CompositionSettings("deurenberg-siri", seed=5))
+    assert list(dense.columns) == [*TABLE_COLUMNS, *COMPOSITION_COLUMNS, *EXTRA]
+    np.testing.assert_allclose(dense["mass_kg"], dense["volume_m3"] * dense["density_kg_m3"], rtol=1e-15)
+    assert dense["density_kg_m3"].between(960, 1100).all()
+    first = dense[dense["variation"] == 0]
+    assert (first["match_mass_err_kg"].abs() <= 1.0).sum() >= (table[table["variation"] == 0]["match_mass_err_kg"]
+                                                               .abs() <= 1.0).sum() - 1
+
 
 def _packaged():
     from importlib.resources import files
 
     return files("wbsa").joinpath("data/nhanes_bmx_demo.csv").open("r", encoding="utf-8")
+
+
+def test_rescue_weights_are_checked():
+    from wbsa.bodies.survey_match import MatchSettings
+
+    with pytest.raises(WbsaError, match="rescue_weights"):
+        MatchSettings(rescue_weights=(3.0, 0.0, 0.1, 0.1))
+    assert MatchSettings(rescue_weights=(3.0, 0.1, 0.1, 0.1)).rescue_weights == (3.0, 0.1, 0.1, 0.1)

@@ -30,7 +30,7 @@ POPULATION_TABLE_COLUMNS: tuple[str, ...] = (
     "underbust_circ_m", "neck_circ_m", "upper_arm_circ_m", "thigh_circ_m", "front_chest_width_m")
 
 #: Shipped study files (``wbsa run --config NAME``), in ``wbsa/configs/NAME.toml``.
-SHIPPED_CONFIGS: tuple[str, ...] = ("default", "paper", "distance-sweep", "reconstruction")
+SHIPPED_CONFIGS: tuple[str, ...] = ("default", "paper", "distance-sweep", "reconstruction", "varied")
 
 PopulationKind = Literal["random", "survey"]
 DensityModel = Literal["constant", "deurenberg-siri", "deurenberg-brozek"]

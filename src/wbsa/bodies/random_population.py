@@ -93,7 +93,7 @@ class RandomPopulationSettings:
         * local changes over [−1, 1] for adults, from two shared factors with weight 2/3: the local
           changes the matcher needs to reach real adults' waist and hip span almost the whole range
           (5th–95th percentiles about −0.7…0.8 waist, −1…1 hips, −1…0.7 belly, −1…0.5 buttocks), and
-          correlate in two pairs, waist with belly (r = 0.69) and hips with buttocks (r = 0.77):
+          correlate in two pairs, waist with belly (r = 0.70) and hips with buttocks (r = 0.77):
           abdominal and gluteal fat. Two equal uniform parts in the ratio 2 : 1 correlate at 0.8.
           The correlation across the pairs (0.2–0.5 in the matches) is left at 0, so apple and pear
           shapes are spread more evenly than among real adults. Children get ±0.5: matched children

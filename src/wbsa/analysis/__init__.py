@@ -16,6 +16,7 @@ Modules (small, one job each):
 - ``outputs``: :func:`run_fit` reads the tables and writes every output file
 - ``command``: the ``wbsa fit`` subcommand
 - ``synthetic``: synthetic tables with a known law, for tests and benchmarks
+- ``realism``: how varied a population is (log H/W law, Du Bois ratios, composition by sex and BMI class)
 
 Names are imported lazily so that ``wbsa --help`` stays fast.
 """
@@ -37,6 +38,7 @@ _EXPORTS = {
     "spearman_matrix": "wbsa.analysis.correlation",
     "compare_formulae": "wbsa.analysis.formulae_comparison",
     "run_fit": "wbsa.analysis.outputs",
+    "realism_summary": "wbsa.analysis.realism",
 }
 
 __all__ = sorted(_EXPORTS)

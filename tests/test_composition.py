@@ -126,3 +126,15 @@ def test_composition_population_has_real_densities_and_consistent_mass(body_mode
     # women carry more fat than men at the same BMI (Deurenberg's −10.8 · sex)
     adults = a[a["age_years"] > 15]
     assert adults.groupby("sex")["fat_fraction"].mean()["female"] > adults.groupby("sex")["fat_fraction"].mean()["male"]
+
+
+def test_a_population_table_given_as_parameters_rebuilds_itself(tmp_path, body_model):
+    """``--kind table --params POPULATION`` measures the bodies again (no duplicate columns) with the same draws."""
+    from wbsa.cli import main
+
+    first, again = tmp_path / "a.csv", tmp_path / "b.csv"
+    assert main(["population", "--kind", "random", "--n", "4", "--seed", "2", "--sampling", "varied",
+                 "--density-model", "deurenberg-brozek", "--out", str(first)]) == 0
+    assert main(["population", "--kind", "table", "--params", str(first), "--density-model", "deurenberg-brozek",
+                 "--seed", "77", "--out", str(again)]) == 0
+    pd.testing.assert_frame_equal(pd.read_csv(first), pd.read_csv(again))

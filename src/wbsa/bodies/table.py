@@ -80,7 +80,9 @@ def measure_population(params: pd.DataFrame, *, density_kg_m3: float = DEFAULT_D
                     parts[i] = rows
                     bar.update(len(rows))
     measures = pd.concat(parts, ignore_index=True) if parts else pd.DataFrame(columns=list(MEASURE_COLUMNS))
-    out = params.reset_index(drop=True).copy()
+    # a population table given as parameters: its measures are measured again, not duplicated
+    out = params.reset_index(drop=True).drop(columns=[c for c in (*MEASURE_COLUMNS, "fat_fraction", "density_kg_m3")
+                                                      if c in params.columns])
     for name in PHENOTYPE_COLUMNS:
         if name not in out.columns:
             out[name] = 0.5

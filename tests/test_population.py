@@ -202,6 +202,64 @@ def test_random_population_is_deterministic_and_prefix_stable():
     assert ((a["p_gender"] == 1.0) == (a["sex"] == "female")).all()
 
 
+def test_varied_sampling_draws_local_changes_in_two_correlated_pairs():
+    from wbsa.bodies.body_model import LOCAL_CHANGE_COLUMNS
+    from wbsa.bodies.random_population import RandomPopulationSettings, sample_random_parameters
+
+    v = sample_random_parameters(RandomPopulationSettings.varied(n=3000, seed=1))
+    paper = sample_random_parameters(RandomPopulationSettings(n=3000, seed=1))
+    pd.testing.assert_frame_equal(v.iloc[:40], sample_random_parameters(RandomPopulationSettings.varied(n=40, seed=1)))
+    assert (v["sex"] == paper["sex"]).all()  # the same streams: the paper's draws come first
+    assert "l_waist_circ" not in paper.columns
+    assert v["age_years"].between(7, 80).all()
+    child = v["age_years"] <= 15
+    assert 0.4 < child.mean() < 0.65  # uniform in anny's age parameter: about half are children
+    local = v[list(LOCAL_CHANGE_COLUMNS)]
+    assert local[~child].abs().max().max() <= 1.0 and local[child].abs().max().max() <= 0.5
+    assert local[~child].abs().max().min() > 0.9  # adults reach the ends of the range
+    r = local[~child].corr()
+    assert r.loc["l_waist_circ", "l_stomach_pregnant"] > 0.7 and r.loc["l_hips_circ", "l_buttocks_volume"] > 0.7
+    assert abs(r.loc["l_waist_circ", "l_hips_circ"]) < 0.1
+    assert abs(r.loc["l_stomach_pregnant", "l_buttocks_volume"]) < 0.1
+    # half the adults sit in the heavy corner on purpose, a sixteenth more by chance; children by chance only
+    corner = (v["p_weight"] >= 0.75) & (v["p_muscle"] <= 0.25)
+    assert abs(corner[~child].mean() - (0.5 + 0.5 / 16)) < 0.04
+    assert abs(corner[child].mean() - 1 / 16) < 0.03
+    assert v["p_height"].min() < 0.01 and v["p_height"].max() > 0.99
+
+
+@pytest.mark.slow
+def test_varied_population_has_the_obese_adults_the_issue_asks_for(body_model):
+    """A default-size (300) varied population at real densities: at least 30 obese adults, BMI 14 to 40+."""
+    from wbsa.analysis.realism import group_counts, hw_law
+    from wbsa.bodies.build import build_population
+
+    t = build_population("random", n=300, seed=0, sampling="varied", density_model="deurenberg-siri",
+                         show_progress=False)
+    counts = group_counts(t)
+    assert counts["obese"] >= 30 and counts["underweight"] >= 5
+    adults = t[t["age_years"] > 15]
+    assert adults["bmi"].min() < 16 and adults["bmi"].max() > 40
+    assert t["stature_m"].min() < 1.1 and t["stature_m"].max() > 2.3
+    paper = build_population("random", n=300, seed=0, show_progress=False)
+    # local changes and composition spread the area at fixed stature and mass
+    assert hw_law(t).residual_sd_percent > hw_law(paper).residual_sd_percent + 0.15
+
+
+@pytest.mark.slow
+def test_population_is_identical_with_worker_processes(monkeypatch, body_model):
+    from wbsa.bodies import table as table_module
+    from wbsa.bodies.composition import CompositionSettings
+    from wbsa.bodies.random_population import RandomPopulationSettings, sample_random_parameters
+
+    params = sample_random_parameters(RandomPopulationSettings.varied(n=70, seed=4))
+    composition = CompositionSettings(model="deurenberg-siri", seed=4)
+    one = table_module.measure_population(params, model=body_model, composition=composition, batch_size=16)
+    monkeypatch.setattr(table_module, "PARALLEL_MIN_BODIES", 0)
+    two = table_module.measure_population(params, composition=composition, workers=2, batch_size=16)
+    pd.testing.assert_frame_equal(one, two, check_exact=True)
+
+
 def test_population_cli_writes_identical_tables_for_same_seed(tmp_path, body_model):
     out1, out2 = tmp_path / "a.parquet", tmp_path / "b.parquet"
     assert main(["population", "--kind", "random", "--n", "6", "--seed", "7", "--out", str(out1)]) == 0

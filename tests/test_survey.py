@@ -189,6 +189,29 @@ def test_known_bodies_are_matched_back_within_tolerance(tools):
     assert fit["fit_converged"].all()
 
 
+def test_known_bodies_are_matched_back_at_their_own_density(tools):
+    """With ``target_density_kg_m3`` each person's mass is volume × its own density in the fit."""
+    from wbsa.bodies.survey_match import DENSITY_COLUMN, match_bodies
+
+    model, meter, measurer = tools
+    params = _bodies().iloc[:2]
+    own = meter.measure(model.rest_bodies(params))
+    density = np.array([1065.0, 1010.0])
+    targets = params[["p_gender", "p_age", "p_african", "p_asian", "p_caucasian"]].copy()
+    for name in ("stature_m", "waist_circ_m", "hip_circ_m"):
+        targets[f"target_{name}"] = own[name].to_numpy()
+    targets["target_mass_kg"] = own["volume_m3"].to_numpy() * density
+    targets[DENSITY_COLUMN] = density
+    fit = match_bodies(targets, measurer, _small_settings(max_iterations=25), show_progress=False)
+    back = meter.measure(model.rest_bodies(fit))
+    assert np.all(np.abs(back["volume_m3"].to_numpy() * density - targets["target_mass_kg"].to_numpy()) <= 1.0)
+    np.testing.assert_allclose(fit["fit_mass_kg"], back["volume_m3"].to_numpy() * density, rtol=1e-9)
+    assert np.all(np.abs(back["stature_m"] - own["stature_m"]) <= 0.01)
+    targets[DENSITY_COLUMN] = [1000.0, -1.0]
+    with pytest.raises(WbsaError, match=DENSITY_COLUMN):
+        match_bodies(targets, measurer, _small_settings(max_iterations=1), show_progress=False)
+
+
 def test_phenotype_only_match_keeps_local_changes_at_zero(tools):
     from wbsa.bodies.survey_match import match_bodies
 
@@ -265,8 +288,30 @@ def test_survey_population_end_to_end(tmp_path):
     for sid in (0, 4):
         assert subject_mesh(read_population(path), sid).area_m2 == pytest.approx(table.loc[sid, "wbsa_m2"], rel=1e-12)
 
+    # with a composition model: each body its own density, the person fitted at its own density
+    from wbsa.bodies.composition import COMPOSITION_COLUMNS, CompositionSettings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", SurveyMatchWarning)
+        dense = build_survey_population(2, variations=1, seed=5, settings=settings, show_progress=False,
+                                        composition=CompositionSettings("deurenberg-siri", seed=5))
+    assert list(dense.columns) == [*TABLE_COLUMNS, *COMPOSITION_COLUMNS, *EXTRA]
+    np.testing.assert_allclose(dense["mass_kg"], dense["volume_m3"] * dense["density_kg_m3"], rtol=1e-15)
+    assert dense["density_kg_m3"].between(960, 1100).all()
+    first = dense[dense["variation"] == 0]
+    assert (first["match_mass_err_kg"].abs() <= 1.0).sum() >= (table[table["variation"] == 0]["match_mass_err_kg"]
+                                                               .abs() <= 1.0).sum() - 1
+
 
 def _packaged():
     from importlib.resources import files
 
     return files("wbsa").joinpath("data/nhanes_bmx_demo.csv").open("r", encoding="utf-8")
+
+
+def test_rescue_weights_are_checked():
+    from wbsa.bodies.survey_match import MatchSettings
+
+    with pytest.raises(WbsaError, match="rescue_weights"):
+        MatchSettings(rescue_weights=(3.0, 0.0, 0.1, 0.1))
+    assert MatchSettings(rescue_weights=(3.0, 0.1, 0.1, 0.1)).rescue_weights == (3.0, 0.1, 0.1, 0.1)

@@ -27,6 +27,10 @@ ModelKind = Literal["linear", "quadratic", "loglog", "wls"]
 #: Subject groups, in report order.
 GroupName = Literal["all", "males", "females", "kids", "adults", "small", "normal", "big", "obese", "underweight",
                     "tall"]
+#: How a body's density is set: one constant, or from its fat fraction (Deurenberg 1991 + Siri or Brozek).
+DensityModel = Literal["constant", "deurenberg-siri", "deurenberg-brozek"]
+#: How a random population's body parameters are drawn: the paper's, or varied shapes (docs/population.md).
+Sampling = Literal["paper", "varied"]
 #: A named standing posture (:data:`wbsa.bodies.posture.POSTURES` has one entry per name, in this order).
 PostureName = Literal["a-pose", "arms-down", "arms-wide", "hands-on-hips", "elbows-bent", "feet-together",
                       "feet-apart"]
@@ -42,5 +46,7 @@ BOUNDARY_MODELS: tuple[str, ...] = get_args(BoundaryModel)
 SMOOTHING_METHODS: tuple[str, ...] = get_args(SmoothingMethod)
 MODEL_KINDS: tuple[str, ...] = get_args(ModelKind)
 GROUP_NAMES: tuple[str, ...] = get_args(GroupName)
+DENSITY_MODELS: tuple[str, ...] = get_args(DensityModel)
+SAMPLINGS: tuple[str, ...] = get_args(Sampling)
 POSTURE_NAMES: tuple[str, ...] = get_args(PostureName)
 POSTURE_CHOICES: tuple[str, ...] = get_args(PostureChoice)

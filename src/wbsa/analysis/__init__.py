@@ -17,6 +17,7 @@ Modules (small, one job each):
 - ``summary``: model kinds side by side (paper section 4.2)
 - ``outputs``: :func:`run_fit` reads the tables and writes every output file
 - ``command``: the ``wbsa fit`` subcommand
+- ``realism``: how varied a population is (log H/W law, Du Bois ratios, composition by sex and BMI class)
 
 Names are imported lazily so that ``wbsa --help`` stays fast.
 """
@@ -40,6 +41,7 @@ _EXPORTS = {
     "evaluate_claim": "wbsa.analysis.claim",
     "ClaimSettings": "wbsa.analysis.claim",
     "run_fit": "wbsa.analysis.outputs",
+    "realism_summary": "wbsa.analysis.realism",
 }
 
 __all__ = sorted(_EXPORTS)

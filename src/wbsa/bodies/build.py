@@ -6,13 +6,15 @@ import pandas as pd
 
 from wbsa.errors import WbsaError
 from wbsa.bodies.anthropometry import DEFAULT_DENSITY_KG_M3
+from wbsa.bodies.composition import CompositionSettings
 from wbsa.bodies.settings import PopulationSettings
-from wbsa.typing import PopulationKind
+from wbsa.typing import DensityModel, PopulationKind, PostureChoice, Sampling
 
 
 def build_population(kind: PopulationKind, n: int | None = None, seed: int = 0, *,
-                     density_kg_m3: float = DEFAULT_DENSITY_KG_M3, params_path: str | None = None,
-                     variations: int = 0, survey_weights: bool = False, posture: str = "a-pose",
+                     density_kg_m3: float = DEFAULT_DENSITY_KG_M3, density_model: DensityModel = "constant",
+                     sampling: Sampling = "paper", params_path: str | None = None,
+                     variations: int = 0, survey_weights: bool = False, posture: PostureChoice = "a-pose",
                      show_progress: bool | None = None, workers: int = 1,
                      scheduler: str | None = None) -> pd.DataFrame:
     """Build a population table.
@@ -27,6 +29,15 @@ def build_population(kind: PopulationKind, n: int | None = None, seed: int = 0, 
         NHANES people, paper's Virtual NHANES) or ``table`` (phenotypes read from ``params_path``).
     n
         Subjects (random) or survey people (survey).
+    density_kg_m3, density_model
+        Body density: ``constant`` (every body ``density_kg_m3``, anny's 980 kg/m³ by default: the
+        paper's tables) or a composition model (``deurenberg-siri``, ``deurenberg-brozek``: each
+        body's density from its fat fraction, see :mod:`wbsa.bodies.composition`; residuals seeded
+        with ``seed``).
+    sampling
+        (random) ``paper``: the paper's uniform macro parameters, no local change; ``varied``:
+        local changes, anny's whole range and a high-adiposity half
+        (:meth:`~wbsa.bodies.random_population.RandomPopulationSettings.varied`).
     posture
         ``a-pose`` (every body at rest, no posture columns: the paper), ``mixed`` (a random named
         posture per subject) or one name of :data:`wbsa.bodies.posture.POSTURES`; drawn with ``seed``
@@ -38,35 +49,41 @@ def build_population(kind: PopulationKind, n: int | None = None, seed: int = 0, 
     from wbsa.bodies.posture_table import add_postures
 
     postures = PostureSettings(posture, seed)  # checked before any body is built
-    table = _build_table(kind, n, seed, density_kg_m3=density_kg_m3, params_path=params_path,
-                         variations=variations, survey_weights=survey_weights, show_progress=show_progress,
+    table = _build_table(kind, n, seed, density_kg_m3=density_kg_m3, density_model=density_model,
+                         sampling=sampling, params_path=params_path, variations=variations,
+                         survey_weights=survey_weights, posture=posture, show_progress=show_progress,
                          workers=workers, scheduler=scheduler)
     return add_postures(table, postures, show_progress=show_progress, workers=workers, scheduler=scheduler)
 
 
 def _build_table(kind: PopulationKind, n: int | None, seed: int, *, density_kg_m3: float,
-                 params_path: str | None, variations: int, survey_weights: bool,
-                 show_progress: bool | None, workers: int, scheduler: str | None) -> pd.DataFrame:
+                 density_model: DensityModel, sampling: Sampling, params_path: str | None, variations: int,
+                 survey_weights: bool, posture: PostureChoice, show_progress: bool | None, workers: int,
+                 scheduler: str | None) -> pd.DataFrame:
     """The population table of ``kind`` in the rest pose (see :func:`build_population`)."""
     from wbsa.bodies.table import measure_population
 
-    PopulationSettings(kind=kind, n=n, seed=seed, density_kg_m3=density_kg_m3, variations=variations,
-                       survey_weights=survey_weights, params_path=params_path)  # checks every argument
+    PopulationSettings(kind=kind, n=n, seed=seed, density_kg_m3=density_kg_m3, density_model=density_model,
+                       sampling=sampling, variations=variations, survey_weights=survey_weights,
+                       params_path=params_path, posture=posture)  # checks every argument
+    composition = CompositionSettings(model=density_model, density_kg_m3=density_kg_m3, seed=seed)
     if kind == "random":
         from wbsa.bodies.random_population import RandomPopulationSettings, sample_random_parameters
 
-        params = sample_random_parameters(RandomPopulationSettings(n=n, seed=seed))
-        return measure_population(params, density_kg_m3=density_kg_m3, show_progress=show_progress,
+        settings = (RandomPopulationSettings.varied(n=n, seed=seed) if sampling == "varied"
+                    else RandomPopulationSettings(n=n, seed=seed))
+        params = sample_random_parameters(settings)
+        return measure_population(params, composition=composition, show_progress=show_progress,
                                   workers=workers, scheduler=scheduler)
     if kind == "table":
-        return measure_population(_read_params(params_path), density_kg_m3=density_kg_m3,
+        return measure_population(_read_params(params_path), composition=composition,
                                   show_progress=show_progress, workers=workers, scheduler=scheduler)
     if kind == "survey":
         try:
             from wbsa.bodies.survey import build_survey_population
         except ModuleNotFoundError:
             raise WbsaError("the survey population is not available in this build") from None
-        return build_survey_population(n=n, variations=variations, seed=seed, density_kg_m3=density_kg_m3,
+        return build_survey_population(n=n, variations=variations, seed=seed, composition=composition,
                                        survey_weights=survey_weights, show_progress=show_progress)
     raise AssertionError(kind)  # pragma: no cover - PopulationSettings accepts only the kinds above
 

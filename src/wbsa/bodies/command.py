@@ -15,7 +15,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     from wbsa.bodies.settings import PopulationSettings
     from wbsa.settings_io import field_defaults
-    from wbsa.typing import POPULATION_KINDS
+    from wbsa.typing import DENSITY_MODELS, POPULATION_KINDS, SAMPLINGS
 
     d = SimpleNamespace(**field_defaults(PopulationSettings))
     p = sub.add_parser("population", help="build a virtual population and its anthropometric table",
@@ -30,6 +30,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--format", choices=("parquet", "csv", "xlsx"), help="table format (default: from --out's suffix)")
     p.add_argument("--density", type=float, default=d.density_kg_m3, metavar="KG_M3",
                    help=f"body density for mass = volume × density (default {d.density_kg_m3:g} kg/m³, as anny)")
+    p.add_argument("--density-model", choices=DENSITY_MODELS, default=d.density_model,
+                   help="constant: every body --density (the paper's tables); deurenberg-siri/-brozek: each body's "
+                        "fat fraction from its BMI, age and sex (Deurenberg 1991, with its scatter) and its density "
+                        "by Siri's/Brozek's equation; adds fat_fraction and density_kg_m3 columns")
+    p.add_argument("--sampling", choices=SAMPLINGS, default=d.sampling,
+                   help="(--kind random) paper: uniform macro parameters, no local change (the paper's Virtual "
+                        "Random); varied: local changes, anny's whole range, an obese half of the adults, ages 7-80 "
+                        "(docs/population.md)")
     p.add_argument("--params", help="(--kind table) Parquet/CSV with p_gender, p_age, ... columns in [0, 1]")
     p.add_argument("--variations", type=int, default=d.variations,
                    help="(--kind survey) weight/muscle variations per person")
@@ -61,7 +69,7 @@ def settings_from_args(args: argparse.Namespace):
 
     return PopulationSettings(kind=args.kind, n=args.n, seed=args.seed, density_kg_m3=args.density,
                               variations=args.variations, survey_weights=args.survey_weights, params_path=args.params,
-                              posture=args.posture)
+                              posture=args.posture, density_model=args.density_model, sampling=args.sampling)
 
 
 def run_population(args: argparse.Namespace) -> int:

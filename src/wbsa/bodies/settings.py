@@ -6,7 +6,8 @@ import math
 from dataclasses import dataclass
 
 from wbsa.errors import check_field
-from wbsa.typing import POPULATION_KINDS, POSTURE_CHOICES, PopulationKind, PostureChoice
+from wbsa.typing import (DENSITY_MODELS, POPULATION_KINDS, POSTURE_CHOICES, SAMPLINGS, DensityModel, PopulationKind,
+                         PostureChoice, Sampling)
 
 #: Default body density (kg/m³), as anny's own ``Anthropometry``.
 DEFAULT_DENSITY_KG_M3 = 980.0
@@ -29,7 +30,14 @@ class PopulationSettings:
     seed : int
         Seed of the parameter draw, >= 0.
     density_kg_m3 : float
-        Body density for mass = volume × density (500–2000 kg/m³; anny's default 980).
+        Body density for mass = volume × density with ``density_model = "constant"`` (500–2000 kg/m³;
+        anny's default 980).
+    density_model : {'constant', 'deurenberg-siri', 'deurenberg-brozek'}
+        ``constant`` (the paper's tables) or each body's density from its fat fraction
+        (:mod:`wbsa.bodies.composition`).
+    sampling : {'paper', 'varied'}
+        (random) ``paper``: the paper's uniform macro parameters; ``varied``: local changes, anny's whole
+        range, an obese half of the adults, ages 7–80 (``docs/population.md``).
     variations : int
         (survey) weight/muscle variations per person, >= 0.
     survey_weights : bool
@@ -45,6 +53,8 @@ class PopulationSettings:
     n: int | None = None
     seed: int = 0
     density_kg_m3: float = DEFAULT_DENSITY_KG_M3
+    density_model: DensityModel = "constant"
+    sampling: Sampling = "paper"
     variations: int = 0
     survey_weights: bool = False
     params_path: str | None = None
@@ -61,6 +71,9 @@ class PopulationSettings:
         check_field(math.isfinite(self.density_kg_m3) and 500 <= self.density_kg_m3 <= 2000, "density_kg_m3",
                     f"must be a body density in 500–2000 kg/m³, got {self.density_kg_m3:g}")
         check_field(self.variations >= 0, "variations", f"must be 0 or more, got {self.variations}")
+        check_field(self.density_model in DENSITY_MODELS, "density_model",
+                    f"must be one of {', '.join(DENSITY_MODELS)}, got {self.density_model!r}")
+        check_field(self.sampling in SAMPLINGS, "sampling", f"must be one of {', '.join(SAMPLINGS)}, got {self.sampling!r}")
         check_field(self.posture in POSTURE_CHOICES, "posture",
                     f"must be one of {', '.join(POSTURE_CHOICES)}, got {self.posture!r}")
         if self.kind == "table":

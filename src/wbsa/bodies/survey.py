@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import time
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pandas as pd
@@ -29,6 +29,7 @@ import pandas as pd
 from wbsa.errors import WbsaError
 from wbsa.bodies.age import years_to_param
 from wbsa.bodies.anthropometry import DEFAULT_DENSITY_KG_M3
+from wbsa.bodies.composition import COMPOSITION_COLUMNS, CompositionSettings
 from wbsa.bodies.survey_match import MatchSettings, torch_threads
 
 #: Columns a survey population has beyond the random population's.
@@ -61,6 +62,10 @@ _MATCHED = (
 _VARIATION_STREAM = 0x7A21A7
 
 
+#: Residual weights of the girth-rescue fit: the mass weighs no more than a girth.
+RESCUE_WEIGHTS = (3.0, 0.1, 0.1, 0.1)
+
+
 class SurveyMatchWarning(UserWarning):
     """Some survey people could not be matched within the tolerances (they are flagged)."""
 
@@ -78,12 +83,18 @@ class SurveyPopulationSettings:
         body's values (the interval cut to [0, 1]); everything else stays the match's.
     survey_path
         Survey CSV; None = the copy shipped in the package.
+    girth_rescue
+        Refit the people matched in stature and mass but not in a girth with
+        :data:`RESCUE_WEIGHTS` (:attr:`MatchSettings.rescue_weights`). None: on with a composition
+        model, off at constant density, so that constant-density tables stay those of the
+        matcher without it.
     """
 
     match: MatchSettings = field(default_factory=MatchSettings)
     weight_spread: float = 0.2
     muscle_spread: float = 0.3
     survey_path: str | None = None
+    girth_rescue: bool | None = None
 
     def __post_init__(self) -> None:
         for name in ("weight_spread", "muscle_spread"):
@@ -93,7 +104,7 @@ class SurveyPopulationSettings:
 
 def build_survey_population(n: int, variations: int = 0, seed: int = 0, *,
                             density_kg_m3: float = DEFAULT_DENSITY_KG_M3, survey_weights: bool = False,
-                            show_progress: bool | None = None,
+                            composition: CompositionSettings | None = None, show_progress: bool | None = None,
                             settings: SurveyPopulationSettings | None = None) -> pd.DataFrame:
     """Build the survey-matched population table.
 
@@ -106,7 +117,12 @@ def build_survey_population(n: int, variations: int = 0, seed: int = 0, *,
     seed
         Seed of the draw and of the variations.
     density_kg_m3
-        Body density for mass = volume × density, in the fit and in the table.
+        Body density for mass = volume × density, in the fit and in the table (when
+        ``composition`` is None or ``constant``).
+    composition
+        Density model. Other than ``constant``, each person is fitted at the density its
+        survey BMI, age and sex give (with the person's residual deviate), and the table's
+        bodies get their own density by :func:`~wbsa.bodies.table.with_composition`.
     survey_weights
         Draw people with probability proportional to their exam weight (the survey's
         population weights) instead of uniformly.
@@ -124,12 +140,14 @@ def build_survey_population(n: int, variations: int = 0, seed: int = 0, *,
     from wbsa.bodies.anthropometry import Anthropometer
     from wbsa.bodies.body_model import BodyModel
     from wbsa.bodies.survey_data import load_survey, select_people
-    from wbsa.bodies.survey_match import match_bodies
+    from wbsa.bodies.survey_match import DENSITY_COLUMN, match_bodies
     from wbsa.bodies.survey_measures import TorchMeasurer
     from wbsa.bodies.survey_start import StartTable
     from wbsa.bodies.table import measure_population
 
     s = settings or SurveyPopulationSettings()
+    if composition is not None and composition.constant:
+        density_kg_m3, composition = composition.density_kg_m3, None
     if not isinstance(variations, (int, np.integer)) or variations < 0:
         raise WbsaError(f"--variations {variations} must be a whole number >= 0 (the paper used 25)")
     clock = _Clock()
@@ -144,11 +162,17 @@ def build_survey_population(n: int, variations: int = 0, seed: int = 0, *,
     with torch_threads(s.match.threads):
         table = StartTable.build(measurer, s.match.start)
     clock.lap("start_table")
-    fit = match_bodies(survey_targets(people), measurer, s.match, table=table, show_progress=show_progress)
+    targets = survey_targets(people)
+    if composition is not None:
+        targets[DENSITY_COLUMN] = person_density(people, composition)
+    rescue = s.girth_rescue if s.girth_rescue is not None else composition is not None
+    match = replace(s.match, rescue_weights=RESCUE_WEIGHTS) if rescue and s.match.rescue_weights is None else s.match
+    fit = match_bodies(targets, measurer, match, table=table, show_progress=show_progress)
     clock.lap("match")
 
     params = _with_variations(people, fit, variations, seed, s)
-    table = measure_population(params, density_kg_m3=density_kg_m3, model=model, show_progress=show_progress)
+    table = measure_population(params, density_kg_m3=density_kg_m3, composition=composition, model=model,
+                               show_progress=show_progress)
     table = _add_match_columns(table, s.match)
     clock.lap("measure")
     summary = {
@@ -181,6 +205,19 @@ def survey_targets(people: pd.DataFrame) -> pd.DataFrame:
         "target_waist_circ_m": people["waist_circ_m"].to_numpy(),
         "target_hip_circ_m": people["hip_circ_m"].to_numpy(),
     })
+
+
+def person_density(people: pd.DataFrame, composition: CompositionSettings) -> np.ndarray:
+    """Density (kg/m³) of each survey person at its own BMI, age and sex, ``(n,) float64``.
+
+    The residual deviate is the one the person's matched body (variation 0) gets in the table
+    (:func:`~wbsa.bodies.table.residual_keys`), so fit and table use the same composition.
+    """
+    from wbsa.bodies.composition import density_at_bmi, residual_z
+
+    keys = np.stack([people["survey_id"].to_numpy(dtype=np.int64), np.zeros(len(people), dtype=np.int64)], axis=1)
+    return density_at_bmi(composition, people["bmi"].to_numpy(), people["age_years"].to_numpy(),
+                          (people["sex"] == "male").to_numpy(), residual_z(composition.seed, keys))
 
 
 def _with_variations(people: pd.DataFrame, fit: pd.DataFrame, k: int, seed: int,
@@ -243,13 +280,14 @@ def _add_match_columns(table: pd.DataFrame, m: MatchSettings) -> pd.DataFrame:
     for column, ok in (("matched", everything), ("matched_stature_mass", stature_mass)):
         # the matched body's flag, on all of its person's rows
         out[column] = pd.Series(np.where(first, ok, True)).groupby(person).transform("all").to_numpy()
-    return out[[*TABLE_COLUMNS, *SURVEY_COLUMNS]]
+    return out[[*TABLE_COLUMNS, *[c for c in COMPOSITION_COLUMNS if c in out.columns], *SURVEY_COLUMNS]]
 
 
 def match_rates(table: pd.DataFrame) -> dict[str, object]:
     """Match rates and error quantiles of a survey population's matched bodies.
 
-    Groups: all people, and adults (18+) with survey BMI ≤ 40 (the target group).
+    Groups: all people, adults (18+) with survey BMI ≤ 40 (the target group), and adults with
+    survey BMI in (40, 50] (beyond anny's reach for many women).
 
     Returns
     -------
@@ -261,6 +299,8 @@ def match_rates(table: pd.DataFrame) -> dict[str, object]:
     groups = {
         "all": first,
         "adults_bmi_le_40": first[(first["survey_age_years"] >= 18) & (first["survey_bmi"] <= 40)],
+        "adults_bmi_40_50": first[(first["survey_age_years"] >= 18) & (first["survey_bmi"] > 40)
+                                  & (first["survey_bmi"] <= 50)],
     }
     out: dict[str, object] = {}
     for name, g in groups.items():

@@ -31,7 +31,7 @@ who else is in the batch (up to floating-point rounding of the batched products)
 from __future__ import annotations
 
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Iterator
 
 import numpy as np
@@ -45,6 +45,9 @@ from wbsa.progress import progress
 
 #: Target columns :func:`match_bodies` reads (NaN waist/hip = not measured).
 TARGET_COLUMNS = ("target_stature_m", "target_mass_kg", "target_waist_circ_m", "target_hip_circ_m")
+#: Optional target column: each person's body density (kg/m³) for mass = volume × density
+#: (absent: the measurer's one density).
+DENSITY_COLUMN = "target_density_kg_m3"
 #: Fixed phenotype columns :func:`match_bodies` reads.
 FIXED_COLUMNS = ("p_gender", "p_age", "p_african", "p_asian", "p_caucasian")
 #: Free body parameters, in fit order (``p_cupsize`` only for women, the ``l_*`` local changes
@@ -85,6 +88,13 @@ class MatchSettings:
     prior_weight
         Weight of the pull of each free phenotype towards 0.5 (in tolerance units per unit
         of phenotype).
+    rescue_weights
+        None, or the residual weights of a second fit for the people whose stature and mass
+        are matched but a girth is not: weighted as above, the fit meets the mass to a few
+        grams and leaves the girths off where anny cannot reach both (heavy women at weight 1,
+        muscle 0); with the mass weighted like a girth, the second fit may use the mass
+        tolerance to bring the girths in. Its result is kept only where all four measures are
+        then within tolerance (the first fit's otherwise).
     max_iterations
         Levenberg–Marquardt iterations per person at most.
     converge_fraction
@@ -108,6 +118,7 @@ class MatchSettings:
     free_local_changes: bool = True
     weights: tuple[float, float, float, float] = (3.0, 1.0, 0.1, 0.1)
     prior_weight: float = 0.05
+    rescue_weights: tuple[float, float, float, float] | None = None
     max_iterations: int = 40
     converge_fraction: float = 0.25
     batch_size: int = 256
@@ -121,8 +132,10 @@ class MatchSettings:
         for name in ("stature_tol_m", "mass_tol_kg", "girth_tol_m"):
             if not getattr(self, name) > 0:
                 raise WbsaError(f"match tolerance {name} = {getattr(self, name)} must be positive")
-        if len(self.weights) != 4 or not all(w > 0 for w in self.weights):
-            raise WbsaError(f"match weights {self.weights} must be four positive numbers (stature, mass, waist, hip)")
+        for name in ("weights", "rescue_weights"):
+            w = getattr(self, name)
+            if w is not None and (len(w) != 4 or not all(x > 0 for x in w)):
+                raise WbsaError(f"match {name} {w} must be four positive numbers (stature, mass, waist, hip)")
         if self.threads is not None and self.threads < 1:
             raise WbsaError(f"match threads = {self.threads} must be >= 1 (or None for torch's default)")
         if self.max_iterations < 0 or self.batch_size < 1:
@@ -142,7 +155,8 @@ def match_bodies(targets: pd.DataFrame, measurer: TorchMeasurer, settings: Match
     ----------
     targets
         :data:`FIXED_COLUMNS` (in [0, 1]) and :data:`TARGET_COLUMNS` (SI units; waist and hip
-        may be NaN, stature and mass must be finite and positive).
+        may be NaN, stature and mass must be finite and positive), optionally
+        :data:`DENSITY_COLUMN`, the density each person's mass is computed with.
     measurer
         Differentiable measures of the body model.
     settings
@@ -167,6 +181,12 @@ def match_bodies(targets: pd.DataFrame, measurer: TorchMeasurer, settings: Match
     if not (np.isfinite(goal[:, :2]).all() and (goal[:, :2] > 0).all()):
         raise WbsaError("every match target needs a finite, positive stature and mass")
     n = len(targets)
+    if DENSITY_COLUMN in targets.columns:
+        density = targets[DENSITY_COLUMN].to_numpy(dtype=np.float64)
+        if not (np.isfinite(density).all() and (density > 0).all()):
+            raise WbsaError(f"{DENSITY_COLUMN} must be finite and positive for every match target")
+    else:
+        density = np.full(n, measurer.density_kg_m3)
     phen = np.zeros((n, len(BODY_PARAMETER_COLUMNS)))
     fit = np.full((n, 4), np.nan)
     iters = np.zeros(n, dtype=np.int64)
@@ -176,8 +196,8 @@ def match_bodies(targets: pd.DataFrame, measurer: TorchMeasurer, settings: Match
         with progress(total=n, desc="matching", unit="person", enabled=show_progress) as bar:
             for start in range(0, n, settings.batch_size):
                 sl = slice(start, start + settings.batch_size)
-                phen[sl], fit[sl], iters[sl], done[sl] = _match_batch(fixed[sl], goal[sl], measurer, settings,
-                                                                      table)
+                phen[sl], fit[sl], iters[sl], done[sl] = _match_batch(fixed[sl], goal[sl], density[sl], measurer,
+                                                                      settings, table)
                 bar.update(len(fixed[sl]))
     out = pd.DataFrame(phen, columns=list(BODY_PARAMETER_COLUMNS), index=targets.index)
     for j, name in enumerate(FIT_MEASURES):
@@ -205,7 +225,8 @@ def torch_threads(n: int | None) -> Iterator[None]:
 class _Problem:
     """One batch: fixed phenotypes, targets, and the map from unknowns to residuals."""
 
-    def __init__(self, fixed: np.ndarray, goal: np.ndarray, measurer: TorchMeasurer, settings: MatchSettings):
+    def __init__(self, fixed: np.ndarray, goal: np.ndarray, density: np.ndarray, measurer: TorchMeasurer,
+                 settings: MatchSettings):
         import torch
 
         self.torch = torch
@@ -236,6 +257,8 @@ class _Problem:
                     self.kinks.append((j, float(a)))
         self.goal = torch.as_tensor(np.nan_to_num(goal, nan=0.0), dtype=measurer.dtype)
         self.has = torch.as_tensor(np.isfinite(goal))
+        #: (b,) each person's body density, kg/m³
+        self.density = torch.as_tensor(np.array(density, dtype=np.float64), dtype=measurer.dtype)
         self.tol = torch.as_tensor(settings.tolerances, dtype=measurer.dtype)
         weight = np.asarray(settings.weights, dtype=np.float64)
         #: residual unit of each measure: its tolerance over its weight
@@ -290,7 +313,7 @@ class _Problem:
         with torch.set_grad_enabled(jacobian):
             ph, free = sub.phenotypes(uu)
             coeffs = self.m.coefficients(ph)
-        ev = self.m.evaluate(self.m.vertices(coeffs), gradient=jacobian)
+        ev = self.m.evaluate(self.m.vertices(coeffs), gradient=jacobian, density_kg_m3=sub.density)
         values = ev.values
         has = sub.has & torch.isfinite(values)
         err = torch.where(has, (values - sub.goal) / self.unit, torch.zeros_like(values))
@@ -318,6 +341,7 @@ class _SubProblem:
         self.free_mask = p.free_mask[rows]
         self.goal = p.goal[rows]
         self.has = p.has[rows]
+        self.density = p.density[rows]
 
     def phenotypes(self, u):
         torch = self.p.torch
@@ -329,10 +353,16 @@ class _SubProblem:
         return ph, free
 
 
-def _start(problem: _Problem, table: StartTable, fixed: np.ndarray, goal: np.ndarray,
+def _start(problem: _Problem, table: StartTable, fixed: np.ndarray, goal: np.ndarray, density: np.ndarray,
            muscle_side: str = "any") -> np.ndarray:
-    """Starting unknowns ``(b, d)`` from the tabulated inverse (cup size at 0.5, no local change)."""
+    """Starting unknowns ``(b, d)`` from the tabulated inverse (cup size at 0.5, no local change).
+
+    The table's bodies were weighed at the measurer's density: a person of another density is
+    looked up by the mass its volume would have there.
+    """
     free = np.full((len(fixed), len(FREE_PHENOTYPES)), 0.5)
+    goal = goal.copy()
+    goal[:, 1] *= problem.m.density_kg_m3 / density
     free[:, :4] = table.start(fixed, goal, problem.s.tolerances, muscle_side)
     return np.clip(free, *problem.s.bounds)
 
@@ -370,8 +400,8 @@ def _box_step(r, jac, u, mu, free, bounds):
     return step
 
 
-def _match_batch(fixed: np.ndarray, goal: np.ndarray, measurer: TorchMeasurer, s: MatchSettings,
-                 table: StartTable):
+def _match_batch(fixed: np.ndarray, goal: np.ndarray, density: np.ndarray, measurer: TorchMeasurer,
+                 s: MatchSettings, table: StartTable):
     """Fit one batch; returns body parameters (b, 15), fit measures (b, 4), iterations (b,), converged (b,).
 
     People whose stature or mass is still off after the first fit are fitted again from the
@@ -379,8 +409,8 @@ def _match_batch(fixed: np.ndarray, goal: np.ndarray, measurer: TorchMeasurer, s
     side), and keep the better of the two fits.
     """
     torch = measurer.torch
-    problem = _Problem(fixed, goal, measurer, s)
-    u0 = torch.as_tensor(_start(problem, table, fixed, goal), dtype=measurer.dtype)
+    problem = _Problem(fixed, goal, density, measurer, s)
+    u0 = torch.as_tensor(_start(problem, table, fixed, goal, density), dtype=measurer.dtype)
     u, r, values, iters = _fit(problem, u0, torch.arange(len(fixed)))
     err = (values - problem.goal).abs() / problem.tol
     retry = torch.nonzero((err[:, :2] > 1.0).any(dim=1)).flatten()
@@ -388,13 +418,24 @@ def _match_batch(fixed: np.ndarray, goal: np.ndarray, measurer: TorchMeasurer, s
         rows = retry.numpy()
         low = (u0[retry, FREE_PHENOTYPES.index("p_muscle")] > 0.5).numpy()
         start = np.where(low[:, None],
-                         _start(problem, table, fixed[rows], goal[rows], "low"),
-                         _start(problem, table, fixed[rows], goal[rows], "high"))
+                         _start(problem, table, fixed[rows], goal[rows], density[rows], "low"),
+                         _start(problem, table, fixed[rows], goal[rows], density[rows], "high"))
         u2, r2, values2, iters2 = _fit(problem, torch.as_tensor(start, dtype=measurer.dtype), retry)
         better = (r2**2).sum(dim=1) < (r[retry] ** 2).sum(dim=1)
         keep = retry[better]
         u[keep], r[keep], values[keep] = u2[better], r2[better], values2[better]
         iters[retry] += iters2
+    if s.rescue_weights is not None:
+        err = (values - problem.goal).abs() / problem.tol
+        girth_off = ((err[:, 2:] > 1.0) & problem.has[:, 2:]).any(dim=1)
+        rescue = torch.nonzero((err[:, :2] <= 1.0).all(dim=1) & girth_off).flatten()
+        if len(rescue):
+            second = _Problem(fixed, goal, density, measurer, replace(s, weights=s.rescue_weights))
+            u3, _, values3, iters3 = _fit(second, u[rescue], rescue)
+            err3 = (values3 - problem.goal[rescue]).abs() / problem.tol
+            ok = ((err3 <= 1.0) | ~problem.has[rescue]).all(dim=1)
+            u[rescue[ok]], values[rescue[ok]] = u3[ok], values3[ok]
+            iters[rescue] += iters3
     ph, _ = problem.phenotypes(u)
     return ph.detach().numpy(), values.numpy(), iters.numpy(), _converged(problem, values).numpy()
 

@@ -101,16 +101,21 @@ class TorchMeasurer:
         return flat.reshape(3, self.n_vertices, -1)
 
     # -- measures -----------------------------------------------------------------------
-    def evaluate(self, x, gradient: bool = False) -> Evaluation:
-        """Measures of bodies ``x`` (3, n, b) and, if asked, their coefficient gradients."""
+    def evaluate(self, x, gradient: bool = False, density_kg_m3=None) -> Evaluation:
+        """Measures of bodies ``x`` (3, n, b) and, if asked, their coefficient gradients.
+
+        ``density_kg_m3`` : (b,) float64 tensor, optional
+            Each body's density for its mass (default: the measurer's one density).
+        """
         torch = self.torch
+        density = self.density_kg_m3 if density_kg_m3 is None else density_kg_m3
         n, b = self.n_vertices, x.shape[2]
         z = x[2]
         top, bottom = z.argmax(dim=0), z.argmin(dim=0)
         cols = torch.arange(b)
         stature = z[top, cols] - z[bottom, cols]
         signed, gvol = self._volume(x, gradient)
-        mass = signed.abs() * self.density_kg_m3
+        mass = signed.abs() * density
         girths, sparse = [], []
         for ring, measure in ((self.waist_ring, 2), (self.hip_ring, 3)):
             value, entries = self._girth(x, ring, measure, gradient)
@@ -125,7 +130,7 @@ class TorchMeasurer:
         # stature: +z of the top vertex, -z of the lowest
         grad[:, 0] = self.basis_t[2 * n + top] - self.basis_t[2 * n + bottom]
         # mass: dense volume gradient, one product with the basis
-        scale = (torch.sign(signed) * self.density_kg_m3)[:, None]
+        scale = (torch.sign(signed) * density)[:, None]
         grad[:, 1] = (gvol.reshape(3 * n, b).T @ self.basis_t) * scale
         # girths: few vertices each, a sparse product
         rows = torch.cat([e[0] for e in sparse])

@@ -13,6 +13,7 @@ from wbsa.parallel import keep_large_allocations, single_threaded_math
 from wbsa.bodies.anthropometry import DEFAULT_DENSITY_KG_M3, MEASURE_COLUMNS, Anthropometer
 from wbsa.bodies.body_model import (LOCAL_CHANGE_COLUMNS, PHENOTYPE_COLUMNS, BodyModel,
                                         body_parameter_array)
+from wbsa.bodies.composition import COMPOSITION_COLUMNS, CompositionSettings
 from wbsa.progress import progress
 
 #: Smallest local population worth starting worker processes for.
@@ -21,11 +22,13 @@ PARALLEL_MIN_BODIES = 2000
 #: Columns every population table has (:func:`read_population` requires them).
 POPULATION_COLUMNS = ("subject_id", "sex", "age_years", *PHENOTYPE_COLUMNS, *MEASURE_COLUMNS)
 #: Columns a population table is written with: :data:`POPULATION_COLUMNS`, then the local changes
-#: (0 unless fitted, see :data:`~wbsa.bodies.body_model.LOCAL_CHANGE_COLUMNS`).
+#: (0 unless fitted, see :data:`~wbsa.bodies.body_model.LOCAL_CHANGE_COLUMNS`). A density model other
+#: than ``constant`` adds :data:`~wbsa.bodies.composition.COMPOSITION_COLUMNS` after them.
 TABLE_COLUMNS = (*POPULATION_COLUMNS, *LOCAL_CHANGE_COLUMNS)
 
 
 def measure_population(params: pd.DataFrame, *, density_kg_m3: float = DEFAULT_DENSITY_KG_M3,
+                       composition: CompositionSettings | None = None,
                        model: BodyModel | None = None, batch_size: int = 64,
                        show_progress: bool | None = None, workers: int = 1,
                        scheduler: str | None = None) -> pd.DataFrame:
@@ -37,7 +40,11 @@ def measure_population(params: pd.DataFrame, *, density_kg_m3: float = DEFAULT_D
         ``subject_id``, ``sex``, ``age_years``, the ``p_*`` columns and optionally the ``l_*``
         local changes (extra columns are kept).
     density_kg_m3
-        Body density for mass = volume × density.
+        Body density for mass = volume × density (when ``composition`` is None or ``constant``).
+    composition
+        Density model (:mod:`~wbsa.bodies.composition`). Other than ``constant``, mass and BMI
+        come from each body's own density, and the composition columns are added (see
+        :func:`with_composition`).
     workers, scheduler
         Local worker processes (used from :data:`PARALLEL_MIN_BODIES` bodies up), or a dask
         scheduler address (see :mod:`wbsa.parallel`); the table is the same whatever the worker count.
@@ -46,12 +53,15 @@ def measure_population(params: pd.DataFrame, *, density_kg_m3: float = DEFAULT_D
     -------
     pandas.DataFrame
         ``params`` (missing optional ``p_*`` columns filled with 0.5) followed by
-        :data:`~wbsa.bodies.anthropometry.MEASURE_COLUMNS` and the ``l_*`` local changes
-        (missing ones 0).
+        :data:`~wbsa.bodies.anthropometry.MEASURE_COLUMNS`, the ``l_*`` local changes
+        (missing ones 0) and, with a composition model,
+        :data:`~wbsa.bodies.composition.COMPOSITION_COLUMNS`.
     """
     from wbsa.parallel import dask_client, map_unordered, resolve_scheduler
 
     body_parameter_array(params)  # validate every row before any work
+    if composition is not None and composition.constant:
+        density_kg_m3, composition = composition.density_kg_m3, None
     starts = list(range(0, len(params), batch_size))
     chunks = [(params.iloc[s:s + batch_size], density_kg_m3) for s in starts]
     parts: list[pd.DataFrame | None] = [None] * len(chunks)
@@ -70,13 +80,56 @@ def measure_population(params: pd.DataFrame, *, density_kg_m3: float = DEFAULT_D
                     parts[i] = rows
                     bar.update(len(rows))
     measures = pd.concat(parts, ignore_index=True) if parts else pd.DataFrame(columns=list(MEASURE_COLUMNS))
-    out = params.reset_index(drop=True).copy()
+    # a population table given as parameters: its measures are measured again, not duplicated
+    out = params.reset_index(drop=True).drop(columns=[c for c in (*MEASURE_COLUMNS, "fat_fraction", "density_kg_m3")
+                                                      if c in params.columns])
     for name in PHENOTYPE_COLUMNS:
         if name not in out.columns:
             out[name] = 0.5
     local = pd.DataFrame({name: out.pop(name) if name in out.columns else np.zeros(len(out))
                           for name in LOCAL_CHANGE_COLUMNS})
-    return pd.concat([out, measures, local], axis=1)
+    table = pd.concat([out, measures, local], axis=1)
+    return table if composition is None else with_composition(table, composition)
+
+
+def with_composition(table: pd.DataFrame, settings: CompositionSettings) -> pd.DataFrame:
+    """``table`` with mass and BMI from each body's own density, and the composition columns.
+
+    Uses ``volume_m3``, ``stature_m``, ``age_years``, ``sex`` and each subject's residual deviate:
+    the table's ``fat_residual_z`` where it has one (the survey matcher's fitted deviates), else
+    drawn from the subject's stream (keys: :func:`residual_keys`); see
+    :func:`~wbsa.bodies.composition.solve_composition`. The constant model gives the table back
+    unchanged.
+    """
+    from wbsa.bodies.composition import residual_z, solve_composition
+
+    if settings.constant:
+        return table
+    if "fat_residual_z" in table.columns:
+        z = table["fat_residual_z"].to_numpy(dtype=np.float64)
+    else:
+        z = residual_z(settings.seed, residual_keys(table))
+    comp = solve_composition(settings, table["volume_m3"].to_numpy(), table["stature_m"].to_numpy(),
+                             table["age_years"].to_numpy(), (table["sex"] == "male").to_numpy(), z)
+    out = table.drop(columns=[c for c in COMPOSITION_COLUMNS if c in table.columns])
+    out["mass_kg"] = comp.mass_kg
+    out["bmi"] = comp.bmi
+    at = out.columns.get_loc(LOCAL_CHANGE_COLUMNS[-1]) + 1 if LOCAL_CHANGE_COLUMNS[-1] in out else len(out.columns)
+    out.insert(at, "fat_fraction", comp.fat_fraction)
+    out.insert(at + 1, "density_kg_m3", comp.density_kg_m3)
+    out.insert(at + 2, "fat_residual_z", z)
+    return out
+
+
+def residual_keys(table: pd.DataFrame) -> np.ndarray:
+    """``(n, k) int64`` keys of each subject's composition residual stream.
+
+    ``(survey_id, variation)`` in survey populations (a person's draw then does not depend on
+    the number of variations or on who else was drawn), else ``subject_id``.
+    """
+    if {"survey_id", "variation"} <= set(table.columns):
+        return table[["survey_id", "variation"]].to_numpy(dtype=np.int64)
+    return table[["subject_id"]].to_numpy(dtype=np.int64)
 
 
 @functools.lru_cache(maxsize=4)

@@ -42,7 +42,7 @@ from wbsa.settings_io import dump_toml, from_table, to_table
 from wbsa.surface.settings import ReconstructionSettings
 
 #: Shipped study files (``wbsa run --config NAME``), in ``wbsa/configs/NAME.toml``.
-SHIPPED_CONFIGS: tuple[str, ...] = ("default", "paper", "distance-sweep", "reconstruction")
+SHIPPED_CONFIGS: tuple[str, ...] = ("default", "paper", "distance-sweep", "reconstruction", "varied")
 
 #: Population kinds a study builds (``table`` reads a file that a stage key could not address).
 STUDY_POPULATION_KINDS: tuple[str, ...] = ("random", "survey")

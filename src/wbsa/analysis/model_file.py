@@ -27,7 +27,7 @@ import pandas as pd
 
 from wbsa.analysis.design import design_matrix, from_model_scale, weights
 from wbsa.errors import WbsaError
-from wbsa.io import atomic_path
+from wbsa.io import write_text
 
 FORMAT = "wbsa-model"
 VERSION = 1
@@ -80,8 +80,7 @@ class WbsaModel:
         head = json.dumps({"format": FORMAT, "version": VERSION, "meta": self.meta}, indent=2, default=_json_default)
         lines = [json.dumps({f: e[f] for f in _ENTRY_FIELDS}, default=_json_default) for e in self.entries]
         text = head[:-2] + ',\n  "entries": [\n    ' + ",\n    ".join(lines) + "\n  ]\n}\n"
-        with atomic_path(path) as tmp:
-            tmp.write_text(text)
+        write_text(text, path)
         return Path(path)
 
     @classmethod

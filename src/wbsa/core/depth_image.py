@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from wbsa.errors import WbsaError
-from wbsa.io import atomic_path
+from wbsa.io import atomic_path, png_verifier
 
 #: Units per metre of the usual depth PNG (OpenNI / Kinect SDK / Open3D); TUM RGB-D uses 5000.
 MM_PER_M = 1000.0
@@ -57,7 +57,7 @@ def write_depth_png(path: str | os.PathLike, depth_m: np.ndarray, *, depth_scale
 
     units = depth_to_png_mm(depth_m, depth_scale=depth_scale)
     path = Path(path)
-    with atomic_path(path) as tmp:
+    with atomic_path(path, verify=png_verifier(units.shape)) as tmp:
         Image.fromarray(units).save(tmp, format="PNG")
     return path
 

@@ -13,7 +13,7 @@ import pandas as pd
 
 from wbsa import __version__
 from wbsa.errors import WbsaError
-from wbsa.io import atomic_path
+from wbsa.io import write_text
 from wbsa.progress import progress
 from wbsa.report import figures as F
 from wbsa.report.data import ReportData, load_report_data, select
@@ -107,8 +107,7 @@ def build_report(sources: ReportSources | str | os.PathLike, out: str | os.PathL
     seconds = time.perf_counter() - t0
     page = builder.page
     page.paragraph(f"Report built in {seconds:.1f} s.")
-    with atomic_path(out) as tmp:
-        tmp.write_text(page.render(), encoding="utf-8")
+    write_text(page.render(), out)
     return ReportResult(path=out, figures=list(page.figures), tables=list(page.tables),
                         unavailable=dict(builder.unavailable), seconds=seconds)
 

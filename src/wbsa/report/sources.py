@@ -113,10 +113,10 @@ def fit_dir_sources(fit_dir: str | os.PathLike, population: str | os.PathLike | 
         if not scan_paths and inputs.get("scans"):
             scan_paths = tuple(stages_dir / f"scan-{k}" / "scan.parquet" for k in inputs["scans"])
     recorded = info.get("inputs", {}) if isinstance(info.get("inputs"), dict) else {}
-    if pop is None and recorded.get("population"):
-        pop = Path(recorded["population"])
-    if not scan_paths and recorded.get("scan"):
-        scan_paths = (Path(recorded["scan"]),)
+    if pop is None and isinstance(recorded.get("population"), str) and recorded["population"]:
+        pop = fit_dir / recorded["population"]  # recorded relative to the fit folder (or absolute)
+    if not scan_paths and isinstance(recorded.get("scan"), str) and recorded["scan"]:
+        scan_paths = (fit_dir / recorded["scan"],)
     if pop is None or not scan_paths:
         raise WbsaError(f"cannot tell which population and scan tables {fit_dir} was fitted on; "
                         "give --population FILE and --scan FILE")

@@ -248,6 +248,18 @@ def write_text(text: str, path: str | os.PathLike) -> Path:
     return write_bytes(text.encode("utf-8"), path)
 
 
+def copy_file(src: str | os.PathLike, dst: str | os.PathLike) -> Path:
+    """Copy ``src`` to ``dst`` atomically (size-checked, re-read by the suffix's verifier)."""
+    src = Path(src)
+    try:
+        size = src.stat().st_size
+    except OSError as exc:
+        raise WbsaError(os_error_message(exc, src, "read")) from None
+    with atomic_path(dst, size=size) as tmp:
+        shutil.copyfile(src, tmp)
+    return Path(dst)
+
+
 def write_table(df: pd.DataFrame, path: str | os.PathLike, fmt: TableFormat | None = None) -> Path:
     """Write ``df`` atomically as Parquet, CSV or XLSX (format from ``fmt`` or the suffix).
 

@@ -146,7 +146,7 @@ def test_body_model_is_built_once_per_process(population, monkeypatch, tmp_path)
     (["--views", "everything"], "unknown view set 'everything'"),
     (["--distance", "-1"], "camera distance must be positive"),
     (["--chunk-size", "0"], "chunk size must be at least 1"),
-    (["--workers", "0"], "--workers must be at least 1"),
+    (["--workers", "-1"], "workers must be 0 (all cores) or more"),
 ])
 def test_bad_settings_are_one_line_errors(population, tmp_path, capsys, args, message):
     pop_path, _ = population

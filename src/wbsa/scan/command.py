@@ -36,7 +36,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--chunk-size", type=int, default=DEFAULT_CHUNK_SIZE, metavar="N",
                    help=f"subjects per chunk, the unit of parallel work and of resuming (default {DEFAULT_CHUNK_SIZE})")
     p.add_argument("--workers", type=int, default=None, metavar="N",
-                   help="local worker processes (default: all cores); 1 scans in this process without dask")
+                   help="local worker processes (default or 0: all cores); 1 scans in this process without dask")
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
                    help="use an existing dask scheduler, e.g. tcp://10.0.0.5:8786 (default: $DASK_SCHEDULER_ADDRESS)")
     p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
@@ -99,4 +99,7 @@ def handle(args: argparse.Namespace) -> int:
     resumed = f", {result.n_resumed} of {result.n_chunks} chunks resumed" if result.n_resumed else ""
     sys.stdout.write(f"scanned {n_subjects} subjects x {len(settings.views)} views = {len(result.table)} rows "
                      f"in {result.seconds:.1f} s ({views_per_s:.3g} views/s{resumed}) -> {result.path}\n")
+    if result.n_views_invalid:
+        sys.stderr.write(f"warning: {result.n_views_invalid} of {len(result.table)} views put the camera inside the "
+                         "body (camera_inside = true): not measured, left out of fits; use a larger distance\n")
     return 0

@@ -245,11 +245,14 @@ def _scan_stage(settings: StudySettings, out: Path, distance_m: float, pop: Stag
     rate = result.n_views_scanned / result.seconds if result.seconds > 0 else float("nan")
     in_frame = float(result.table["fits_in_frame"].mean()) if "fits_in_frame" in result.table else float("nan")
     summary = (f"{n_subjects} subjects x {len(ss.views)} views = {len(result.table)} rows ({rate:.1f} views/s, "
-               f"{100 * in_frame:.0f}% in frame)")
+               f"{100 * in_frame:.0f}% in frame"
+               + (f", {result.n_views_invalid} with the camera inside the body, left out" if result.n_views_invalid
+                  else "") + ")")
     stage.finish(seconds, {"scan": "scan.parquet"},
                  {"summary": summary, "distance_m": distance_m, "n_rows": len(result.table), "n_subjects": n_subjects,
                   "n_views": len(ss.views), "n_views_scanned": result.n_views_scanned, "views_per_s": rate,
                   "n_chunks": result.n_chunks, "n_resumed": result.n_resumed, "workers": workers,
+                  "n_views_invalid": result.n_views_invalid,
                   "fraction_in_frame": in_frame})
     return StageRun(name, stage, False, seconds, seconds, summary)
 

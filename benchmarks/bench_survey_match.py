@@ -50,7 +50,7 @@ def main(argv: list[str] | None = None) -> int:
         table = build_survey_population(args.n, variations=0, seed=args.seed, survey_weights=args.weighted,
                                         show_progress=False, settings=settings)
     wall, cpu = time.perf_counter() - t0, time.process_time() - c0
-    s = table.attrs["survey"]
+    s = {**table.attrs["survey"], **table.attrs["run_log"]}
     if args.out:
         table.to_parquet(args.out, index=False)
 

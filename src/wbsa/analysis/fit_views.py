@@ -15,6 +15,7 @@ from wbsa.analysis.groups import GROUP_NAMES, PAPER_GROUPS, GroupSpec, assign_gr
 from wbsa.analysis.model_file import WbsaModel
 from wbsa.analysis.regression import CannotFit, fit_arrays
 from wbsa.analysis.residuals import qq_quantiles, residual_frame
+from wbsa.core.limits import check_seed
 from wbsa.errors import WbsaError
 from wbsa.progress import progress
 
@@ -72,6 +73,7 @@ class FitSettings:
     def __post_init__(self) -> None:
         if int(self.k) < 2:
             raise WbsaError(f"k = {self.k} folds is too few; use --k 2 or more (paper: 10)")
+        check_seed(self.seed, "the fold seed")
         if int(self.qq_points) < 2:
             raise WbsaError(f"qq_points = {self.qq_points} is too few; use 2 or more")
         check_model_kinds(self.models)

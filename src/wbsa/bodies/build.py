@@ -28,8 +28,26 @@ def build_population(kind: PopulationKind, n: int | None = None, seed: int = 0, 
         Subjects (random) or survey people (survey).
     workers, scheduler
         Parallel body building (see :mod:`wbsa.parallel`); the table does not depend on them.
+        ``workers`` 0 (or None) means all cores.
+
+    Raises
+    ------
+    WbsaError
+        A negative seed, a density that is not a finite body density (500–2000 kg/m³), a negative
+        worker count, or the kind's own errors.
     """
+    import math
+
     from wbsa.bodies.table import measure_population
+    from wbsa.core.limits import check_seed
+    from wbsa.parallel import resolve_workers
+
+    check_seed(seed, "the population seed")
+    if not (isinstance(density_kg_m3, (int, float)) and math.isfinite(density_kg_m3)
+            and 500.0 <= density_kg_m3 <= 2000.0):
+        raise WbsaError(f"body density must be a finite number in 500–2000 kg/m³, got {density_kg_m3!r}; "
+                        "use e.g. 980 (anny's)")
+    workers = resolve_workers(workers)
 
     if kind == "random":
         from wbsa.bodies.random_population import RandomPopulationSettings, sample_random_parameters

@@ -27,7 +27,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--variations", type=int, default=0, help="(--kind survey) weight/muscle variations per person")
     p.add_argument("--survey-weights", action="store_true", help="(--kind survey) select people by exam weights")
     p.add_argument("--workers", type=int, default=None,
-                   help="worker processes (default: all cores; 1 = in this process)")
+                   help="worker processes (default or 0: all cores; 1 = in this process)")
     p.add_argument("--scheduler", default=None,
                    help="address of an existing dask scheduler (default: $DASK_SCHEDULER_ADDRESS)")
     p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
@@ -45,8 +45,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run_population(args: argparse.Namespace) -> int:
     """Handler of ``wbsa population``."""
-    from wbsa.io import write_table
-    from wbsa.parallel import default_workers
+    from wbsa.io import RUN_LOG_ATTR, write_run_log, write_table
     from wbsa.bodies.build import build_population
 
     out = Path(args.out)
@@ -54,8 +53,10 @@ def run_population(args: argparse.Namespace) -> int:
     df = build_population(kind=args.kind, n=args.n, seed=args.seed, density_kg_m3=args.density,
                           params_path=args.params, variations=args.variations,
                           survey_weights=args.survey_weights, show_progress=args.progress,
-                          workers=args.workers or default_workers(), scheduler=args.scheduler)
+                          workers=args.workers, scheduler=args.scheduler)
     write_table(df, out, fmt)
+    if df.attrs.get(RUN_LOG_ATTR):
+        write_run_log(df.attrs[RUN_LOG_ATTR], out)
     print(f"wrote {len(df)} subjects to {out}")
     return 0
 

@@ -16,6 +16,7 @@ import numpy as np
 
 from wbsa.core.frame import DepthFrame
 from wbsa.errors import WbsaError
+from wbsa.core.mesh_io import quiet_stderr
 from wbsa.core.ply import check_ply, empty_point_cloud_ply
 from wbsa.io import atomic_path, os_error_message, write_bytes, write_json
 
@@ -58,7 +59,7 @@ def write_point_cloud(frame: DepthFrame, path: str | os.PathLike,
     cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
     cloud.normals = o3d.utility.Vector3dVector(normals)
     n = len(points)
-    with atomic_path(path, keep_suffix=True, verify=lambda tmp: check_ply(tmp, n)) as tmp:
+    with atomic_path(path, keep_suffix=True, verify=lambda tmp: check_ply(tmp, n)) as tmp, quiet_stderr():
         if not o3d.io.write_point_cloud(str(tmp), cloud, write_ascii=False):
             raise WbsaError(f"open3d could not write {path}; check the disk and the folder")
     return path

@@ -24,7 +24,7 @@ _SUSPICIOUS_SIZE_M = 20.0
 
 
 @contextlib.contextmanager
-def _quiet_stderr() -> Iterator[None]:
+def quiet_stderr() -> Iterator[None]:
     """Silence C-level messages on file descriptor 2 (Open3D's file readers print their own errors)."""
     fd = 2
     try:
@@ -59,7 +59,7 @@ def read_mesh(path: str | os.PathLike) -> TriangleMesh:
         raise WbsaError(f"cannot read {path.name}: use a mesh file ending in {', '.join(READ_SUFFIXES)}")
     import open3d as o3d
 
-    with _quiet_stderr(), o3d.utility.VerbosityContextManager(o3d.utility.VerbosityLevel.Error):
+    with quiet_stderr(), o3d.utility.VerbosityContextManager(o3d.utility.VerbosityLevel.Error):
         mesh = o3d.io.read_triangle_mesh(str(path), enable_post_processing=False)
     vertices = np.asarray(mesh.vertices, dtype=np.float64)
     faces = np.asarray(mesh.triangles, dtype=np.int64)
@@ -103,7 +103,7 @@ def write_mesh(mesh: TriangleMesh, path: str | os.PathLike) -> Path:
         def verify(tmp: Path) -> None:
             _check_obj(tmp, n_v, n_f)
     with atomic_path(path, keep_suffix=True, verify=verify) as tmp:  # open3d picks the format from the suffix
-        with _quiet_stderr():
+        with quiet_stderr():
             ok = o3d.io.write_triangle_mesh(str(tmp), m, write_ascii=False, write_vertex_normals=False,
                                             write_vertex_colors=False)
         for extra in tmp.parent.glob(tmp.stem + "*.mtl"):

@@ -121,7 +121,7 @@ class _Builder:
         self.dpi = int(settings.dpi)
         self.unavailable: dict[str, str] = {}
         manifest = data.sources.manifest
-        title = manifest.get("study", {}).get("name") or f"wbsa report: {data.sources.fit_dir}"
+        title = str(manifest.get("study", {}).get("name") or f"wbsa report: {data.sources.fit_dir}")
         self.page = Page(title=title, subtitle=(
             f"Generated {time.strftime('%Y-%m-%d %H:%M')} by wbsa {__version__} from "
             f"{data.sources.study_dir or data.sources.fit_dir}. Areas in figures are in dm² (1 m² = 100 dm², the "
@@ -418,7 +418,8 @@ def stage_table(sources: ReportSources) -> pd.DataFrame:
                      "this_run_s": sources.manifest.get("seconds"), "reused": False, "result": ""})
         return pd.DataFrame(rows)
     rows = [{"stage": r.get("label", r.get("stage")), "folder": f"{r.get('stage')}-{r.get('key')}",
-             "computed_in_s": r.get("seconds"), "result": r.get("info", {}).get("summary", "")}
+             "computed_in_s": r.get("seconds"),
+             "result": r["info"].get("summary", "") if isinstance(r.get("info"), dict) else ""}
             for r in sources.stage_records]
     if not rows:
         rows = [{"stage": "fit", "folder": str(sources.fit_dir), "computed_in_s": np.nan, "result": ""}]

@@ -222,9 +222,11 @@ def _population_stage(settings: StudySettings, out: Path, workers: int, schedule
     write_table(df, stage.path / "population.parquet")
     seconds = time.perf_counter() - t
     summary = f"{len(df)} {cfg.kind} subjects"
+    from wbsa.io import RUN_LOG_ATTR
+
     stage.finish(seconds, {"population": "population.parquet"},
                  {"summary": summary, "n_subjects": len(df), "subjects_per_s": len(df) / seconds if seconds else None,
-                  "workers": workers})
+                  "workers": workers, **({"run_log": df.attrs[RUN_LOG_ATTR]} if RUN_LOG_ATTR in df.attrs else {})})
     return StageRun("population", stage, False, seconds, seconds, summary)
 
 

@@ -11,7 +11,7 @@ Every artefact wbsa writes goes through :func:`atomic_path`:
 
 A crash, a ``kill -9`` or a full disk therefore never leaves a file under a final name that is not
 complete; the temporary files it leaves carry the writer's process id and are deleted by the next
-writer of that folder (:func:`remove_stale_temporaries`) once that process is gone. Files that only
+writer of that file or folder (:func:`remove_stale_temporaries`) once that process is gone. Files that only
 make sense together (the outputs of ``wbsa fit``, the top of a study folder) are written into a
 staging folder and moved in as a group with a marker file last (:func:`staged_files`); readers
 require the marker. Operating-system errors (disk full, permissions, read-only file systems) become
@@ -22,6 +22,7 @@ one-line :class:`~wbsa.errors.WbsaError` messages naming the path and the fix
 from __future__ import annotations
 
 import errno
+import glob
 import json
 import os
 import re
@@ -145,6 +146,7 @@ def atomic_path(final: str | os.PathLike, keep_suffix: bool = False,
     _mkdir(parent)
     if final.is_dir():
         raise WbsaError(f"output path {final} is a folder; give a file name")
+    _remove_stale(parent.glob(f".{glob.escape(final.name)}.*{TEMP_SUFFIX}*"))  # left by killed writers of final
     tmp = _temp_name(final, keep_suffix)
     try:
         os.close(os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))  # the umask applies, as for open()
@@ -351,8 +353,12 @@ def remove_stale_temporaries(folder: str | os.PathLike, *, all_of_them: bool = F
     folder = Path(folder)
     if not folder.is_dir():
         return 0
+    return _remove_stale(folder.iterdir(), all_of_them)
+
+
+def _remove_stale(entries, all_of_them: bool = False) -> int:
     removed = 0
-    for entry in folder.iterdir():
+    for entry in entries:
         name = entry.name
         if not (name.startswith(".") and TEMP_SUFFIX in name):
             continue
@@ -364,10 +370,13 @@ def remove_stale_temporaries(folder: str | os.PathLike, *, all_of_them: bool = F
             stale = all_of_them
         if not stale:
             continue
-        if entry.is_dir() and not entry.is_symlink():
-            shutil.rmtree(entry, ignore_errors=True)
-        else:
-            entry.unlink(missing_ok=True)
+        try:
+            if entry.is_dir() and not entry.is_symlink():
+                shutil.rmtree(entry, ignore_errors=True)
+            else:
+                entry.unlink(missing_ok=True)
+        except OSError:  # not ours to delete (permissions): leave it
+            continue
         removed += 1
     return removed
 

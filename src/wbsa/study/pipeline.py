@@ -243,6 +243,9 @@ def _scan_stage(settings: StudySettings, out: Path, distance_m: float, pop: Stag
     result = scan_population(pop.path / "population.parquet", ss, stage.path, workers=workers, scheduler=scheduler,
                              chunk_fn=chunk_fn, show_progress=show_progress)
     seconds = time.perf_counter() - t
+    if result.n_views_invalid == len(result.table):
+        raise WbsaError(f"at {distance_m:g} m every view puts the camera inside the body (nothing to fit); "
+                        "use larger [scan] distances_m")
     n_subjects = int(result.table["subject_id"].nunique())
     rate = result.n_views_scanned / result.seconds if result.seconds > 0 else float("nan")
     in_frame = float(result.table["fits_in_frame"].mean()) if "fits_in_frame" in result.table else float("nan")

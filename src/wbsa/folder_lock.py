@@ -56,6 +56,8 @@ def folder_lock(folder: str | os.PathLike, what: str = "output folder") -> Itera
     from wbsa.io import os_error_message
 
     folder = Path(folder)
+    if folder.exists() and not folder.is_dir():
+        raise WbsaError(f"{what} {folder} is a file; give a folder")
     try:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as exc:

@@ -119,13 +119,8 @@ class Stage:
             Output name -> path relative to the stage folder.
         info : dict, optional
             Anything else worth keeping (counts, rates).
-
-        Raises
-        ------
-        FileNotFoundError
-            If an output is missing (a bug in the stage).
         """
-        sizes = {rel: (self.path / rel).stat().st_size for rel in outputs.values()}
+        sizes = {rel: (self.path / rel).stat().st_size for rel in outputs.values() if (self.path / rel).is_file()}
         doc = {"stage": self.name, "key": self.key, "format": STAGE_FORMAT, "settings": self.settings,
                "inputs": self.inputs, "outputs": outputs, "sizes": sizes, "seconds": float(seconds),
                "info": info or {},

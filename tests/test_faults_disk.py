@@ -2,7 +2,7 @@
 
 As root (the build machine) the disk is a small tmpfs filled up to the free space each case asks for,
 so the real writers (pyarrow, openpyxl, PIL, matplotlib, Open3D) meet a real ENOSPC part-way through
-their files. Without root (CI) the disk is simulated: :func:`wbsa.io.atomic_path`'s sync step raises
+their files. Without root (CI) the disk is simulated: :func:`wbsa.atomic.atomic_path`'s sync step raises
 ENOSPC once the bytes written exceed the budget, which checks the error path but not Open3D's silent
 failures. Each case ends with exit 0 and complete files, or exit 2 and one line naming the path and
 the fix; in both cases every file under a final name reads back whole and no temporary file is left.
@@ -55,10 +55,10 @@ class Disk:
                     except OSError:
                         break
         else:
-            import wbsa.io
+            import wbsa.atomic
 
             budget = {"left": free}
-            real_sync = wbsa.io._sync
+            real_sync = wbsa.atomic._sync
 
             def sync_within_budget(tmp: Path) -> None:
                 budget["left"] -= tmp.stat().st_size
@@ -66,7 +66,7 @@ class Disk:
                     raise OSError(errno.ENOSPC, "No space left on device", str(tmp))
                 real_sync(tmp)
 
-            self.monkeypatch.setattr(wbsa.io, "_sync", sync_within_budget)
+            self.monkeypatch.setattr(wbsa.atomic, "_sync", sync_within_budget)
         out = self.path / "out"
         out.mkdir(exist_ok=True)
         return out

@@ -53,7 +53,7 @@ def folder_lock(folder: str | os.PathLike, what: str = "output folder") -> Itera
     WbsaError
         If another process holds the lock, or the folder cannot be created.
     """
-    from wbsa.io import os_error_message
+    from wbsa.atomic import os_error_message
 
     folder = Path(folder)
     if folder.exists() and not folder.is_dir():

@@ -38,7 +38,7 @@ OUTPUT_FILES: dict[str, str] = {
     "run_log": "run_log.json",
     "info": "fit_info.json",
 }
-#: The marker of a complete fit folder: written last; readers require it (:func:`wbsa.io.staged_files`).
+#: The marker of a complete fit folder: written last; readers require it (:func:`wbsa.atomic.staged_files`).
 MARKER = OUTPUT_FILES["info"]
 
 
@@ -65,7 +65,7 @@ def write_outputs(out: FitOutput, population: pd.DataFrame, scan: pd.DataFrame, 
     ``inputs`` (e.g. ``{"population": path, "scan": path}``) is recorded in ``fit_info.json`` (relative
     to ``out_dir``) so a report can find the tables the fit came from. The files are written into a
     staging folder and moved into ``out_dir`` together, ``fit_info.json`` last
-    (:func:`wbsa.io.staged_files`): a refit that fails part-way leaves the previous outputs as they
+    (:func:`wbsa.atomic.staged_files`): a refit that fails part-way leaves the previous outputs as they
     were, and a folder without ``fit_info.json`` is not a finished fit. The run time goes to
     ``run_log.json``, so the other files depend only on the inputs and the settings.
 

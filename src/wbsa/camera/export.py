@@ -1,7 +1,7 @@
 """Files of one rendered view: depth PNG, point cloud, visible triangles, camera JSON, preview.
 
 Every file is written under a temporary name beside its final one, checked (the PLY's size and
-counts, the PNGs decoded) and renamed when complete (:func:`wbsa.io.atomic_path`), so an interrupted
+counts, the PNGs decoded) and renamed when complete (:func:`wbsa.atomic.atomic_path`), so an interrupted
 run or a full disk never leaves a half-written file under a final name. ``view.json`` is written
 last: a view folder is complete when it exists.
 """

@@ -9,7 +9,7 @@ import numpy as np
 
 from wbsa.core.limits import check_image_size
 from wbsa.errors import WbsaError
-from wbsa.io import atomic_path, png_verifier
+from wbsa.atomic import atomic_path, png_verifier
 
 #: Units per metre of the usual depth PNG (OpenNI / Kinect SDK / Open3D); TUM RGB-D uses 5000.
 MM_PER_M = 1000.0

@@ -13,7 +13,7 @@ import numpy as np
 from wbsa.core.mesh import TriangleMesh
 from wbsa.core.ply import check_ply
 from wbsa.errors import WbsaError
-from wbsa.io import atomic_path
+from wbsa.atomic import atomic_path
 
 #: File types :func:`write_mesh` writes.
 WRITE_SUFFIXES = (".ply", ".obj")

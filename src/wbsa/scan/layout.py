@@ -8,7 +8,7 @@
     DIR/scan.parquet         all parts, sorted by (subject_id, azimuth_deg, elevation_deg, distance_m)
     DIR/.wbsa.lock           the folder's write lock (:mod:`wbsa.folder_lock`)
 
-A part exists only when its chunk finished (``wbsa.io.atomic_path`` renames it into place), so a
+A part exists only when its chunk finished (``wbsa.atomic.atomic_path`` renames it into place), so a
 killed run leaves finished parts and at most some ``.part-*.part`` temporary files, which the
 next run deletes before it scans the missing chunks. Every part carries in its Parquet metadata
 (key ``wbsa.scan_part``) the scan's settings hash, its chunk (first and last subject id, subject

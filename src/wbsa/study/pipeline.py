@@ -18,7 +18,7 @@ Each stage folder is addressed by the hash of its settings and of its inputs' ke
 stage's settings, redoes only what changed. Every stage is self-describing: it is built from its own
 settings and the folders of its input stages, never from the top-level files, which belong to the last
 run that finished. Those top-level files are replaced as a group when a run finishes, ``study.json``
-last (:func:`wbsa.io.staged_files`), so a run that fails leaves the previous ones as they were.
+last (:func:`wbsa.atomic.staged_files`), so a run that fails leaves the previous ones as they were.
 
 One run at a time writes a study folder: :func:`run_study` holds the folder's lock
 (:mod:`wbsa.folder_lock`) and a second run on the same folder stops with a one-line error.

@@ -191,6 +191,22 @@ def test_report_on_a_hand_edited_study_json_is_one_line(study, tmp_path, edit, f
     assert not (folder / "report.html").exists()
 
 
+@pytest.mark.parametrize("edit,fragment", [
+    (lambda i: [i], "is not a JSON object"),
+    (lambda i: {**i, "settings": 5}, "'settings' is not an object"),
+    (lambda i: {**i, "settings": {**i["settings"], "models": "linear"}}, "'models' is not a list"),
+    (lambda i: {**i, "settings": {**i["settings"], "group_spec": {"tallest": 2.5}}}, "'group_spec' is not valid"),
+])
+def test_report_on_a_hand_edited_fit_info_is_one_line(tables, tmp_path, edit, fragment):
+    import shutil
+
+    fit = tmp_path / "fit"
+    shutil.copytree(tables / "fit", fit)
+    (fit / "fit_info.json").write_text(json.dumps(edit(json.loads((fit / "fit_info.json").read_text()))))
+    code, _, err = run_cli("report", fit, "--population", tables / "pop.parquet", "--scan", tables / "scan.parquet")
+    assert_one_line_error(code, err, fragment)
+
+
 def test_report_refuses_a_stage_that_did_not_finish(study, tmp_path):
     import shutil
 

@@ -257,6 +257,23 @@ def test_a_run_log_never_goes_into_a_data_file(tmp_path):
     assert df.attrs[RUN_LOG_ATTR] == {"seconds": 9.5}  # the caller's frame is untouched
 
 
+def test_a_fit_folder_has_the_same_bytes_on_every_run(tables, tmp_path):
+    """No timings or absolute paths in the fit's files (XLSX dates included); the run time is in run_log.json."""
+    import time
+
+    runs = []
+    for name in ("a", "b"):
+        out = tmp_path / name / "fit"
+        assert run_cli("fit", tables / "pop.parquet", tables / "scan.parquet", "--out", out, "--k", "3",
+                       "--groups", "all")[0] == 0
+        runs.append({p.name: p.read_bytes() for p in out.iterdir()})
+        time.sleep(2.1)  # ZIP entry times have a 2-second resolution
+    a, b = runs
+    assert set(a) == set(b) and "run_log.json" in a
+    assert [name for name in a if a[name] != b[name]] == ["run_log.json"]
+    assert str(tmp_path) not in a["fit_info.json"].decode()
+
+
 @pytest.mark.slow
 def test_survey_population_bytes_are_the_same_on_every_run(tmp_path):
     """Issue 12 item 7: the survey table's Parquet metadata held the run's timings."""

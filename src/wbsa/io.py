@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import shutil
 from pathlib import Path
 from typing import Literal
@@ -69,6 +70,7 @@ def write_table(df: pd.DataFrame, path: str | os.PathLike, fmt: TableFormat | No
         with atomic_path(path, verify=_nonempty) as tmp:
             with pd.ExcelWriter(tmp, engine="openpyxl") as writer:
                 df.to_excel(writer, index=False)
+            _without_timestamps(tmp)
     else:
         raise WbsaError(f"unknown table format {fmt!r}; use parquet, csv or xlsx")
     return path
@@ -85,7 +87,33 @@ def write_sheets(sheets: dict[str, pd.DataFrame], path: str | os.PathLike) -> Pa
         with pd.ExcelWriter(tmp, engine="openpyxl") as writer:
             for name, df in sheets.items():
                 df.to_excel(writer, sheet_name=str(name)[:31], index=False)
+        _without_timestamps(tmp)
     return Path(path)
+
+
+#: The fixed time of every entry of an XLSX file wbsa writes (the ZIP format's epoch).
+_ZIP_EPOCH = (1980, 1, 1, 0, 0, 0)
+_CORE_TIMES = re.compile(rb"(<dcterms:(created|modified)[^>]*>)[^<]*(</dcterms:\2>)")
+
+
+def _without_timestamps(path: Path) -> None:
+    """Rewrite an XLSX (a ZIP) with fixed entry times and document dates, so equal tables give equal bytes.
+
+    openpyxl stamps the workbook's creation and modification time into ``docProps/core.xml`` and the
+    ZIP entries carry the time they were written.
+    """
+    import zipfile
+
+    with zipfile.ZipFile(path) as zin:
+        entries = [(info, zin.read(info.filename)) for info in zin.infolist()]
+    with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as zout:
+        for info, data in entries:
+            if info.filename == "docProps/core.xml":
+                data = _CORE_TIMES.sub(rb"\g<1>2000-01-01T00:00:00Z\g<3>", data)
+            fixed = zipfile.ZipInfo(info.filename, date_time=_ZIP_EPOCH)
+            fixed.compress_type = zipfile.ZIP_DEFLATED
+            fixed.external_attr = info.external_attr
+            zout.writestr(fixed, data)
 
 
 def write_json(obj: object, path: str | os.PathLike) -> Path:

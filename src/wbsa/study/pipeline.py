@@ -40,7 +40,8 @@ from wbsa.analysis.data import reference_distance
 from wbsa.core.versions import package_versions
 from wbsa.errors import WbsaError
 from wbsa.folder_lock import folder_lock
-from wbsa.io import copy_file, os_error_message, remove_stale_temporaries, staged_files, write_json, write_text
+from wbsa.io import (RUN_LOG_ATTR, copy_file, os_error_message, remove_stale_temporaries, staged_files, write_json,
+                     write_text)
 from wbsa.study.settings import StudySettings, camera_spec, fit_settings, scan_settings
 from wbsa.study.stages import Stage
 
@@ -222,8 +223,6 @@ def _population_stage(settings: StudySettings, out: Path, workers: int, schedule
     write_table(df, stage.path / "population.parquet")
     seconds = time.perf_counter() - t
     summary = f"{len(df)} {cfg.kind} subjects"
-    from wbsa.io import RUN_LOG_ATTR
-
     stage.finish(seconds, {"population": "population.parquet"},
                  {"summary": summary, "n_subjects": len(df), "subjects_per_s": len(df) / seconds if seconds else None,
                   "workers": workers, **({"run_log": df.attrs[RUN_LOG_ATTR]} if RUN_LOG_ATTR in df.attrs else {})})

@@ -121,6 +121,18 @@ def write_json(obj: object, path: str | os.PathLike) -> Path:
     return write_text(json.dumps(obj, indent=2, default=_json_default) + "\n", path)
 
 
+def relative_path(path: str | os.PathLike, start: str | os.PathLike) -> str:
+    """``path`` relative to the folder ``start``, with ``/`` separators, for recording inputs in a file.
+
+    A data file never holds an absolute path: a relative one still leads to the input when the whole
+    tree is moved or shared. On another drive (Windows) the absolute path is the only answer.
+    """
+    try:
+        return Path(os.path.relpath(Path(path).resolve(), Path(start).resolve())).as_posix()
+    except ValueError:
+        return str(Path(path).resolve())
+
+
 def write_run_log(log: dict, data_path: str | os.PathLike) -> Path:
     """Write the run information of a data file (timings) beside it as ``<name>.log.json``."""
     data_path = Path(data_path)

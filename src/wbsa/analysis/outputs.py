@@ -16,7 +16,7 @@ from wbsa.analysis.formulae_comparison import compare_formulae
 from wbsa.analysis.groups import COMPARISON_GROUPS
 from wbsa.analysis.summary import model_comparison, model_summary
 from wbsa.errors import WbsaError
-from wbsa.io import read_table, staged_files, write_json, write_sheets, write_table
+from wbsa.io import read_table, relative_path, staged_files, write_json, write_sheets, write_table
 
 #: Output files of :func:`run_fit`, by key (relative to the output folder).
 OUTPUT_FILES: dict[str, str] = {
@@ -108,15 +108,8 @@ def _write_all(out: FitOutput, population: pd.DataFrame, stage: Path, settings: 
                p["run_log"])
     write_json({"settings": settings.to_dict(), "info": {k: v for k, v in out.info.items() if k != "seconds"},
                 "files": {k: v.name for k, v in p.items()},
-                "inputs": {k: _relative(v, out_dir) for k, v in inputs.items()}}, p["info"])
+                "inputs": {k: relative_path(v, out_dir) for k, v in inputs.items()}}, p["info"])
 
-
-def _relative(path: str | os.PathLike, start: Path) -> str:
-    """``path`` relative to ``start`` (so a moved folder tree still finds its inputs), POSIX separators."""
-    try:
-        return Path(os.path.relpath(Path(path).resolve(), start.resolve())).as_posix()
-    except ValueError:  # another drive (Windows)
-        return str(Path(path).resolve())
 
 
 def run_fit(population_path: str | os.PathLike, scan_path: str | os.PathLike, out_dir: str | os.PathLike,

@@ -30,7 +30,7 @@ import pandas as pd
 from wbsa import __version__
 from wbsa.errors import WbsaError
 from wbsa.folder_lock import folder_lock
-from wbsa.io import write_json, write_table
+from wbsa.io import relative_path, write_json, write_table
 from wbsa.parallel import resolve_scheduler, resolve_workers
 from wbsa.progress import progress
 from wbsa.scan.layout import (INTRINSICS_FILE, SORT_COLUMNS, TABLE_FILE, Chunk, assemble_table, check_parts,
@@ -123,7 +123,7 @@ def scan_population(population: pd.DataFrame | str | os.PathLike, settings: Scan
     doc = {
         "settings_hash": settings_hash(settings, fingerprint),
         "settings": settings.to_dict(),
-        "population": {"path": _relative(population_path, out_dir) if population_path else None,
+        "population": {"path": relative_path(population_path, out_dir) if population_path else None,
                        "n_subjects": len(subjects), "fingerprint": fingerprint},
         "camera": settings.camera_name,
         "n_views": len(settings.views),
@@ -157,14 +157,6 @@ def scan_population(population: pd.DataFrame | str | os.PathLike, settings: Scan
     n_invalid = int(table["camera_inside"].fillna(False).astype(bool).sum()) if "camera_inside" in table else 0
     return ScanResult(table=table, path=path, n_chunks=len(chunks), n_resumed=len(chunks) - len(todo),
                       n_views_scanned=n_views_todo, seconds=time.perf_counter() - t0, n_views_invalid=n_invalid)
-
-
-def _relative(path: Path, start: Path) -> str:
-    """``path`` relative to ``start`` (no absolute paths in the scan's files), POSIX separators."""
-    try:
-        return Path(os.path.relpath(path.resolve(), start.resolve())).as_posix()
-    except ValueError:  # another drive (Windows)
-        return str(path)
 
 
 def _part_writer(out_dir: Path, settings_hash: str, bar) -> Callable[[Chunk, pd.DataFrame], None]:

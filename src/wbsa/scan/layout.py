@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -40,7 +39,6 @@ PARTS_DIR = "parts"
 SORT_COLUMNS = ("subject_id", "azimuth_deg", "elevation_deg", "distance_m")
 #: Parquet metadata key of a part's identity (settings hash, chunk, rows).
 PART_METADATA_KEY = b"wbsa.scan_part"
-_PART_NAME = re.compile(r"^part-(\d+)-(\d+)\.parquet$")
 
 
 @dataclass(frozen=True)

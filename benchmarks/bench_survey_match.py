@@ -59,7 +59,7 @@ def main(argv: list[str] | None = None) -> int:
                                         show_progress=False, settings=settings,
                                         composition=CompositionSettings(model=args.density_model, seed=args.seed))
     wall, cpu = time.perf_counter() - t0, time.process_time() - c0
-    s = table.attrs["survey"]
+    s = {**table.attrs["survey"], **table.attrs["run_log"]}
     if args.out:
         table.to_parquet(args.out, index=False)
 

@@ -2,8 +2,9 @@
 
 Each pipeline stage registers its own subcommands from a small ``command`` module
 (``wbsa.<stage>.command.register(subparsers)``) that imports heavy libraries only
-inside its handler, so ``wbsa bsa`` starts fast. Every :class:`~wbsa.errors.WbsaError`
-becomes one line on stderr and exit status 2.
+inside its handler, so ``wbsa bsa`` starts fast. Every :class:`~wbsa.errors.WbsaError`, and any
+operating-system error (disk full, permissions) or ``MemoryError`` that reaches it, becomes one line
+on stderr and exit status 2.
 """
 
 from __future__ import annotations
@@ -71,7 +72,22 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         sys.stderr.write("interrupted: finished parts are kept; run the same command again to resume\n")
         return 130
+    except OSError as exc:  # a disk or permission error a writer did not name itself
+        from wbsa.io import os_error_message
+
+        sys.stderr.write(f"error: {os_error_message(exc, action=_os_action(exc))}\n")
+        return 2
+    except MemoryError:
+        sys.stderr.write("error: out of memory; use smaller inputs (fewer subjects, smaller images or camera "
+                         "resolution) or a machine with more memory\n")
+        return 2
     return int(result or 0)
+
+
+def _os_action(exc: OSError) -> str:
+    import errno
+
+    return "write" if exc.errno in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EROFS) else "access"
 
 
 if __name__ == "__main__":  # pragma: no cover

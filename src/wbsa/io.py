@@ -1,87 +1,142 @@
-"""File I/O at the edges of the pipeline: atomic writes and validated table reads."""
+"""File I/O at the edges of the pipeline: table, JSON and text writers on the one verified write path.
+
+Every writer here goes through :func:`wbsa.atomic.atomic_path` (temporary file, fsync, size and
+re-read checks, rename; see that module and docs/reliability.md), re-exported here with the other
+pieces of that path so callers need one import. :func:`read_table` reads and validates tables.
+"""
 
 from __future__ import annotations
 
 import json
 import os
-import tempfile
-from contextlib import contextmanager
+import re
+import shutil
 from pathlib import Path
-from typing import Iterator, Literal
+from typing import Literal
 
 import pandas as pd
 
+from wbsa.atomic import (TEMP_SUFFIX, atomic_path, default_verifier, os_error_message, parquet_verifier,  # noqa: F401
+                         png_verifier, remove_stale_temporaries, staged_files)
 from wbsa.errors import WbsaError
 
 TableFormat = Literal["parquet", "csv", "xlsx"]
+#: ``df.attrs`` key of run information (timings, hosts) that never goes into a data file.
+RUN_LOG_ATTR = "run_log"
 
 
-@contextmanager
-def atomic_path(final: str | os.PathLike, keep_suffix: bool = False) -> Iterator[Path]:
-    """Yield a temporary path beside ``final``; rename it to ``final`` only on success.
+def write_bytes(data: bytes, path: str | os.PathLike) -> Path:
+    """Write ``data`` atomically (size-checked)."""
+    with atomic_path(path, size=len(data)) as tmp:
+        tmp.write_bytes(data)
+    return Path(path)
 
-    Nothing is left under the final name if the body raises, so a crash or a Ctrl-C
-    never leaves a half-written file that looks finished. ``keep_suffix`` ends the temporary
-    name with ``final``'s suffix, for writers that pick the format by it (Open3D).
-    """
-    final = Path(final)
-    parent = final.parent if str(final.parent) else Path(".")
+
+def write_text(text: str, path: str | os.PathLike) -> Path:
+    """Write ``text`` atomically as UTF-8 (size-checked)."""
+    return write_bytes(text.encode("utf-8"), path)
+
+
+def copy_file(src: str | os.PathLike, dst: str | os.PathLike) -> Path:
+    """Copy ``src`` to ``dst`` atomically (size-checked, re-read by the suffix's verifier)."""
+    src = Path(src)
     try:
-        parent.mkdir(parents=True, exist_ok=True)
+        size = src.stat().st_size
     except OSError as exc:
-        raise WbsaError(f"cannot create output folder {parent}: {exc.strerror}; choose a writable --out") from None
-    if final.is_dir():
-        raise WbsaError(f"output path {final} is a folder; give a file name")
-    try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{final.name}.", suffix=".part" + (final.suffix if keep_suffix else ""),
-                                   dir=parent)
-    except OSError as exc:
-        raise WbsaError(f"cannot write to {parent}: {exc.strerror}; choose a writable --out") from None
-    os.close(fd)
-    tmp_path = Path(tmp)
-    try:
-        yield tmp_path
-        if tmp_path.exists():  # mkstemp makes 0600 files; give the result the usual umask mode
-            umask = os.umask(0)
-            os.umask(umask)
-            os.chmod(tmp_path, 0o666 & ~umask)
-        os.replace(tmp_path, final)
-    except BaseException:
-        tmp_path.unlink(missing_ok=True)
-        raise
+        raise WbsaError(os_error_message(exc, src, "read")) from None
+    with atomic_path(dst, size=size) as tmp:
+        shutil.copyfile(src, tmp)
+    return Path(dst)
 
 
 def write_table(df: pd.DataFrame, path: str | os.PathLike, fmt: TableFormat | None = None) -> Path:
-    """Write ``df`` atomically as Parquet, CSV or XLSX (format from ``fmt`` or the suffix)."""
+    """Write ``df`` atomically as Parquet, CSV or XLSX (format from ``fmt`` or the suffix).
+
+    ``df.attrs`` go into a Parquet file's metadata, except :data:`RUN_LOG_ATTR` (timings): a data file
+    holds only what the inputs and settings decide, so the same run gives the same bytes.
+    """
     path = Path(path)
     fmt = fmt or _format_from_suffix(path)
-    with atomic_path(path) as tmp:
-        if fmt == "parquet":
+    if RUN_LOG_ATTR in df.attrs:
+        df = df.copy(deep=False)
+        df.attrs = {k: v for k, v in df.attrs.items() if k != RUN_LOG_ATTR}
+    if fmt == "parquet":
+        with atomic_path(path, verify=parquet_verifier(len(df))) as tmp:
             df.to_parquet(tmp, index=False)
-        elif fmt == "csv":
+    elif fmt == "csv":
+        with atomic_path(path, verify=_nonempty) as tmp:
             df.to_csv(tmp, index=False)
-        elif fmt == "xlsx":
+    elif fmt == "xlsx":
+        with atomic_path(path, verify=_nonempty) as tmp:
             with pd.ExcelWriter(tmp, engine="openpyxl") as writer:
                 df.to_excel(writer, index=False)
-        else:
-            raise WbsaError(f"unknown table format {fmt!r}; use parquet, csv or xlsx")
+            _without_timestamps(tmp)
+    else:
+        raise WbsaError(f"unknown table format {fmt!r}; use parquet, csv or xlsx")
     return path
+
+
+def _nonempty(tmp: Path) -> None:
+    if tmp.stat().st_size == 0:
+        raise WbsaError("the file is empty")
 
 
 def write_sheets(sheets: dict[str, pd.DataFrame], path: str | os.PathLike) -> Path:
     """Write several tables atomically as one XLSX workbook, one sheet per key."""
-    with atomic_path(path) as tmp:
+    with atomic_path(path, verify=_nonempty) as tmp:
         with pd.ExcelWriter(tmp, engine="openpyxl") as writer:
             for name, df in sheets.items():
                 df.to_excel(writer, sheet_name=str(name)[:31], index=False)
+        _without_timestamps(tmp)
     return Path(path)
+
+
+#: The fixed time of every entry of an XLSX file wbsa writes (the ZIP format's epoch).
+_ZIP_EPOCH = (1980, 1, 1, 0, 0, 0)
+_CORE_TIMES = re.compile(rb"(<dcterms:(created|modified)[^>]*>)[^<]*(</dcterms:\2>)")
+
+
+def _without_timestamps(path: Path) -> None:
+    """Rewrite an XLSX (a ZIP) with fixed entry times and document dates, so equal tables give equal bytes.
+
+    openpyxl stamps the workbook's creation and modification time into ``docProps/core.xml`` and the
+    ZIP entries carry the time they were written.
+    """
+    import zipfile
+
+    with zipfile.ZipFile(path) as zin:
+        entries = [(info, zin.read(info.filename)) for info in zin.infolist()]
+    with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as zout:
+        for info, data in entries:
+            if info.filename == "docProps/core.xml":
+                data = _CORE_TIMES.sub(rb"\g<1>2000-01-01T00:00:00Z\g<3>", data)
+            fixed = zipfile.ZipInfo(info.filename, date_time=_ZIP_EPOCH)
+            fixed.compress_type = zipfile.ZIP_DEFLATED
+            fixed.external_attr = info.external_attr
+            zout.writestr(fixed, data)
 
 
 def write_json(obj: object, path: str | os.PathLike) -> Path:
     """Write ``obj`` atomically as indented JSON."""
-    with atomic_path(path) as tmp:
-        tmp.write_text(json.dumps(obj, indent=2, default=_json_default) + "\n")
-    return Path(path)
+    return write_text(json.dumps(obj, indent=2, default=_json_default) + "\n", path)
+
+
+def relative_path(path: str | os.PathLike, start: str | os.PathLike) -> str:
+    """``path`` relative to the folder ``start``, with ``/`` separators, for recording inputs in a file.
+
+    A data file never holds an absolute path: a relative one still leads to the input when the whole
+    tree is moved or shared. On another drive (Windows) the absolute path is the only answer.
+    """
+    try:
+        return Path(os.path.relpath(Path(path).resolve(), Path(start).resolve())).as_posix()
+    except ValueError:
+        return str(Path(path).resolve())
+
+
+def write_run_log(log: dict, data_path: str | os.PathLike) -> Path:
+    """Write the run information of a data file (timings) beside it as ``<name>.log.json``."""
+    data_path = Path(data_path)
+    return write_json(log, data_path.with_name(data_path.name + ".log.json"))
 
 
 def _json_default(o: object) -> object:
@@ -114,6 +169,8 @@ def read_table(path: str | os.PathLike, required: list[str] | tuple[str, ...] = 
             df = pd.read_csv(path)
         else:
             df = pd.read_parquet(path)
+    except MemoryError:
+        raise WbsaError(f"{path} does not fit in memory; give a smaller {what}") from None
     except Exception as exc:  # pyarrow raises many types for corrupt files
         raise WbsaError(f"{path} is not a readable Parquet {what} ({type(exc).__name__}); regenerate it with wbsa") from None
     missing = [c for c in required if c not in df.columns]

@@ -28,6 +28,25 @@ def default_workers() -> int:
         return os.cpu_count() or 1
 
 
+def resolve_workers(workers: int | None) -> int:
+    """The worker count of a ``--workers`` value: None or 0 = all cores (:func:`default_workers`), else itself.
+
+    Raises
+    ------
+    WbsaError
+        If ``workers`` is negative or not a whole number.
+    """
+    if workers is None:
+        return default_workers()
+    try:
+        n = int(workers)
+    except (TypeError, ValueError):
+        raise WbsaError(f"workers must be a whole number (0 = all cores), got {workers!r}") from None
+    if n != workers or n < 0:
+        raise WbsaError(f"workers must be 0 (all cores) or more, got {workers}")
+    return default_workers() if n == 0 else n
+
+
 def resolve_scheduler(scheduler: str | None) -> str | None:
     """The scheduler address to use: ``scheduler``, else ``$DASK_SCHEDULER_ADDRESS``, else None (local)."""
     return scheduler or os.environ.get(SCHEDULER_ENV) or None
@@ -166,4 +185,4 @@ class RunSettings:
     @property
     def n_workers(self) -> int:
         """``workers`` with 0 resolved to the cores this process may use."""
-        return default_workers() if self.workers == 0 else self.workers
+        return resolve_workers(self.workers)

@@ -27,7 +27,7 @@ import pandas as pd
 
 from wbsa.analysis.design import design_matrix, from_model_scale, weights
 from wbsa.errors import WbsaError
-from wbsa.io import atomic_path
+from wbsa.io import write_text
 
 FORMAT = "wbsa-model"
 VERSION = 1
@@ -95,13 +95,19 @@ class WbsaModel:
         head = json.dumps({"format": FORMAT, "version": VERSION, "meta": self.meta}, indent=2, default=_json_default)
         lines = [json.dumps({f: e[f] for f in _ENTRY_FIELDS}, default=_json_default) for e in self.entries]
         text = head[:-2] + ',\n  "entries": [\n    ' + ",\n    ".join(lines) + "\n  ]\n}\n"
-        with atomic_path(path) as tmp:
-            tmp.write_text(text)
+        write_text(text, path)
         return Path(path)
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> "WbsaModel":
-        """Read a model file written by :meth:`save`."""
+        """Read a model file written by :meth:`save`, checking every number in it.
+
+        Raises
+        ------
+        WbsaError
+            Missing or unreadable file, another format or version, or an entry with a missing field,
+            a non-finite or out-of-range number (NaN coefficients, negative variance, ...).
+        """
         path = Path(path)
         if not path.is_file():
             raise WbsaError(f"model file {path} does not exist; run wbsa fit first")
@@ -110,11 +116,22 @@ class WbsaModel:
         except (json.JSONDecodeError, UnicodeDecodeError) as exc:
             raise WbsaError(f"{path} is not valid JSON ({exc.__class__.__name__}); "
                             "regenerate it with wbsa fit") from None
+        except OSError as exc:
+            from wbsa.io import os_error_message
+
+            raise WbsaError(os_error_message(exc, path, "read")) from None
         if not isinstance(obj, dict) or obj.get("format") != FORMAT:
             raise WbsaError(f"{path} is not a wbsa model file; regenerate it with wbsa fit")
         if obj.get("version") != VERSION:
             raise WbsaError(f"{path} has model format version {obj.get('version')}, this wbsa reads {VERSION}; refit")
-        return cls(entries=list(obj.get("entries", [])), meta=dict(obj.get("meta", {})))
+        entries, meta = obj.get("entries", []), obj.get("meta", {})
+        if not isinstance(entries, list) or not isinstance(meta, dict):
+            raise WbsaError(f"{path}: entries must be a list and meta an object; regenerate it with wbsa fit")
+        for i, e in enumerate(entries):
+            problem = entry_problem(e)
+            if problem:
+                raise WbsaError(f"{path}: entry {i} {problem}; regenerate the file with wbsa fit")
+        return cls(entries=list(entries), meta=dict(meta))
 
     # ------------------------------------------------------------ queries
     def table(self) -> pd.DataFrame:
@@ -230,6 +247,48 @@ class WbsaModel:
                 out[:, rows] = [from_model_scale(entry["model"], v) for v in (mu, mu - half, mu + half)]
         shape = arrays[0].shape
         return tuple(o.reshape(shape) for o in out)  # type: ignore[return-value]
+
+
+def entry_problem(e: object) -> str:
+    """What is wrong with one model-file entry, or ``''`` when nothing is.
+
+    Checks the fields' presence and types, that coefficients, their (X'X)^-1 and the residual
+    variance are finite, that the variance is >= 0 and the degrees of freedom and ``n`` positive,
+    and that the view and distance are finite numbers.
+    """
+    import math
+
+    if not isinstance(e, dict):
+        return "is not an object"
+    missing = [f for f in _ENTRY_FIELDS if f not in e]
+    if missing:
+        return f"lacks {', '.join(missing)}"
+    if not isinstance(e["predictors"], list) or not all(isinstance(p, str) for p in e["predictors"]):
+        return "has predictors that are not a list of names"
+    for key in ("group", "model", "vbsa_column"):
+        if not isinstance(e[key], str):
+            return f"has a {key} that is not a name"
+    for key in ("distance_m", "azimuth_deg", "elevation_deg", "scale"):
+        v = e[key]
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+            return f"has a non-finite or non-numeric {key} ({v!r})"
+    if e["scale"] < 0 or e["distance_m"] <= 0:
+        return f"has a negative residual variance or a non-positive distance ({e['scale']!r}, {e['distance_m']!r})"
+    for key in ("df_resid", "n"):
+        v = e[key]
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not v >= 1 or v != int(v):
+            return f"has {key} = {v!r}, not a whole number >= 1"
+    try:
+        coef = np.asarray(e["coef"], dtype=float)
+        cov = np.asarray(e["cov_unscaled"], dtype=float)
+    except (TypeError, ValueError):
+        return "has coefficients or a covariance that are not numbers"
+    p = len(e["terms"]) if isinstance(e["terms"], list) else -1
+    if coef.shape != (p,) or cov.shape != (p, p):
+        return f"has {coef.size} coefficients and a {cov.shape} covariance for {p} terms"
+    if not (np.isfinite(coef).all() and np.isfinite(cov).all()):
+        return "has non-finite (NaN or infinite) coefficients or covariance"
+    return ""
 
 
 def _json_default(o: object) -> object:

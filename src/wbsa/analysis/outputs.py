@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import time
 from pathlib import Path
 
 import numpy as np
@@ -16,7 +17,7 @@ from wbsa.analysis.formulae_comparison import compare_formulae
 from wbsa.analysis.groups import COMPARISON_GROUPS
 from wbsa.analysis.summary import model_comparison, model_summary
 from wbsa.errors import WbsaError
-from wbsa.io import read_table, write_json, write_sheets, write_table
+from wbsa.io import read_table, relative_path, staged_files, write_json, write_sheets, write_table
 
 #: Output files of :func:`run_fit`, by key (relative to the output folder).
 OUTPUT_FILES: dict[str, str] = {
@@ -35,8 +36,11 @@ OUTPUT_FILES: dict[str, str] = {
     "formulae_parquet": "formulae_comparison.parquet",
     "formulae_csv": "formulae_comparison.csv",
     "formulae_xlsx": "formulae_comparison.xlsx",
+    "run_log": "run_log.json",
     "info": "fit_info.json",
 }
+#: The marker of a complete fit folder: written last; readers require it (:func:`wbsa.atomic.staged_files`).
+MARKER = OUTPUT_FILES["info"]
 
 
 def read_inputs(population_path: str | os.PathLike, scan_path: str | os.PathLike,
@@ -59,8 +63,12 @@ def write_outputs(out: FitOutput, population: pd.DataFrame, scan: pd.DataFrame, 
                   settings: FitSettings, correlation: pd.DataFrame, inputs: dict | None = None) -> dict[str, Path]:
     """Write the fit results, the formulae comparison and the correlation table into ``out_dir``.
 
-    ``inputs`` (e.g. ``{"population": path, "scan": path}``) is recorded in ``fit_info.json`` so a
-    report can find the tables the fit came from.
+    ``inputs`` (e.g. ``{"population": path, "scan": path}``) is recorded in ``fit_info.json`` (relative
+    to ``out_dir``) so a report can find the tables the fit came from. The files are written into a
+    staging folder and moved into ``out_dir`` together, ``fit_info.json`` last
+    (:func:`wbsa.atomic.staged_files`): a refit that fails part-way leaves the previous outputs as they
+    were, and a folder without ``fit_info.json`` is not a finished fit. The run time goes to
+    ``run_log.json``, so the other files depend only on the inputs and the settings.
 
     Returns
     -------
@@ -68,7 +76,14 @@ def write_outputs(out: FitOutput, population: pd.DataFrame, scan: pd.DataFrame, 
         Output key (:data:`OUTPUT_FILES`) -> path written.
     """
     out_dir = Path(out_dir)
-    p = {k: out_dir / v for k, v in OUTPUT_FILES.items()}
+    with staged_files(out_dir, MARKER) as stage:
+        _write_all(out, population, stage, settings, correlation, inputs or {}, out_dir)
+    return {k: out_dir / v for k, v in OUTPUT_FILES.items()}
+
+
+def _write_all(out: FitOutput, population: pd.DataFrame, stage: Path, settings: FitSettings,
+               correlation: pd.DataFrame, inputs: dict, out_dir: Path) -> None:
+    p = {k: stage / v for k, v in OUTPUT_FILES.items()}
     fits = out.fits
     write_table(fits, p["fits_parquet"])
     write_table(fits, p["fits_csv"])
@@ -93,9 +108,12 @@ def write_outputs(out: FitOutput, population: pd.DataFrame, scan: pd.DataFrame, 
     write_table(comparison, p["formulae_parquet"])
     write_table(comparison, p["formulae_csv"])
     write_sheets(_sheets(comparison, COMPARISON_GROUPS), p["formulae_xlsx"])
-    write_json({"settings": settings.to_dict(), "info": out.info, "files": {k: v.name for k, v in p.items()},
-                "inputs": {k: str(Path(v).resolve()) for k, v in (inputs or {}).items()}}, p["info"])
-    return p
+    write_json({"seconds": out.info.get("seconds"), "finished": time.strftime("%Y-%m-%dT%H:%M:%S%z")},
+               p["run_log"])
+    write_json({"settings": settings.to_dict(), "info": {k: v for k, v in out.info.items() if k != "seconds"},
+                "files": {k: v.name for k, v in p.items()},
+                "inputs": {k: relative_path(v, out_dir) for k, v in inputs.items()}}, p["info"])
+
 
 
 def run_fit(population_path: str | os.PathLike, scan_path: str | os.PathLike, out_dir: str | os.PathLike,

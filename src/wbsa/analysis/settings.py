@@ -167,6 +167,7 @@ class FitSettings:
         from wbsa.analysis.data import resolve_vbsa_column
 
         check_field(int(self.k) >= 2, "k", f"must be at least 2 folds (paper: 10), got {self.k}")
+        check_field(isinstance(self.seed, int) and self.seed >= 0, "seed", f"must be a whole number 0 or more, got {self.seed}")
         check_field(int(self.qq_points) >= 2, "qq_points", f"must be at least 2, got {self.qq_points}")
         check_model_kinds(self.models, "models")
         check_group_names(self.groups, "groups")

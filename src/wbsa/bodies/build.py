@@ -44,11 +44,24 @@ def build_population(kind: PopulationKind, n: int | None = None, seed: int = 0, 
         (see :func:`wbsa.bodies.posture_table.add_postures`).
     workers, scheduler
         Parallel body building (see :mod:`wbsa.parallel`); the table does not depend on them.
+        ``workers`` 0 (or None) means all cores.
+
+    Raises
+    ------
+    WbsaError
+        A negative seed, a density that is not a finite body density (500–2000 kg/m³), a negative
+        worker count, or the kind's own errors.
     """
     from wbsa.bodies.posture import PostureSettings
     from wbsa.bodies.posture_table import add_postures
 
-    postures = PostureSettings(posture, seed)  # checked before any body is built
+    from wbsa.parallel import resolve_workers
+
+    PopulationSettings(kind=kind, n=n, seed=seed, density_kg_m3=density_kg_m3, density_model=density_model,
+                       sampling=sampling, variations=variations, survey_weights=survey_weights,
+                       params_path=params_path, posture=posture)  # checks every argument first
+    workers = resolve_workers(workers)
+    postures = PostureSettings(posture, seed)
     table = _build_table(kind, n, seed, density_kg_m3=density_kg_m3, density_model=density_model,
                          sampling=sampling, params_path=params_path, variations=variations,
                          survey_weights=survey_weights, posture=posture, show_progress=show_progress,
@@ -62,10 +75,6 @@ def _build_table(kind: PopulationKind, n: int | None, seed: int, *, density_kg_m
                  scheduler: str | None) -> pd.DataFrame:
     """The population table of ``kind`` in the rest pose (see :func:`build_population`)."""
     from wbsa.bodies.table import measure_population
-
-    PopulationSettings(kind=kind, n=n, seed=seed, density_kg_m3=density_kg_m3, density_model=density_model,
-                       sampling=sampling, variations=variations, survey_weights=survey_weights,
-                       params_path=params_path, posture=posture)  # checks every argument
     composition = CompositionSettings(model=density_model, density_kg_m3=density_kg_m3, seed=seed)
     if kind == "random":
         from wbsa.bodies.random_population import RandomPopulationSettings, sample_random_parameters

@@ -76,6 +76,8 @@ def run_population(args: argparse.Namespace) -> int:
     """Handler of ``wbsa population``."""
     import dataclasses
 
+    from wbsa.io import RUN_LOG_ATTR, write_run_log
+
     from wbsa.bodies.build import build_population
     from wbsa.io import write_table
     from wbsa.parallel import RunSettings
@@ -87,6 +89,8 @@ def run_population(args: argparse.Namespace) -> int:
     df = build_population(**dataclasses.asdict(settings), show_progress=run.progress, workers=run.n_workers,
                           scheduler=run.scheduler)
     write_table(df, out, fmt)
+    if df.attrs.get(RUN_LOG_ATTR):
+        write_run_log(df.attrs[RUN_LOG_ATTR], out)
     print(f"wrote {len(df)} subjects to {out}")
     return 0
 

@@ -26,6 +26,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import pandas as pd
 
+from wbsa.io import RUN_LOG_ATTR
 from wbsa.errors import WbsaError
 from wbsa.bodies.age import years_to_param
 from wbsa.bodies.anthropometry import DEFAULT_DENSITY_KG_M3
@@ -134,8 +135,10 @@ def build_survey_population(n: int, variations: int = 0, seed: int = 0, *,
     pandas.DataFrame
         ``n × (variations + 1)`` rows: :data:`~wbsa.bodies.table.TABLE_COLUMNS` then
         :data:`SURVEY_COLUMNS`. ``subject_id = person × (variations + 1) + variation``. The
-        frame's ``attrs["survey"]`` holds the cleaning counts, the match summary
-        (:func:`match_rates`) and the wall and CPU seconds of each stage.
+        frame's ``attrs["survey"]`` holds the cleaning counts and the match summary
+        (:func:`match_rates`), written into a Parquet file's metadata; ``attrs["run_log"]`` the wall and
+        CPU seconds of each stage, which :func:`wbsa.io.write_table` keeps out of the file (same bytes
+        on every run).
     """
     from wbsa.bodies.anthropometry import Anthropometer
     from wbsa.bodies.body_model import BodyModel
@@ -184,10 +187,10 @@ def build_survey_population(n: int, variations: int = 0, seed: int = 0, *,
         "fit_iterations_p50": float(np.median(fit["fit_iterations"])),
         "fit_iterations_max": int(fit["fit_iterations"].max()),
         **match_rates(table),
-        "seconds": clock.wall,
-        "cpu_seconds": clock.cpu,
     }
     table.attrs["survey"] = summary
+    # timings are run information, not data: wbsa.io.write_table keeps them out of the file
+    table.attrs[RUN_LOG_ATTR] = {"seconds": clock.wall, "cpu_seconds": clock.cpu}
     _warn_unmatched(table, summary)
     return table
 

@@ -12,6 +12,7 @@ from typing import Literal
 
 import numpy as np
 
+from wbsa.core.limits import check_image_size
 from wbsa.errors import WbsaError
 
 PresetName = Literal["kinect-v1", "kinect-v2", "tum"]
@@ -60,6 +61,7 @@ class Intrinsics:
             if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value <= 0:
                 raise WbsaError(f"camera {key} must be a positive whole number of pixels, got {value!r}")
             object.__setattr__(self, key, int(value))
+        check_image_size(self.width, self.height, "the camera image")
         for key in ("fx", "fy", "cx", "cy", "skew", "min_range_m", "max_range_m"):
             try:
                 value = float(getattr(self, key))

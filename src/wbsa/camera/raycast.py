@@ -143,9 +143,12 @@ class RayHits:
         """Visible skin area of this view (m²); see :func:`wbsa.camera.area.visible_area_m2`.
 
         ``grazing_cos`` 0 gives the plain sum of the pixel footprints (:meth:`pixel_areas_m2`).
+        A view in which no pixel sees the body has no visible area (0).
         """
         from wbsa.camera.area import GRAZING_COS, visible_area_m2
 
+        if self.n_pixels == 0:
+            return 0.0
         grazing_cos = GRAZING_COS if grazing_cos is None else grazing_cos
         if grazing_cos <= 0:
             return float(self.pixel_areas_m2().sum())

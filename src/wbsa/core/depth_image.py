@@ -7,8 +7,9 @@ from pathlib import Path
 
 import numpy as np
 
+from wbsa.core.limits import check_image_size
 from wbsa.errors import WbsaError
-from wbsa.io import atomic_path
+from wbsa.atomic import atomic_path, png_verifier
 
 #: Units per metre of the usual depth PNG (OpenNI / Kinect SDK / Open3D); TUM RGB-D uses 5000.
 MM_PER_M = 1000.0
@@ -57,7 +58,7 @@ def write_depth_png(path: str | os.PathLike, depth_m: np.ndarray, *, depth_scale
 
     units = depth_to_png_mm(depth_m, depth_scale=depth_scale)
     path = Path(path)
-    with atomic_path(path) as tmp:
+    with atomic_path(path, verify=png_verifier(units.shape)) as tmp:
         Image.fromarray(units).save(tmp, format="PNG")
     return path
 
@@ -79,7 +80,8 @@ def read_depth_png(path: str | os.PathLike, *, depth_scale: float = MM_PER_M) ->
     Raises
     ------
     WbsaError
-        If the file is missing, not an image, or not a single-channel 16-bit image.
+        If the file is missing, not an image, not a single-channel 16-bit image, or larger than
+        :data:`wbsa.core.limits.MAX_IMAGE_PIXELS` (checked from the header, before decoding).
     """
     from PIL import Image, UnidentifiedImageError
 
@@ -88,9 +90,10 @@ def read_depth_png(path: str | os.PathLike, *, depth_scale: float = MM_PER_M) ->
         raise WbsaError(f"depth image {path} does not exist; check the path")
     try:
         with Image.open(path) as img:
+            check_image_size(img.width, img.height, f"depth image {path}")
             mode = img.mode
             units = np.asarray(img)
-    except (UnidentifiedImageError, OSError) as exc:
+    except (UnidentifiedImageError, OSError, Image.DecompressionBombError) as exc:
         raise WbsaError(f"{path} is not a readable image ({type(exc).__name__}); give a 16-bit depth PNG") from None
     if mode not in ("I;16", "I;16B", "I;16L", "I") or units.ndim != 2:
         raise WbsaError(f"{path} is a {mode} image, not a single-channel 16-bit depth image; "

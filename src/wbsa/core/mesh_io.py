@@ -11,8 +11,9 @@ from typing import Iterator
 import numpy as np
 
 from wbsa.core.mesh import TriangleMesh
+from wbsa.core.ply import check_ply
 from wbsa.errors import WbsaError
-from wbsa.io import atomic_path
+from wbsa.atomic import atomic_path
 
 #: File types :func:`write_mesh` writes.
 WRITE_SUFFIXES = (".ply", ".obj")
@@ -23,7 +24,7 @@ _SUSPICIOUS_SIZE_M = 20.0
 
 
 @contextlib.contextmanager
-def _quiet_stderr() -> Iterator[None]:
+def quiet_stderr() -> Iterator[None]:
     """Silence C-level messages on file descriptor 2 (Open3D's file readers print their own errors)."""
     fd = 2
     try:
@@ -58,7 +59,7 @@ def read_mesh(path: str | os.PathLike) -> TriangleMesh:
         raise WbsaError(f"cannot read {path.name}: use a mesh file ending in {', '.join(READ_SUFFIXES)}")
     import open3d as o3d
 
-    with _quiet_stderr(), o3d.utility.VerbosityContextManager(o3d.utility.VerbosityLevel.Error):
+    with quiet_stderr(), o3d.utility.VerbosityContextManager(o3d.utility.VerbosityLevel.Error):
         mesh = o3d.io.read_triangle_mesh(str(path), enable_post_processing=False)
     vertices = np.asarray(mesh.vertices, dtype=np.float64)
     faces = np.asarray(mesh.triangles, dtype=np.int64)
@@ -75,19 +76,51 @@ def read_mesh(path: str | os.PathLike) -> TriangleMesh:
 
 
 def write_mesh(mesh: TriangleMesh, path: str | os.PathLike) -> Path:
-    """Write ``mesh`` atomically as PLY or OBJ (by suffix), in metres."""
+    """Write ``mesh`` atomically as PLY or OBJ (by suffix), in metres.
+
+    The file is checked before it is renamed into place: a PLY must have exactly the size its header
+    announces and the mesh's vertex and face counts, an OBJ the right number of ``v`` and ``f`` lines
+    (Open3D reports success after a failed write, e.g. on a full disk).
+
+    Raises
+    ------
+    WbsaError
+        Unknown suffix, or the file cannot be written completely (one line naming the path and the fix).
+    """
     import open3d as o3d
 
     path = Path(path)
     if path.suffix.lower() not in WRITE_SUFFIXES:
         raise WbsaError(f"cannot write a mesh as {path.suffix or 'no suffix'}; use a .ply or .obj name")
-    m = o3d.geometry.TriangleMesh(o3d.utility.Vector3dVector(np.asarray(mesh.vertices, dtype=np.float64)),
-                                  o3d.utility.Vector3iVector(np.asarray(mesh.faces, dtype=np.int32)))
-    with atomic_path(path, keep_suffix=True) as tmp:  # open3d picks the format from the suffix
-        ok = o3d.io.write_triangle_mesh(str(tmp), m, write_ascii=False, write_vertex_normals=False,
-                                        write_vertex_colors=False)
-        if not ok:
-            raise WbsaError(f"open3d could not write {path}")
+    vertices = np.asarray(mesh.vertices, dtype=np.float64)
+    faces = np.asarray(mesh.faces, dtype=np.int32)
+    m = o3d.geometry.TriangleMesh(o3d.utility.Vector3dVector(vertices), o3d.utility.Vector3iVector(faces))
+    n_v, n_f = len(vertices), len(faces)
+    if path.suffix.lower() == ".ply":
+        def verify(tmp: Path) -> None:
+            check_ply(tmp, n_v, n_f)
+    else:
+        def verify(tmp: Path) -> None:
+            _check_obj(tmp, n_v, n_f)
+    with atomic_path(path, keep_suffix=True, verify=verify) as tmp:  # open3d picks the format from the suffix
+        with quiet_stderr():
+            ok = o3d.io.write_triangle_mesh(str(tmp), m, write_ascii=False, write_vertex_normals=False,
+                                            write_vertex_colors=False)
         for extra in tmp.parent.glob(tmp.stem + "*.mtl"):
             extra.unlink()
+        if not ok:
+            raise WbsaError(f"open3d could not write {path}; check the disk and the folder")
     return path
+
+
+def _check_obj(path: Path, n_vertices: int, n_faces: int) -> None:
+    """Count the ``v`` and ``f`` lines of an OBJ file."""
+    n_v = n_f = 0
+    with open(path, "rb") as fh:
+        for line in fh:
+            if line.startswith(b"v "):
+                n_v += 1
+            elif line.startswith(b"f "):
+                n_f += 1
+    if (n_v, n_f) != (n_vertices, n_faces):
+        raise WbsaError(f"it holds {n_v} vertices and {n_f} faces, not {n_vertices} and {n_faces}")

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from wbsa.errors import WbsaError
-from wbsa.io import atomic_path
+from wbsa.io import write_text
 from wbsa.progress import progress
 from wbsa.report.data import load_report_data
 from wbsa.report.sections import SectionBuilder
@@ -93,8 +93,7 @@ def build_report(sources: ReportSources | str | os.PathLike, out: str | os.PathL
     seconds = time.perf_counter() - t0
     page = builder.page
     page.paragraph(f"Report built in {seconds:.1f} s.")
-    with atomic_path(out) as tmp:
-        tmp.write_text(page.render(), encoding="utf-8")
+    write_text(page.render(), out)
     return ReportResult(path=out, figures=list(page.figures), tables=list(page.tables),
                         unavailable=dict(builder.unavailable), seconds=seconds)
 

@@ -100,6 +100,27 @@ def _strings(df: pd.DataFrame) -> pd.DataFrame:
     return df
 
 
+def _checked_fit_info(info: object, path: Path) -> dict:
+    """``fit_info.json`` with the parts a report reads checked (it may have been edited by hand)."""
+    fix = "run wbsa fit again to rewrite it"
+    if not isinstance(info, dict):
+        raise WbsaError(f"{path} is not a JSON object; {fix}")
+    settings = info.get("settings", {})
+    if not isinstance(settings, dict):
+        raise WbsaError(f"{path}: 'settings' is not an object; {fix}")
+    if not isinstance(settings.get("models", []), list):
+        raise WbsaError(f"{path}: settings 'models' is not a list; {fix}")
+    spec = settings.get("group_spec") or {}
+    if spec:
+        from wbsa.analysis.groups import GroupSpec
+
+        try:
+            GroupSpec(**spec)
+        except (TypeError, ValueError, WbsaError) as exc:
+            raise WbsaError(f"{path}: settings 'group_spec' is not valid ({str(exc).splitlines()[0]}); {fix}") from None
+    return info
+
+
 def load_report_data(sources: ReportSources) -> ReportData:
     """Read the population, the scans and the fit outputs named by ``sources``.
 
@@ -113,6 +134,7 @@ def load_report_data(sources: ReportSources) -> ReportData:
         info = json.loads((fit_dir / FIT_INFO).read_text())
     except (OSError, ValueError):
         info = {}
+    info = _checked_fit_info(info, fit_dir / FIT_INFO)
     population = read_table(sources.population_path, ("subject_id", "sex", "age_years", "stature_m", "mass_kg",
                                                       "wbsa_m2"), what="population")
     scans = [read_table(p, ("subject_id", "azimuth_deg", "elevation_deg", "distance_m", "camera"), what="scan")

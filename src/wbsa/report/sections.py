@@ -39,7 +39,7 @@ class SectionBuilder:
         self.unavailable: dict[str, str] = {}
         self.claim_result = None
         manifest = data.sources.manifest
-        title = manifest.get("study", {}).get("name") or f"wbsa report: {data.sources.fit_dir}"
+        title = str(manifest.get("study", {}).get("name") or f"wbsa report: {data.sources.fit_dir}")
         self.page = Page(title=title, subtitle=(
             f"Generated {time.strftime('%Y-%m-%d %H:%M')} by wbsa {__version__} from "
             f"{data.sources.study_dir or data.sources.fit_dir}. Tables give areas in m² and errors in %; figures "

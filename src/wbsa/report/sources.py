@@ -55,16 +55,43 @@ def _read_json(path: Path, what: str) -> dict:
     return doc
 
 
+#: Keys of ``study.json`` a report reads, and the JSON type each must have.
+_MANIFEST_TYPES = {"stages": list, "study": dict, "settings": dict, "versions": dict, "seconds": (int, float)}
+
+
+def checked_manifest(doc: dict, path: Path) -> dict:
+    """``study.json`` with the types a report relies on checked (it may have been edited by hand).
+
+    Raises
+    ------
+    WbsaError
+        One line naming the key that has the wrong type.
+    """
+    fix = "run the same wbsa run command again to rewrite it"
+    for key, types in _MANIFEST_TYPES.items():
+        if key in doc and not isinstance(doc[key], types) or isinstance(doc.get(key), bool):
+            raise WbsaError(f"{path}: {key!r} has the wrong type ({type(doc[key]).__name__}); {fix}")
+    for i, s in enumerate(doc.get("stages", [])):
+        if not (isinstance(s, dict) and isinstance(s.get("stage"), str) and isinstance(s.get("path"), str)):
+            raise WbsaError(f"{path}: stage {i} is not a record with 'stage' and 'path' names; {fix}")
+    for name, table in doc.get("settings", {}).items():
+        if not isinstance(table, dict):
+            raise WbsaError(f"{path}: settings table {name!r} is not an object; {fix}")
+    return doc
+
+
 def study_sources(study_dir: str | os.PathLike) -> ReportSources:
     """The inputs of the report of a study folder (``study.json`` written by ``wbsa run``).
 
     Raises
     ------
     WbsaError
-        No manifest, or a stage folder it names is missing.
+        No manifest, a malformed (hand-edited) manifest, or a stage folder it names is missing or
+        unfinished.
     """
     study_dir = Path(study_dir)
-    manifest = _read_json(study_dir / STUDY_MANIFEST, "run the study with wbsa run first")
+    manifest = checked_manifest(_read_json(study_dir / STUDY_MANIFEST, "run the study with wbsa run first"),
+                                study_dir / STUDY_MANIFEST)
     stages = manifest.get("stages", [])
     by_kind: dict[str, list[dict]] = {}
     for s in stages:
@@ -77,11 +104,14 @@ def study_sources(study_dir: str | os.PathLike) -> ReportSources:
     for p in (pop, *scans, fit_dir / FIT_INFO):
         if not p.exists():
             raise WbsaError(f"{p} is missing from the study; run the same wbsa run command again to rebuild it")
+    for s in (*by_kind["population"][:1], *by_kind["scan"], *by_kind["fit"][:1]):
+        if not (study_dir / s["path"] / STAGE_FILE).is_file():  # the marker a stage writes last
+            raise WbsaError(f"stage {study_dir / s['path']} did not finish; run the same wbsa run command again")
     records = []
     for s in stages:
         rec_path = study_dir / s["path"] / STAGE_FILE
         if rec_path.is_file():
-            records.append({**_read_json(rec_path, "rerun the study"), "label": s.get("name", s.get("stage"))})
+            records.append({**_read_json(rec_path, "rerun the study"), "label": str(s.get("name", s["stage"]))})
     return ReportSources(fit_dir=fit_dir, population_path=pop, scan_paths=scans, study_dir=study_dir,
                          manifest=manifest, stage_records=records)
 
@@ -107,16 +137,16 @@ def fit_dir_sources(fit_dir: str | os.PathLike, population: str | os.PathLike | 
     if (fit_dir / STAGE_FILE).is_file():
         record = _read_json(fit_dir / STAGE_FILE, "rerun the study")
         stages_dir = fit_dir.parent
-        inputs = record.get("inputs", {})
-        if pop is None and inputs.get("population"):
+        inputs = record.get("inputs") if isinstance(record.get("inputs"), dict) else {}
+        if pop is None and isinstance(inputs.get("population"), str):
             pop = stages_dir / f"population-{inputs['population']}" / "population.parquet"
-        if not scan_paths and inputs.get("scans"):
+        if not scan_paths and isinstance(inputs.get("scans"), list):
             scan_paths = tuple(stages_dir / f"scan-{k}" / "scan.parquet" for k in inputs["scans"])
     recorded = info.get("inputs", {}) if isinstance(info.get("inputs"), dict) else {}
-    if pop is None and recorded.get("population"):
-        pop = Path(recorded["population"])
-    if not scan_paths and recorded.get("scan"):
-        scan_paths = (Path(recorded["scan"]),)
+    if pop is None and isinstance(recorded.get("population"), str) and recorded["population"]:
+        pop = fit_dir / recorded["population"]  # recorded relative to the fit folder (or absolute)
+    if not scan_paths and isinstance(recorded.get("scan"), str) and recorded["scan"]:
+        scan_paths = (fit_dir / recorded["scan"],)
     if pop is None or not scan_paths:
         raise WbsaError(f"cannot tell which population and scan tables {fit_dir} was fitted on; "
                         "give --population FILE and --scan FILE")
@@ -126,7 +156,8 @@ def fit_dir_sources(fit_dir: str | os.PathLike, population: str | os.PathLike | 
     study_dir = fit_dir.parent.parent if record else None
     manifest = {}
     if study_dir is not None and (study_dir / STUDY_MANIFEST).is_file():
-        manifest = _read_json(study_dir / STUDY_MANIFEST, "rerun the study")
+        manifest = checked_manifest(_read_json(study_dir / STUDY_MANIFEST, "rerun the study"),
+                                    study_dir / STUDY_MANIFEST)
     return ReportSources(fit_dir=fit_dir, population_path=pop, scan_paths=scan_paths, study_dir=study_dir,
                          manifest=manifest, stage_records=[{**record, "label": "fit"}] if record else [])
 

@@ -69,7 +69,8 @@ def stage_table(sources: ReportSources) -> pd.DataFrame:
                      "this_run_s": sources.manifest.get("seconds"), "reused": False, "result": ""})
         return pd.DataFrame(rows)
     rows = [{"stage": r.get("label", r.get("stage")), "folder": f"{r.get('stage')}-{r.get('key')}",
-             "computed_in_s": r.get("seconds"), "result": r.get("info", {}).get("summary", "")}
+             "computed_in_s": r.get("seconds"),
+             "result": r["info"].get("summary", "") if isinstance(r.get("info"), dict) else ""}
             for r in sources.stage_records]
     if not rows:
         rows = [{"stage": "fit", "folder": str(sources.fit_dir), "computed_in_s": np.nan, "result": ""}]

@@ -107,4 +107,7 @@ def handle(args: argparse.Namespace) -> int:
     resumed = f", {result.n_resumed} of {result.n_chunks} chunks resumed" if result.n_resumed else ""
     sys.stdout.write(f"scanned {n_subjects} subjects x {len(settings.views)} views = {len(result.table)} rows "
                      f"in {result.seconds:.1f} s ({views_per_s:.3g} views/s{resumed}) -> {result.path}\n")
+    if result.n_views_invalid:
+        sys.stderr.write(f"warning: {result.n_views_invalid} of {len(result.table)} views put the camera inside the "
+                         "body (camera_inside = true): not measured, left out of fits; use a larger distance\n")
     return 0

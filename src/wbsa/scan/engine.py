@@ -6,7 +6,15 @@ The engine knows nothing about bodies or cameras: it calls a *chunk function*
 (``workers=1``) or as one ``dask.distributed`` task per chunk on a local cluster or on an
 existing one (``scheduler=ADDRESS``), and writes each returned table atomically as its own
 part. Rows depend only on the subject and the job, never on the chunking or the workers, so neither
-is part of the folder's settings hash; a folder keeps the chunk size it was started with.
+is part of the folder's settings hash; a folder keeps the chunk size it was started with. The default
+chunk function builds each body on its own (anny's batched forward pass rounds differently for
+different batch sizes, up to 4.4e-16 m on a vertex) and every random stream is keyed by the subject and
+the view, so the bytes of ``scan.parquet`` do not depend on ``chunk_size`` or ``workers``.
+
+One process at a time writes a scan folder (:mod:`wbsa.folder_lock`); a second one stops at once with
+a one-line error. Before any scanning, every part already in the folder is checked against this scan
+(:func:`wbsa.scan.layout.check_parts`): a part of another scan, an edited part, a part of another
+chunking or a corrupt part is refused, naming the file.
 """
 
 from __future__ import annotations
@@ -22,11 +30,12 @@ import pandas as pd
 
 from wbsa.core.versions import WBSA_VERSION as __version__
 from wbsa.errors import WbsaError
-from wbsa.io import write_json, write_table
-from wbsa.parallel import DEFAULT_CHUNK_SIZE, default_workers, resolve_scheduler
+from wbsa.folder_lock import folder_lock
+from wbsa.io import relative_path, write_json, write_table
+from wbsa.parallel import DEFAULT_CHUNK_SIZE, resolve_scheduler, resolve_workers
 from wbsa.progress import progress
-from wbsa.scan.layout import (INTRINSICS_FILE, SORT_COLUMNS, TABLE_FILE, Chunk, assemble_table, open_scan_folder,
-                              part_path, pending_chunks, plan_chunks, remove_stale_temporaries)
+from wbsa.scan.layout import (INTRINSICS_FILE, SORT_COLUMNS, TABLE_FILE, Chunk, assemble_table, check_parts,
+                              open_scan_folder, pending_chunks, plan_chunks, remove_stale_temporaries, write_part)
 from wbsa.scan.settings import ScanJob, population_fingerprint, settings_hash
 
 #: ``chunk_fn(subjects, settings) -> rows``: scans the subjects (rows of the population table) at every view.
@@ -50,6 +59,8 @@ class ScanResult:
         Rows (subject x view) scanned by this run, not counting resumed chunks.
     seconds : float
         Wall-clock time of this run.
+    n_views_invalid : int
+        Rows whose camera stood inside the body (``camera_inside``): no areas, left out of fits.
     """
 
     table: pd.DataFrame
@@ -58,6 +69,7 @@ class ScanResult:
     n_resumed: int
     n_views_scanned: int
     seconds: float
+    n_views_invalid: int = 0
 
 
 def scan_population(population: pd.DataFrame | str | os.PathLike, settings: ScanJob, out_dir: str | os.PathLike,
@@ -75,7 +87,7 @@ def scan_population(population: pd.DataFrame | str | os.PathLike, settings: Scan
         Scan folder (see :mod:`wbsa.scan.layout`). If it holds an unfinished scan with the same
         job and population, the finished chunks are kept and only the others are scanned.
     workers : int, optional
-        Local worker processes (default: all cores). ``1`` scans in this process, without dask.
+        Local worker processes (default or 0: all cores). ``1`` scans in this process, without dask.
     scheduler : str, optional
         Address of an existing dask scheduler (default: ``$DASK_SCHEDULER_ADDRESS`` if set);
         overrides ``workers``.
@@ -95,11 +107,11 @@ def scan_population(population: pd.DataFrame | str | os.PathLike, settings: Scan
     Raises
     ------
     WbsaError
-        Bad population, an ``out_dir`` made with other settings, an unreachable scheduler.
+        Bad population, an ``out_dir`` made with other settings, holding a foreign or corrupt part, or
+        being written by another process; an unreachable scheduler; a full disk.
     """
     t0 = time.perf_counter()
-    if workers is not None and int(workers) < 1:
-        raise WbsaError(f"workers must be at least 1, got {workers}")
+    workers = resolve_workers(workers)
     if chunk_size is not None and int(chunk_size) < 1:
         raise WbsaError(f"chunk_size must be at least 1 subject, got {chunk_size}")
     out_dir = Path(out_dir)
@@ -118,38 +130,49 @@ def scan_population(population: pd.DataFrame | str | os.PathLike, settings: Scan
     doc = {
         "settings_hash": settings_hash(settings, fingerprint),
         "settings": settings.to_dict(),
-        "population": {"path": str(population_path) if population_path else None,
+        "population": {"path": relative_path(population_path, out_dir) if population_path else None,
                        "n_subjects": len(subjects), "fingerprint": fingerprint},
         "camera": settings.camera_name,
         "n_views": len(settings.views),
         "chunk_size": int(chunk_size or DEFAULT_CHUNK_SIZE),
         "wbsa_version": __version__,
     }
-    chunk_size = open_scan_folder(out_dir, doc)
-    if hasattr(settings.camera, "to_open3d_json"):
-        write_json(settings.camera.to_open3d_json(), out_dir / INTRINSICS_FILE)
-    remove_stale_temporaries(out_dir)
+    with folder_lock(out_dir, "scan folder"):
+        chunk_size = open_scan_folder(out_dir, doc)
+        if hasattr(settings.camera, "to_open3d_json"):
+            write_json(settings.camera.to_open3d_json(), out_dir / INTRINSICS_FILE)
+        remove_stale_temporaries(out_dir)
 
-    chunks = plan_chunks(subjects["subject_id"].to_numpy(), chunk_size)
-    todo = pending_chunks(out_dir, chunks)
-    n_views_todo = sum(c.n_subjects for c in todo) * len(settings.views)
-    if todo:
-        scheduler = resolve_scheduler(scheduler)
-        workers = default_workers() if workers is None else int(workers)
-        bar = progress(total=n_views_todo, desc="scan", unit="view",
-                       enabled=show_progress)
-        try:
-            if scheduler is None and (workers == 1 or len(todo) == 1):
-                _run_in_process(subjects, todo, settings, chunk_fn, out_dir, bar)
-            else:
-                _run_dask(subjects, todo, settings, chunk_fn, out_dir, bar, workers=workers, scheduler=scheduler)
-        finally:
-            bar.close()
+        chunks = plan_chunks(subjects["subject_id"].to_numpy(), chunk_size)
+        check_parts(out_dir, chunks, doc["settings_hash"])
+        todo = pending_chunks(out_dir, chunks)
+        n_views_todo = sum(c.n_subjects for c in todo) * len(settings.views)
+        if todo:
+            scheduler = resolve_scheduler(scheduler)
+            bar = progress(total=n_views_todo, desc="scan", unit="view", enabled=show_progress)
+            write = _part_writer(out_dir, doc["settings_hash"], bar)
+            try:
+                if scheduler is None and (workers == 1 or len(todo) == 1):
+                    for chunk in todo:
+                        write(chunk, run_chunk(chunk_fn, subjects.iloc[chunk.start:chunk.stop], settings))
+                else:
+                    _run_dask(subjects, todo, settings, chunk_fn, write, workers=workers, scheduler=scheduler)
+            finally:
+                bar.close()
 
-    table = assemble_table(out_dir, chunks)
-    path = write_table(table, out_dir / TABLE_FILE)
+        table = assemble_table(out_dir, chunks)
+        path = write_table(table, out_dir / TABLE_FILE)
+    n_invalid = int(table["camera_inside"].fillna(False).astype(bool).sum()) if "camera_inside" in table else 0
     return ScanResult(table=table, path=path, n_chunks=len(chunks), n_resumed=len(chunks) - len(todo),
-                      n_views_scanned=n_views_todo, seconds=time.perf_counter() - t0)
+                      n_views_scanned=n_views_todo, seconds=time.perf_counter() - t0, n_views_invalid=n_invalid)
+
+
+def _part_writer(out_dir: Path, settings_hash: str, bar) -> Callable[[Chunk, pd.DataFrame], None]:
+    """``write(chunk, rows)``: the chunk's part, with the scan's identity, and the progress bar."""
+    def write(chunk: Chunk, rows: pd.DataFrame) -> None:
+        write_part(rows, out_dir, chunk, settings_hash)
+        bar.update(len(rows))
+    return write
 
 
 def run_chunk(chunk_fn: ChunkFn, subjects: pd.DataFrame, settings: ScanJob) -> pd.DataFrame:
@@ -171,24 +194,15 @@ def run_chunk(chunk_fn: ChunkFn, subjects: pd.DataFrame, settings: ScanJob) -> p
     return rows.reset_index(drop=True)
 
 
-def _run_in_process(subjects: pd.DataFrame, todo: list[Chunk], settings: ScanJob, chunk_fn: ChunkFn,
-                    out_dir: Path, bar) -> None:
-    for chunk in todo:
-        rows = run_chunk(chunk_fn, subjects.iloc[chunk.start:chunk.stop], settings)
-        write_table(rows, part_path(out_dir, chunk), fmt="parquet")
-        bar.update(len(rows))
-
-
-def _run_dask(subjects: pd.DataFrame, todo: list[Chunk], settings: ScanJob, chunk_fn: ChunkFn, out_dir: Path,
-              bar, *, workers: int, scheduler: str | None) -> None:
+def _run_dask(subjects: pd.DataFrame, todo: list[Chunk], settings: ScanJob, chunk_fn: ChunkFn,
+              write: Callable[[Chunk, pd.DataFrame], None], *, workers: int, scheduler: str | None) -> None:
     """One task per chunk; the parts are written here, so workers need no shared file system."""
     from wbsa.parallel import dask_client, map_unordered
 
     args = [(chunk_fn, subjects.iloc[c.start:c.stop], settings) for c in todo]
     with dask_client(min(workers, len(todo)), scheduler) as client:
         for i, rows in map_unordered(client, run_chunk, args, tag="scan"):
-            write_table(rows, part_path(out_dir, todo[i]), fmt="parquet")
-            bar.update(len(rows))
+            write(todo[i], rows)
 
 
 def _read_population(path: Path) -> pd.DataFrame:

@@ -6,14 +6,20 @@
     DIR/intrinsics.json      camera intrinsics, Open3D format
     DIR/parts/part-<first>-<last>.parquet   one finished chunk (subject ids, zero-padded), written atomically
     DIR/scan.parquet         all parts, sorted by (subject_id, azimuth_deg, elevation_deg, distance_m)
+    DIR/.wbsa.lock           the folder's write lock (:mod:`wbsa.folder_lock`)
 
-A part exists only when its chunk finished (``wbsa.io.atomic_path`` renames it into place), so a
+A part exists only when its chunk finished (``wbsa.atomic.atomic_path`` renames it into place), so a
 killed run leaves finished parts and at most some ``.part-*.part`` temporary files, which the
-next run deletes before it scans the missing chunks.
+next run deletes before it scans the missing chunks. Every part carries in its Parquet metadata
+(key ``wbsa.scan_part``) the scan's settings hash, its chunk (first and last subject id, subject
+count), its row count and a hash of its rows; :func:`check_parts` reads every part before any
+scanning starts and refuses, naming the file, a part of another scan, an edited part, a part of
+another chunking and a corrupt part.
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 from dataclasses import dataclass
 from pathlib import Path
@@ -22,7 +28,7 @@ import numpy as np
 import pandas as pd
 
 from wbsa.errors import WbsaError
-from wbsa.io import write_json
+from wbsa.io import atomic_path, parquet_verifier, remove_stale_temporaries as remove_temporaries, write_json
 
 SETTINGS_FILE = "settings.json"
 INTRINSICS_FILE = "intrinsics.json"
@@ -31,6 +37,8 @@ PARTS_DIR = "parts"
 
 #: Row order of the final table.
 SORT_COLUMNS = ("subject_id", "azimuth_deg", "elevation_deg", "distance_m")
+#: Parquet metadata key of a part's identity (settings hash, chunk, rows).
+PART_METADATA_KEY = b"wbsa.scan_part"
 
 
 @dataclass(frozen=True)
@@ -120,17 +128,100 @@ def open_scan_folder(out_dir: Path, settings_doc: dict) -> int:
 
 
 def remove_stale_temporaries(out_dir: Path) -> int:
-    """Delete temporary files that an interrupted run left (``.part-*.part``, ``.scan.parquet.*.part``).
+    """Delete temporary files that an interrupted run left (in ``DIR`` and ``DIR/parts``).
+
+    Call it only while holding the folder's lock: every temporary file there is then stale.
 
     Returns
     -------
     int
         Number of files removed.
     """
-    stale = list((out_dir / PARTS_DIR).glob(".part-*.part")) + list(out_dir.glob(f".{TABLE_FILE}.*.part"))
-    for path in stale:
-        path.unlink(missing_ok=True)
-    return len(stale)
+    return remove_temporaries(out_dir, all_of_them=True) + remove_temporaries(out_dir / PARTS_DIR, all_of_them=True)
+
+
+def _rows_hash(table) -> str:
+    """SHA-256 (16 hex) of a part's values, as pandas reads them back."""
+    values = pd.util.hash_pandas_object(table.to_pandas(), index=False).to_numpy()
+    names = "\0".join(table.column_names).encode()
+    return hashlib.sha256(names + values.tobytes()).hexdigest()[:16]
+
+
+def write_part(rows: pd.DataFrame, out_dir: Path, chunk: Chunk, settings_hash: str) -> Path:
+    """Write a finished chunk's rows atomically as its Parquet part, with its identity in the metadata."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    table = pa.Table.from_pandas(rows, preserve_index=False)
+    ident = {"settings_hash": settings_hash, "first_id": chunk.first_id, "last_id": chunk.last_id,
+             "n_subjects": chunk.n_subjects, "n_rows": table.num_rows, "rows_hash": _rows_hash(table)}
+    table = table.replace_schema_metadata({**(table.schema.metadata or {}),
+                                           PART_METADATA_KEY: json.dumps(ident, sort_keys=True).encode()})
+    path = part_path(out_dir, chunk)
+    with atomic_path(path, verify=parquet_verifier(table.num_rows)) as tmp:
+        pq.write_table(table, tmp)
+    return path
+
+
+def check_parts(out_dir: Path, chunks: list[Chunk], settings_hash: str) -> int:
+    """Check every part in ``DIR/parts`` against this scan before any scanning starts.
+
+    Parameters
+    ----------
+    out_dir : Path
+    chunks : list of Chunk
+        The chunk plan of this run.
+    settings_hash : str
+        This scan's settings hash.
+
+    Returns
+    -------
+    int
+        Number of parts checked (all of them belong to this scan).
+
+    Raises
+    ------
+    WbsaError
+        Naming the first part that is unreadable (corrupt or cut short), lacks wbsa's metadata (written by
+        something else, or edited), belongs to another scan, covers subjects that are not one chunk of
+        this plan, or whose rows differ from those it was written with.
+    """
+    import pyarrow.parquet as pq
+
+    planned = {c.part_name: c for c in chunks}
+    parts = out_dir / PARTS_DIR
+    fix = "delete it and run the same wbsa scan command again, or use another output folder"
+    n = 0
+    for path in sorted(parts.glob("part-*.parquet")) if parts.is_dir() else []:
+        try:
+            table = pq.read_table(path)
+        except Exception as exc:  # pyarrow raises many types for corrupt files
+            raise WbsaError(f"scan part {path} is unreadable, corrupt or cut short ({type(exc).__name__}); "
+                            f"{fix}") from None
+        raw = (table.schema.metadata or {}).get(PART_METADATA_KEY)
+        try:
+            ident = json.loads(raw) if raw else None
+        except ValueError:
+            ident = None
+        if not isinstance(ident, dict):
+            raise WbsaError(f"scan part {path} was not written by wbsa scan (or was edited since): it lacks the "
+                            f"scan's identity; {fix}")
+        if ident.get("settings_hash") != settings_hash:
+            raise WbsaError(f"scan part {path} belongs to another scan (settings hash {ident.get('settings_hash')}, "
+                            f"this scan {settings_hash}); {fix}")
+        chunk = planned.get(path.name)
+        if chunk is None or (ident.get("first_id"), ident.get("last_id"), ident.get("n_subjects")) != (
+                chunk.first_id, chunk.last_id, chunk.n_subjects):
+            size = ident.get("n_subjects")
+            raise WbsaError(f"scan part {path} covers subjects {ident.get('first_id')}-{ident.get('last_id')}, "
+                            f"which is not a chunk of this scan (it was written with {size} subjects per chunk; "
+                            f"this run plans {chunks[0].n_subjects}); run with the chunk size of the first run or "
+                            "use another output folder")
+        if table.num_rows != ident.get("n_rows") or _rows_hash(table) != ident.get("rows_hash"):
+            raise WbsaError(f"scan part {path} was changed after it was written (its rows do not match its "
+                            f"hash); {fix}")
+        n += 1
+    return n
 
 
 def part_path(out_dir: Path, chunk: Chunk) -> Path:

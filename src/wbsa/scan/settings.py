@@ -91,15 +91,21 @@ class ScanSettings:
                                      elevations=list(self.elevations_deg) or None, distance_m=distance_m))
         return tuple(parse_views(self.views, distance_m=distance_m))
 
-    def intrinsics(self, base_dir: str | os.PathLike = ".") -> Intrinsics:
-        """The camera's intrinsics; a relative JSON path is read from ``base_dir``."""
-        from wbsa.camera.intrinsics import PRESETS, resolve_camera
+    def camera_spec(self, base_dir: str | os.PathLike = ".") -> str:
+        """``camera`` with a relative JSON path made absolute from ``base_dir`` (a preset name as it is)."""
+        from wbsa.camera.intrinsics import PRESETS
 
         cam = str(self.camera)
         if cam in PRESETS or not (cam.lower().endswith(".json") or "/" in cam or os.sep in cam):
-            return resolve_camera(cam)  # a preset (an unknown name gets the "unknown preset" message)
+            return cam  # a preset (an unknown name gets the "unknown preset" message)
         path = Path(cam)
-        return resolve_camera(str(path if path.is_absolute() else Path(base_dir) / path))
+        return str(path if path.is_absolute() else Path(base_dir) / path)
+
+    def intrinsics(self, base_dir: str | os.PathLike = ".") -> Intrinsics:
+        """The camera's intrinsics; a relative JSON path is read from ``base_dir``."""
+        from wbsa.camera.intrinsics import resolve_camera
+
+        return resolve_camera(self.camera_spec(base_dir))
 
     def job(self, distance_m: float, *, sensor: SensorSettings | None = None,
             reconstruction: ReconstructionSettings | None = None, base_dir: str | os.PathLike = ".") -> ScanJob:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from wbsa.core.frame import DepthFrame
+from wbsa.core.limits import check_seed
 
 
 def view_rng(seed: int, subject_id: int, view) -> np.random.Generator:
@@ -16,6 +17,7 @@ def view_rng(seed: int, subject_id: int, view) -> np.random.Generator:
     give the same noisy image.
     """
     key = (round(view.azimuth_deg * 1e6), round((view.elevation_deg + 90.0) * 1e6), round(view.distance_m * 1e6))
+    check_seed(seed, "the sensor seed")
     return np.random.default_rng(np.random.SeedSequence([int(seed), int(subject_id)], spawn_key=key))
 
 

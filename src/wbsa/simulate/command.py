@@ -159,6 +159,11 @@ def run_view(args: argparse.Namespace) -> int:
 
         write_table(pd.DataFrame(rows), out / "views.csv")
         write_json(intrinsics.to_open3d_json(), out / "intrinsics.json")
+    blind = [r for r in rows if r["n_pixels"] == 0]
+    if blind:
+        sys.stderr.write(f"warning: no pixel sees the body in {len(blind)} of {len(rows)} view(s) (e.g. azimuth "
+                         f"{blind[0]['azimuth_deg']:g}, elevation {blind[0]['elevation_deg']:g}, "
+                         f"{blind[0]['distance_m']:g} m): visible area 0; move the camera closer\n")
     if args.json:
         json.dump(rows[0] if len(rows) == 1 else rows, sys.stdout, indent=2)
         sys.stdout.write("\n")

@@ -1,7 +1,9 @@
 """Files of one rendered view: depth PNG, point cloud, visible triangles, camera JSON, preview.
 
-Every file is written under a temporary name beside its final one and renamed when complete,
-so an interrupted run never leaves a half-written file under a final name.
+Every file is written under a temporary name beside its final one, checked (the PLY's size and
+counts, the PNGs decoded) and renamed when complete (:func:`wbsa.atomic.atomic_path`), so an interrupted
+run or a full disk never leaves a half-written file under a final name. ``view.json`` is written
+last: a view folder is complete when it exists.
 """
 
 from __future__ import annotations
@@ -14,7 +16,9 @@ import numpy as np
 
 from wbsa.core.frame import DepthFrame
 from wbsa.errors import WbsaError
-from wbsa.io import atomic_path, write_json
+from wbsa.core.mesh_io import quiet_stderr
+from wbsa.core.ply import check_ply, empty_point_cloud_ply
+from wbsa.io import atomic_path, os_error_message, write_bytes, write_json
 
 #: Largest depth a 16-bit millimetre PNG holds (m); farther returns are written as 0 (no return).
 
@@ -49,12 +53,15 @@ def write_point_cloud(frame: DepthFrame, path: str | os.PathLike,
         inv = frame.pose.inverse()
         points = inv.apply(points)
         normals = normals @ frame.pose.R  # rotate back: n_world = Rᵀ n_cam
+    path = Path(path)
+    if len(points) == 0:  # nothing visible: Open3D refuses an empty cloud, so write the empty PLY directly
+        return write_bytes(empty_point_cloud_ply(), path)
     cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
     cloud.normals = o3d.utility.Vector3dVector(normals)
-    path = Path(path)
-    with atomic_path(path, keep_suffix=True) as tmp:
+    n = len(points)
+    with atomic_path(path, keep_suffix=True, verify=lambda tmp: check_ply(tmp, n)) as tmp, quiet_stderr():
         if not o3d.io.write_point_cloud(str(tmp), cloud, write_ascii=False):
-            raise WbsaError(f"could not write {path}; choose a writable output folder")
+            raise WbsaError(f"open3d could not write {path}; check the disk and the folder")
     return path
 
 
@@ -93,9 +100,11 @@ def write_preview(frame: DepthFrame, path: str | os.PathLike, title: str = "") -
     if title:
         fig.suptitle(title, fontsize=10)
     path = Path(path)
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png", dpi=100)
-    plt.close(fig)
+    try:
+        with atomic_path(path) as tmp:
+            fig.savefig(tmp, format="png", dpi=100)
+    finally:
+        plt.close(fig)
     return path
 
 
@@ -112,7 +121,7 @@ def write_view_outputs(frame: DepthFrame, out_dir: str | os.PathLike, summary: d
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
-        raise WbsaError(f"cannot create output folder {out}: {exc.strerror}; choose a writable output folder") from None
+        raise WbsaError(os_error_message(exc, out, "create folder")) from None
     paths = {key: out / name for key, name in FILES.items()}
     write_depth_png(frame, paths["depth"])
     write_point_cloud(frame, paths["points"], coordinates)

@@ -86,7 +86,9 @@ def simulate_view(scene: MeshScene, camera: Intrinsics, view: View, *, sensor: S
     SimulatedView
     """
     from wbsa.camera.measure import measure_view
+    from wbsa.core.limits import check_seed
 
+    check_seed(seed, "the sensor seed")
     need_frame = keep_frame or sensor is not None or bool(reconstruct)
     row, frame = measure_view(scene, camera, view, scene.center, return_frame=need_frame)
     if sensor is not None:

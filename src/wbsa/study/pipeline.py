@@ -3,6 +3,7 @@
 Layout of a study folder ``DIR``::
 
     DIR/study.toml                      the resolved settings (every key), to re-run the study
+    DIR/camera.json                     a copy of the camera intrinsics file, when [scan] camera names one
     DIR/study.json                      manifest: stage keys and folders, this run's timings, versions
     DIR/fits.parquet, DIR/fits.csv      the per-view fit table (copy of the fit stage's)
     DIR/model.json                      the fitted models (copy of the fit stage's)
@@ -14,7 +15,13 @@ Layout of a study folder ``DIR``::
 
 Each stage folder is addressed by the hash of its settings and of its inputs' keys
 (:mod:`wbsa.study.stages`); a finished one is reused, so re-running a study, or changing only a later
-stage's settings, redoes only what changed.
+stage's settings, redoes only what changed. Every stage is self-describing: it is built from its own
+settings and the folders of its input stages, never from the top-level files, which belong to the last
+run that finished. Those top-level files are replaced as a group when a run finishes, ``study.json``
+last (:func:`wbsa.atomic.staged_files`), so a run that fails leaves the previous ones as they were.
+
+One run at a time writes a study folder: :func:`run_study` holds the folder's lock
+(:mod:`wbsa.folder_lock`) and a second run on the same folder stops with a one-line error.
 """
 
 from __future__ import annotations
@@ -22,7 +29,6 @@ from __future__ import annotations
 import dataclasses
 import os
 import platform
-import shutil
 import sys
 import time
 from dataclasses import dataclass, field
@@ -33,7 +39,9 @@ from wbsa.core.versions import WBSA_VERSION as __version__
 from wbsa.analysis.data import reference_distance
 from wbsa.core.versions import package_versions
 from wbsa.errors import WbsaError
-from wbsa.io import atomic_path, write_json
+from wbsa.folder_lock import folder_lock
+from wbsa.io import (RUN_LOG_ATTR, copy_file, os_error_message, remove_stale_temporaries, staged_files, write_json,
+                     write_text)
 from wbsa.parallel import RunSettings
 from wbsa.settings_io import to_table
 from wbsa.study.settings import StudySettings, fit_settings, scan_job
@@ -43,6 +51,8 @@ from wbsa.study.stages import Stage
 MANIFEST_FILE = "study.json"
 SETTINGS_FILE = "study.toml"
 REPORT_FILE = "report.html"
+#: Copy of a camera intrinsics file named by ``[scan] camera``, so ``study.toml`` can be re-run.
+CAMERA_FILE = "camera.json"
 
 #: The paper's camera distance; the listed distance nearest to it is the study's reference distance.
 
@@ -139,6 +149,11 @@ def run_study(settings: StudySettings, out_dir: str | os.PathLike, *, workers: i
     Returns
     -------
     StudyResult
+
+    Raises
+    ------
+    WbsaError
+        Bad settings, another run writing the same folder, a stage that fails, a full disk.
     """
     t0 = time.perf_counter()
     out = Path(out_dir)
@@ -147,17 +162,21 @@ def run_study(settings: StudySettings, out_dir: str | os.PathLike, *, workers: i
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
-        raise WbsaError(f"cannot create study folder {out}: {exc.strerror}; choose a writable folder") from None
+        raise WbsaError(os_error_message(exc, out, "create the study folder")) from None
     log = _Log(sys.stderr if stream == "stderr" else stream)
     run = settings.run
     if workers is not None:
         run = dataclasses.replace(run, workers=int(workers))
     if show_progress is not None:
         run = dataclasses.replace(run, progress=show_progress)
-    with atomic_path(out / SETTINGS_FILE) as tmp:
-        tmp.write_text(settings.to_toml())
-    log.line(f"study {settings.study.name!r} -> {out} (settings: {settings.source})")
+    with folder_lock(out, "study folder"):
+        remove_stale_temporaries(out, all_of_them=True)
+        return _run_locked(settings, out, run, log, scan_chunk_fn, t0)
 
+
+def _run_locked(settings: StudySettings, out: Path, run: RunSettings, log: _Log, scan_chunk_fn: Callable | None,
+                t0: float) -> StudyResult:
+    log.line(f"study {settings.study.name!r} -> {out} (settings: {settings.source})")
     runs: list[StageRun] = []
     pop = _population_stage(settings, out, run)
     runs.append(pop)
@@ -172,30 +191,28 @@ def run_study(settings: StudySettings, out_dir: str | os.PathLike, *, workers: i
     runs.append(fit)
     log.stage(fit)
 
-    manifest = _manifest(settings, out, runs, time.perf_counter() - t0)
-    write_json(manifest, out / MANIFEST_FILE)
-    rep = _report_stage(settings, out, pop.stage, [s.stage for s in scans], fit.stage, run.progress)
+    rep = _report_stage(settings, out, runs, pop.stage, [s.stage for s in scans], fit.stage, run.progress,
+                        time.perf_counter() - t0)
     runs.append(rep)
     log.stage(rep)
 
-    fits_path = _publish(out, fit.stage, rep.stage)
     seconds = time.perf_counter() - t0
-    write_json(_manifest(settings, out, runs, seconds), out / MANIFEST_FILE)
+    fits_path = _publish(settings, out, fit.stage, rep.stage, _manifest(settings, out, runs, seconds))
     log.line(f"study finished in {seconds:.1f} s ({sum(r.reused for r in runs)} of {len(runs)} stages reused)")
     return StudyResult(out_dir=out, report_path=out / REPORT_FILE, fits_path=fits_path, stages=runs, seconds=seconds)
 
 
 def _reused(name: str, stage: Stage) -> StageRun:
     rec = stage.record()
-    return StageRun(name, stage, True, 0.0, float(rec.get("seconds", 0.0)), rec.get("info", {}).get("summary", ""))
+    info = rec.get("info") if isinstance(rec.get("info"), dict) else {}
+    seconds = rec.get("seconds")
+    return StageRun(name, stage, True, 0.0, float(seconds) if isinstance(seconds, (int, float)) else 0.0,
+                    str(info.get("summary", "")))
 
 
 def _population_stage(settings: StudySettings, out: Path, run: RunSettings) -> StageRun:
     cfg = settings.population
-    content = to_table(cfg)
-    if content.get("posture") == "a-pose":  # the rest pose keeps the address the stage had before postures existed
-        del content["posture"]
-    stage = Stage.create(out, "population", content)
+    stage = Stage.create(out, "population", to_table(cfg))
     if stage.done:
         return _reused("population", stage)
     from wbsa.io import write_table
@@ -210,7 +227,7 @@ def _population_stage(settings: StudySettings, out: Path, run: RunSettings) -> S
     summary = f"{len(df)} {cfg.kind} subjects"
     stage.finish(seconds, {"population": "population.parquet"},
                  {"summary": summary, "n_subjects": len(df), "subjects_per_s": len(df) / seconds if seconds else None,
-                  "workers": workers})
+                  "workers": workers, **({"run_log": df.attrs[RUN_LOG_ATTR]} if RUN_LOG_ATTR in df.attrs else {})})
     return StageRun("population", stage, False, seconds, seconds, summary)
 
 
@@ -229,15 +246,21 @@ def _scan_stage(settings: StudySettings, out: Path, distance_m: float, pop: Stag
                              scheduler=run.scheduler, chunk_size=run.chunk_size, chunk_fn=chunk_fn,
                              show_progress=run.progress)
     seconds = time.perf_counter() - t
+    if result.n_views_invalid == len(result.table):
+        raise WbsaError(f"at {distance_m:g} m every view puts the camera inside the body (nothing to fit); "
+                        "use larger [scan] distances_m")
     n_subjects = int(result.table["subject_id"].nunique())
     rate = result.n_views_scanned / result.seconds if result.seconds > 0 else float("nan")
     in_frame = float(result.table["fits_in_frame"].mean()) if "fits_in_frame" in result.table else float("nan")
     summary = (f"{n_subjects} subjects x {len(ss.views)} views = {len(result.table)} rows ({rate:.1f} views/s, "
-               f"{100 * in_frame:.0f}% in frame)")
+               f"{100 * in_frame:.0f}% in frame"
+               + (f", {result.n_views_invalid} with the camera inside the body, left out" if result.n_views_invalid
+                  else "") + ")")
     stage.finish(seconds, {"scan": "scan.parquet"},
                  {"summary": summary, "distance_m": distance_m, "n_rows": len(result.table), "n_subjects": n_subjects,
                   "n_views": len(ss.views), "n_views_scanned": result.n_views_scanned, "views_per_s": rate,
                   "n_chunks": result.n_chunks, "n_resumed": result.n_resumed, "workers": workers,
+                  "n_views_invalid": result.n_views_invalid,
                   "fraction_in_frame": in_frame})
     return StageRun(name, stage, False, seconds, seconds, summary)
 
@@ -279,17 +302,22 @@ def _fit_stage(settings: StudySettings, out: Path, pop: Stage, scans: list[Stage
     return StageRun("fit", stage, False, seconds, seconds, summary)
 
 
-def _report_stage(settings: StudySettings, out: Path, pop: Stage, scans: list[Stage], fit: Stage,
-                  show_progress: bool | None) -> StageRun:
+def _report_stage(settings: StudySettings, out: Path, runs: list[StageRun], pop: Stage, scans: list[Stage],
+                  fit: Stage, show_progress: bool | None, seconds_so_far: float) -> StageRun:
+    """The report of this run's own stages and settings (never read back from the shared ``study.json``)."""
     stage = Stage.create(out, "report", {"report": to_table(settings.report), "study": to_table(settings.study)},
                          {"population": pop.key, "scans": [s.key for s in scans], "fit": fit.key})
     if stage.done:
         return _reused("report", stage)
     from wbsa.report.build import build_report
-    from wbsa.report.sources import study_sources
+    from wbsa.report.sources import ReportSources
 
     t = time.perf_counter()
-    result = build_report(study_sources(out), stage.path / REPORT_FILE, settings.report)
+    sources = ReportSources(fit_dir=fit.path, population_path=pop.path / "population.parquet",
+                            scan_paths=tuple(s.path / "scan.parquet" for s in scans), study_dir=out,
+                            manifest=_manifest(settings, out, runs, seconds_so_far),
+                            stage_records=[{**r.stage.record(), "label": r.name} for r in runs])
+    result = build_report(sources, stage.path / REPORT_FILE, settings.report)
     seconds = time.perf_counter() - t
     summary = f"{len(result.figures)} figures, {len(result.tables)} tables"
     stage.finish(seconds, {"report": REPORT_FILE}, {"summary": summary, "figures": result.figures,
@@ -297,13 +325,24 @@ def _report_stage(settings: StudySettings, out: Path, pop: Stage, scans: list[St
     return StageRun("report", stage, False, seconds, seconds, summary)
 
 
-def _publish(out: Path, fit: Stage, report: Stage) -> Path:
-    """Copy the fit table (Parquet, CSV), the model file and the report to the top of the study folder."""
-    for src, dst in ((fit.path / "fits.parquet", out / "fits.parquet"), (fit.path / "fits.csv", out / "fits.csv"),
-                     (fit.path / "model.json", out / "model.json"), (report.path / REPORT_FILE, out / REPORT_FILE)):
-        if src.is_file():
-            with atomic_path(dst) as tmp:
-                shutil.copyfile(src, tmp)
+def _publish(settings: StudySettings, out: Path, fit: Stage, report: Stage, manifest: dict) -> Path:
+    """Replace the top-level files as one group: fit table (Parquet, CSV), model, report, settings, manifest last.
+
+    ``study.toml`` names a camera intrinsics file by the copy ``camera.json`` beside it, so
+    ``wbsa run --config DIR/study.toml`` re-runs the study from anywhere.
+    """
+    with staged_files(out, MANIFEST_FILE) as stage:
+        for src in (fit.path / "fits.parquet", fit.path / "fits.csv", fit.path / "model.json",
+                    report.path / REPORT_FILE):
+            if src.is_file():
+                copy_file(src, stage / src.name)
+        resolved = settings
+        camera = Path(settings.scan.camera_spec(settings.base_dir))
+        if camera.suffix.lower() == ".json" and camera.is_file():
+            copy_file(camera, stage / CAMERA_FILE)
+            resolved = dataclasses.replace(settings, scan=dataclasses.replace(settings.scan, camera=CAMERA_FILE))
+        write_text(resolved.to_toml(), stage / SETTINGS_FILE)
+        write_json(manifest, stage / MANIFEST_FILE)
     return out / "fits.parquet"
 
 

@@ -4,8 +4,10 @@ Every stage of a study writes into ``DIR/stages/<name>-<key>/``, where ``key`` i
 (16 hex characters) of the stage's name, its settings and the keys of the stages it reads
 (:func:`stage_key`). The stage is *finished* once ``stage.json`` exists in its folder; it is written
 last and atomically, so a crash leaves an unfinished folder that the next run completes (the scan
-stage resumes its finished chunks) or redoes. Because every stage's output is a deterministic
-function of its settings and inputs, the key identifies the content.
+stage resumes its finished chunks) or redoes. ``stage.json`` records the size of every output, and a
+stage whose outputs are missing or have another size is not reused. Because every stage's output is a
+deterministic function of its settings and inputs, the key identifies the content; ``stage.json`` is
+the stage's run log (its run time, when it finished).
 """
 
 from __future__ import annotations
@@ -82,20 +84,29 @@ class Stage:
 
     @property
     def done(self) -> bool:
-        """Whether the stage finished in an earlier run and its recorded outputs are all still there."""
+        """Whether the stage finished in an earlier run and its recorded outputs are all still there, whole."""
         if not self.marker.is_file():
             return False
-        outputs = self.record().get("outputs")
-        if not isinstance(outputs, dict):
+        rec = self.record()
+        outputs = rec.get("outputs")
+        if not isinstance(outputs, dict) or rec.get("key") != self.key:
             return False
-        return all((self.path / rel).exists() for rel in outputs.values())
+        sizes = rec.get("sizes") if isinstance(rec.get("sizes"), dict) else {}
+        for rel in outputs.values():
+            path = self.path / str(rel)
+            if not path.is_file():
+                return False
+            if rel in sizes and path.stat().st_size != sizes[rel]:
+                return False
+        return True
 
     def record(self) -> dict:
         """The content of ``stage.json`` (empty if the stage has not finished)."""
         try:
-            return json.loads(self.marker.read_text())
+            doc = json.loads(self.marker.read_text())
         except (OSError, ValueError):
             return {}
+        return doc if isinstance(doc, dict) else {}
 
     def finish(self, seconds: float, outputs: dict[str, str], info: dict | None = None) -> dict:
         """Mark the stage finished: write ``stage.json`` (settings, inputs, outputs, run time).
@@ -109,8 +120,10 @@ class Stage:
         info : dict, optional
             Anything else worth keeping (counts, rates).
         """
+        sizes = {rel: (self.path / rel).stat().st_size for rel in outputs.values() if (self.path / rel).is_file()}
         doc = {"stage": self.name, "key": self.key, "format": STAGE_FORMAT, "settings": self.settings,
-               "inputs": self.inputs, "outputs": outputs, "seconds": float(seconds), "info": info or {},
+               "inputs": self.inputs, "outputs": outputs, "sizes": sizes, "seconds": float(seconds),
+               "info": info or {},
                "finished": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "wbsa_version": __version__}
         write_json(doc, self.marker)
         return doc

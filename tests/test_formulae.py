@@ -199,7 +199,7 @@ def test_schlich_needs_sex_and_unknown_key():
         (-170.0, 70.0, "height -170 must be positive"),
         (170.0, 0.0, "weight 0 must be positive"),
         (170.0, -3.0, "weight -3 must be positive"),
-        (1.7, 70.0, "height 1.7 looks like metres; give --height-cm in centimetres, e.g. 170"),
+        (1.7, 70.0, "height 1.7 looks like metres; give the height in centimetres, e.g. 170"),
         (1700.0, 70.0, "height 1700 is above 272 cm and looks like millimetres"),
         (20.0, 70.0, "height 20 cm is outside the physiological range 30–272 cm"),
         (4000.0, 70.0, "height 4000 cm is outside the physiological range 30–272 cm"),
@@ -263,7 +263,7 @@ def test_cli_json(capsys):
 @pytest.mark.parametrize(
     ("height", "weight", "message"),
     [
-        ("1.7", "70", "error: height 1.7 looks like metres; give --height-cm in centimetres, e.g. 170"),
+        ("1.7", "70", "error: height 1.7 looks like metres; give the height in centimetres, e.g. 170"),
         ("0", "70", "error: height 0 must be positive"),
         ("170", "-70", "error: weight -70 must be positive"),
         ("170", "70000", "error: weight 70000 is above 650 kg and looks like grams"),

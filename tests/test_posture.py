@@ -170,7 +170,7 @@ def test_bad_posture_settings_name_the_field():
     from wbsa.study.settings import settings_from_dict
 
     assert PopulationSettings(n=1).posture == "a-pose"
-    with pytest.raises(WbsaError, match="posture must be one of a-pose, mixed, arms-down"):
+    with pytest.raises(WbsaError, match="posture must be one of 'a-pose', 'mixed', 'arms-down'"):
         PopulationSettings(n=1, posture="sit")
     assert settings_from_dict({"population": {"n": 3, "posture": "mixed"}}).population.posture == "mixed"
     with pytest.raises(WbsaError, match=r"\[population\] posture must be one of 'a-pose', 'mixed', .* got 'sit'"):
@@ -183,7 +183,7 @@ def test_population_cli_posture(tmp_path, capsys):
     assert main(["population", "--kind", "random", "--n", "2", "--posture", "sitting",
                  "--out", str(tmp_path / "p.parquet")]) == 2
     err = capsys.readouterr().err
-    assert err.startswith("error: posture must be one of a-pose, mixed") and err.count("\n") == 1
+    assert err.startswith("error: posture must be one of 'a-pose', 'mixed'") and err.count("\n") == 1
     assert not (tmp_path / "p.parquet").exists()
     assert main(["population", "--kind", "random", "--n", "2", "--posture", "elbows-bent", "--workers", "1",
                  "--out", str(tmp_path / "p.parquet")]) == 0

@@ -172,7 +172,7 @@ def test_resume_refuses_other_settings_on_the_cli(population, tmp_path, capsys):
     capsys.readouterr()
     assert _scan(pop_path, tmp_path / "out", "--camera", "kinect-v2") == 2
     err = capsys.readouterr().err
-    assert "use another --out" in err and err.count("\n") == 1
+    assert "use another output folder" in err and err.count("\n") == 1
 
 
 @pytest.mark.slow

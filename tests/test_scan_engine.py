@@ -195,7 +195,7 @@ def test_resume_with_the_same_command_is_idempotent(tmp_path):
 @pytest.mark.parametrize("change", [{"seed": 6}, {"views": VIEWS[:3]}])
 def test_refuses_to_resume_with_other_settings(tmp_path, change):
     _scan(_population(), tmp_path / "out")
-    with pytest.raises(WbsaError, match="other settings.*use another --out") as exc:
+    with pytest.raises(WbsaError, match="other settings.*use another output folder") as exc:
         _scan(_population(), tmp_path / "out", settings=_settings(**change))
     assert "\n" not in str(exc.value)
 

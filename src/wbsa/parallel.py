@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from typing import Any, Callable, Iterator, Sequence
 
 from wbsa.errors import WbsaError, check_field
+from wbsa.settings_io import check_types
 
 SCHEDULER_ENV = "DASK_SCHEDULER_ADDRESS"
 CONNECT_TIMEOUT_S = 20
@@ -177,6 +178,7 @@ class RunSettings:
     progress: bool | None = None
 
     def __post_init__(self) -> None:
+        check_types(self)
         if self.scheduler == "":  # the empty string of older study files
             object.__setattr__(self, "scheduler", None)
         check_field(self.workers >= 0, "workers", f"must be 0 (all cores) or more, got {self.workers}")

@@ -28,7 +28,7 @@ import types
 import typing
 from typing import Any, Literal, TypeVar, Union, get_args, get_origin
 
-from wbsa.errors import WbsaError
+from wbsa.errors import SettingsError, WbsaError
 
 T = TypeVar("T")
 
@@ -205,6 +205,43 @@ def _coerce(value: Any, tp: Any) -> Any:
             raise bad
         return value
     raise bad  # a field type this layer does not map (a settings class would not use it)
+
+
+def check_types(settings: Any) -> None:
+    """Check every field of a settings dataclass against its annotation, for values given from Python.
+
+    The same rules as for TOML values (:func:`from_table`), so ``FitSettings(k="3")`` fails like ``k = "3"``
+    in a study file. Values are normalised in place: lists become tuples, integers in float fields become
+    floats, NumPy scalars become Python numbers. Nested settings and ``None`` for optional fields pass.
+    Call it first in a settings class's ``__post_init__``.
+
+    Raises
+    ------
+    SettingsError
+        Naming the first field of the wrong type: ``k must be an integer, got '3'``.
+    """
+    hints = typing.get_type_hints(type(settings))
+    for f in dataclasses.fields(settings):
+        value, tp = getattr(settings, f.name), hints[f.name]
+        if value is None and type(None) in get_args(tp):
+            continue
+        if dataclasses.is_dataclass(value) and _dataclass_of(tp) is type(value):
+            continue
+        try:
+            new = _coerce(_as_toml(value), tp)
+        except _TypeMismatch as exc:
+            raise SettingsError(f.name, str(exc)) from None
+        if type(new) is not type(value) or new != value:
+            object.__setattr__(settings, f.name, new)
+
+
+def _as_toml(value: Any) -> Any:
+    """A Python value as TOML would give it: sequences as lists, NumPy scalars as Python scalars."""
+    if isinstance(value, (tuple, list)):
+        return [_as_toml(v) for v in value]
+    if hasattr(value, "item") and getattr(value, "shape", None) == ():  # a NumPy scalar
+        return value.item()
+    return value
 
 
 def _toml_value(v: Any) -> str:

@@ -35,8 +35,7 @@ Sampling = Literal["paper", "varied"]
 PostureName = Literal["a-pose", "arms-down", "arms-wide", "hands-on-hips", "elbows-bent", "feet-together",
                       "feet-apart"]
 #: A population's ``posture`` setting: a posture name, or ``mixed`` (a random name per subject).
-PostureChoice = Literal["a-pose", "mixed", "arms-down", "arms-wide", "hands-on-hips", "elbows-bent",
-                        "feet-together", "feet-apart"]
+PostureChoice = Literal[Literal["a-pose", "mixed"], PostureName]
 
 POPULATION_KINDS: tuple[str, ...] = get_args(PopulationKind)
 NOISE_MODELS: tuple[str, ...] = get_args(NoiseModel)

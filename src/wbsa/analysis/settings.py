@@ -10,6 +10,7 @@ from dataclasses import asdict, dataclass, field, fields
 
 from wbsa.errors import SettingsError, WbsaError, check_field
 from wbsa.typing import GROUP_NAMES, MODEL_KINDS, GroupName, ModelKind
+from wbsa.settings_io import check_types
 
 #: The groups of the paper (section 2.5): all, males/females, kids/adults, small/normal/big stature.
 PAPER_GROUPS: tuple[str, ...] = ("all", "males", "females", "kids", "adults", "small", "normal", "big")
@@ -74,6 +75,7 @@ class GroupSpec:
     tall_min_stature_m: float = 1.85
 
     def __post_init__(self) -> None:
+        check_types(self)
         check_field(0 < self.small_max_stature_m < self.big_min_stature_m, "small_max_stature_m",
                     f"must be positive and below big_min_stature_m (stature cuts 0 < small < big, e.g. 1.40 and "
                     f"2.00 m), got {self.small_max_stature_m:g} m and {self.big_min_stature_m:g} m")
@@ -164,6 +166,7 @@ class FitSettings:
     correlation_view_deg: tuple[float, float] = (0.0, 0.0)
 
     def __post_init__(self) -> None:
+        check_types(self)
         from wbsa.analysis.data import resolve_vbsa_column
 
         check_field(int(self.k) >= 2, "k", f"must be at least 2 folds (paper: 10), got {self.k}")

@@ -14,7 +14,7 @@ if TYPE_CHECKING:  # pragma: no cover - for type hints only
     from wbsa.core.mesh import TriangleMesh
 
 
-def population(n: int = 100, kind: PopulationKind = "random", seed: int = 0, *, show_progress: bool = False,
+def population(n: int, kind: PopulationKind = "random", seed: int = 0, *, show_progress: bool = False,
                **options: Any) -> pd.DataFrame:
     """A virtual population and its anthropometric table (what ``wbsa population`` writes).
 
@@ -41,8 +41,11 @@ def population(n: int = 100, kind: PopulationKind = "random", seed: int = 0, *, 
     Examples
     --------
     >>> import wbsa
-    >>> people = wbsa.population(n=2, seed=1)  # doctest: +SKIP
-    >>> people[["stature_m", "mass_kg", "wbsa_m2"]].round(2)  # doctest: +SKIP
+    >>> people = wbsa.population(n=2, seed=1)
+    >>> list(people[["subject_id", "sex"]].itertuples(index=False, name=None))
+    [(0, 'male'), (1, 'female')]
+    >>> bool(((people["wbsa_m2"] > 0.5) & (people["wbsa_m2"] < 3.0)).all())
+    True
     """
     from wbsa.bodies.build import build_population
 
@@ -72,9 +75,8 @@ def body(people: pd.DataFrame | str | os.PathLike | None = None, subject_id: int
     Examples
     --------
     >>> import wbsa
-    >>> mesh = wbsa.body(gender=0.0, height=0.7)  # doctest: +SKIP
-    >>> mesh  # doctest: +SKIP
-    TriangleMesh(13380 vertices, 24236 triangles, ...)
+    >>> wbsa.body(gender=0.0, height=0.7)
+    TriangleMesh(13,718 vertices, 24,236 faces, area ... m², bbox ... m)
     """
     from wbsa.bodies.subject import subject_mesh
 
@@ -82,6 +84,9 @@ def body(people: pd.DataFrame | str | os.PathLike | None = None, subject_id: int
         if phenotypes:
             raise WbsaError("give either a population table or phenotype values, not both")
         if not hasattr(people, "columns"):
+            if not (isinstance(people, str) or hasattr(people, "__fspath__")):
+                raise WbsaError(f"people must be a population table (DataFrame) or its file path, "
+                                f"got {type(people).__name__}")
             from wbsa.bodies.table import read_population
 
             people = read_population(people)

@@ -104,7 +104,7 @@ class RandomPopulationSettings:
 
     def __post_init__(self) -> None:
         if not isinstance(self.n, (int, np.integer)) or self.n <= 0:
-            raise WbsaError(f"population size n = {self.n} must be a positive integer; use --n 100, say")
+            raise WbsaError(f"population size n = {self.n} must be a positive integer; e.g. 100")
         if self.age_sampling not in ("parameter", "years"):
             raise WbsaError(f"age_sampling {self.age_sampling!r} is unknown; use parameter or years")
         lo, hi = self.age_years

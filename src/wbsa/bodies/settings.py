@@ -6,8 +6,8 @@ import math
 from dataclasses import dataclass
 
 from wbsa.errors import check_field
-from wbsa.typing import (DENSITY_MODELS, POPULATION_KINDS, POSTURE_CHOICES, SAMPLINGS, DensityModel, PopulationKind,
-                         PostureChoice, Sampling)
+from wbsa.typing import DensityModel, PopulationKind, PostureChoice, Sampling
+from wbsa.settings_io import check_types
 
 #: Default body density (kg/m³), as anny's own ``Anthropometry``.
 DEFAULT_DENSITY_KG_M3 = 980.0
@@ -61,7 +61,7 @@ class PopulationSettings:
     posture: PostureChoice = "a-pose"
 
     def __post_init__(self) -> None:
-        check_field(self.kind in POPULATION_KINDS, "kind", f"must be one of {', '.join(POPULATION_KINDS)}, got {self.kind!r}")
+        check_types(self)
         if self.kind in ("random", "survey"):
             what = "subjects" if self.kind == "random" else "survey people"
             check_field(self.n is not None, "n", f"must be given for kind {self.kind!r}: the number of {what}, e.g. 300")
@@ -71,11 +71,6 @@ class PopulationSettings:
         check_field(math.isfinite(self.density_kg_m3) and 500 <= self.density_kg_m3 <= 2000, "density_kg_m3",
                     f"must be a body density in 500–2000 kg/m³, got {self.density_kg_m3:g}")
         check_field(self.variations >= 0, "variations", f"must be 0 or more, got {self.variations}")
-        check_field(self.density_model in DENSITY_MODELS, "density_model",
-                    f"must be one of {', '.join(DENSITY_MODELS)}, got {self.density_model!r}")
-        check_field(self.sampling in SAMPLINGS, "sampling", f"must be one of {', '.join(SAMPLINGS)}, got {self.sampling!r}")
-        check_field(self.posture in POSTURE_CHOICES, "posture",
-                    f"must be one of {', '.join(POSTURE_CHOICES)}, got {self.posture!r}")
         if self.kind == "table":
             check_field(bool(self.params_path), "params_path",
                         "must name a phenotype table (p_gender, p_age, ... columns) for kind 'table'")

@@ -152,7 +152,7 @@ def build_survey_population(n: int, variations: int = 0, seed: int = 0, *,
     if composition is not None and composition.constant:
         density_kg_m3, composition = composition.density_kg_m3, None
     if not isinstance(variations, (int, np.integer)) or variations < 0:
-        raise WbsaError(f"--variations {variations} must be a whole number >= 0 (the paper used 25)")
+        raise WbsaError(f"variations = {variations} must be a whole number >= 0 (the paper used 25)")
     clock = _Clock()
     data = load_survey(s.survey_path)
     people = select_people(data.people, n, seed, weighted=survey_weights)

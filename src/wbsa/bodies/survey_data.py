@@ -226,13 +226,13 @@ def select_people(people: pd.DataFrame, n: int, seed: int = 0, *, weighted: bool
         If ``n`` is not positive or more than the people available.
     """
     if not isinstance(n, (int, np.integer)) or n <= 0:
-        raise WbsaError(f"number of survey people n = {n} must be a positive integer; use --n 500, say")
+        raise WbsaError(f"number of survey people n = {n} must be a positive integer; e.g. 500")
     pool = people
     if weighted:
         pool = people[people["exam_weight"] > 0]
     if n > len(pool):
         what = "survey people with an exam weight" if weighted else "usable survey people"
-        raise WbsaError(f"--n {n} is more than the {len(pool)} {what}; use --n {len(pool)} or fewer")
+        raise WbsaError(f"n = {n} is more than the {len(pool)} {what}; use {len(pool)} or fewer")
     rng = np.random.default_rng(np.random.SeedSequence([int(seed), _SELECT_STREAM]))
     p = None
     if weighted:

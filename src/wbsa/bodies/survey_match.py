@@ -1,5 +1,9 @@
 """Fit anny phenotypes to body measures: stature, mass, waist and hip of real people.
 
+(About 500 lines, above the project's ~400: the batched Levenberg–Marquardt solver, its bounds, step
+control and the girth rescue share one set of per-person state arrays; splitting them would pass that
+state across modules for no gain in clarity.)
+
 Each person keeps the fixed parameters it is given (gender, age, ethnic mix) and the free
 ones (muscle, weight, height, proportions, the four local changes of the body model —
 waist, hips, belly, buttocks — and cup size for women) are fitted so that the

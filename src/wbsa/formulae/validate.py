@@ -76,8 +76,8 @@ def validate_inputs(height_cm, weight_kg) -> None:
     h_lo, h_hi = HEIGHT_RANGE_CM
     w_lo, w_hi = WEIGHT_RANGE_KG
     scalar = h.ndim == 0
-    cm_hint = "give --height-cm in centimetres, e.g. 170" if scalar else "give heights in centimetres, e.g. 170"
-    kg_hint = "give --weight-kg in kilograms, e.g. 70" if scalar else "give weights in kilograms, e.g. 70"
+    cm_hint = "give the height in centimetres, e.g. 170" if scalar else "give heights in centimetres, e.g. 170"
+    kg_hint = "give the weight in kilograms, e.g. 70" if scalar else "give weights in kilograms, e.g. 70"
     nan_hint = (
         "give a number" if scalar else "drop the missing rows first, or pass check=False to get NaN for them"
     )

@@ -6,6 +6,7 @@ import math
 from dataclasses import dataclass
 
 from wbsa.errors import check_field
+from wbsa.settings_io import check_types
 
 
 @dataclass(frozen=True)
@@ -34,6 +35,7 @@ class ReportSettings:
     dpi: int = 100
 
     def __post_init__(self) -> None:
+        check_types(self)
         for name in ("scatter_view_deg", "nonlinear_view_deg", "snapshot_view_deg"):
             view = getattr(self, name)
             check_field(len(view) == 2 and all(math.isfinite(a) for a in view), name,

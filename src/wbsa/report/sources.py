@@ -152,7 +152,7 @@ def fit_dir_sources(fit_dir: str | os.PathLike, population: str | os.PathLike | 
                         "give --population FILE and --scan FILE")
     for p in (pop, *scan_paths):
         if not p.is_file():
-            raise WbsaError(f"input table {p} does not exist; give --population and --scan")
+            raise WbsaError(f"input table {p} does not exist; give the population and scan tables")
     study_dir = fit_dir.parent.parent if record else None
     manifest = {}
     if study_dir is not None and (study_dir / STUDY_MANIFEST).is_file():

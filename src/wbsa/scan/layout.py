@@ -104,7 +104,7 @@ def open_scan_folder(out_dir: Path, settings_doc: dict) -> int:
         If ``out_dir`` holds a scan with other settings or population (or parts without settings).
     """
     if out_dir.exists() and not out_dir.is_dir():
-        raise WbsaError(f"--out {out_dir} is a file; give a folder for the scan")
+        raise WbsaError(f"scan folder {out_dir} is a file; give a folder for the scan")
     settings_path = out_dir / SETTINGS_FILE
     chunk_size = int(settings_doc["chunk_size"])
     if settings_path.exists():
@@ -116,12 +116,12 @@ def open_scan_folder(out_dir: Path, settings_doc: dict) -> int:
             old_hash = None
         if old_hash != settings_doc["settings_hash"]:
             raise WbsaError(f"{out_dir} holds a scan made with other settings or another population "
-                            f"(hash {old_hash} != {settings_doc['settings_hash']}); use another --out")
+                            f"(hash {old_hash} != {settings_doc['settings_hash']}); use another output folder")
     else:
         parts = out_dir / PARTS_DIR
         if parts.is_dir() and any(parts.glob("part-*.parquet")):
             raise WbsaError(f"{out_dir} holds scan parts but no {SETTINGS_FILE}, so it cannot be resumed safely; "
-                            "use another --out")
+                            "use another output folder")
         write_json(settings_doc, settings_path)
     (out_dir / PARTS_DIR).mkdir(parents=True, exist_ok=True)
     return chunk_size

@@ -26,6 +26,7 @@ import numpy as np
 
 from wbsa.camera.views import PAPER_DISTANCE_M, VIEW_SPECS
 from wbsa.errors import SettingsError, WbsaError, check_field
+from wbsa.settings_io import check_types
 
 if TYPE_CHECKING:  # pragma: no cover - imported for type hints only
     import pandas as pd
@@ -64,6 +65,7 @@ class ScanSettings:
     seed: int = 0
 
     def __post_init__(self) -> None:
+        check_types(self)
         for name in ("azimuths_deg", "elevations_deg", "distances_m"):
             object.__setattr__(self, name, tuple(float(x) for x in getattr(self, name)))
         check_field(bool(str(self.camera).strip()), "camera", "must name a preset or an intrinsics JSON file")

@@ -7,6 +7,7 @@ from dataclasses import asdict, dataclass
 
 from wbsa.errors import check_field
 from wbsa.typing import NOISE_MODELS, NoiseModel
+from wbsa.settings_io import check_types
 
 #: Returns closer than this to grazing are dropped by default when Nguyen noise is on (facts.md).
 NGUYEN_GRAZING_DROPOUT_DEG = 8.0
@@ -55,6 +56,7 @@ class SensorSettings:
     range_limits: bool = False
 
     def __post_init__(self) -> None:
+        check_types(self)
         check_field(self.noise in NOISE_MODELS, "noise", f"must be one of {', '.join(NOISE_MODELS)}, got {self.noise!r}")
         for name in ("holes_fraction", "pixel_dropout"):
             value = getattr(self, name)

@@ -34,10 +34,11 @@ class SimulatedView:
         with a sensor also :func:`wbsa.sensor.measure.sense_view`'s (``n_pixels_sensor, vbsa_hit_sensor_m2,
         vbsa_visible_sensor_m2, sensor_<setting>``), and ``vbsa_recon_<method>_m2`` per reconstruction.
     frame : DepthFrame or None
-        The frame the reconstructions saw (the sensor's when there is one); None when not asked for and not
-        needed.
+        The frame the reconstructions saw (the sensor's when there is one); :func:`render` always keeps it,
+        :func:`simulate_view` only with ``keep_frame``.
     surfaces : dict of str to TriangleMesh
-        The reconstructed surfaces by method (camera frame, metres), when ``keep_surfaces``.
+        The reconstructed surfaces by method (camera frame, metres); :func:`render` always keeps them,
+        :func:`simulate_view` only with ``keep_surfaces``.
     """
 
     row: dict[str, Any]
@@ -123,9 +124,9 @@ def render(mesh: Any, camera: Any = "kinect-v1", view: Any = (0.0, 0.0, 4.3), *,
     view : View or (azimuth_deg, elevation_deg) or (azimuth_deg, elevation_deg, distance_m)
         The paper's convention: azimuth 0 = in front, 90 = at the subject's left; elevation +90 = above;
         distance from the camera to the mesh's centre (default 4.3 m).
-    sensor : SensorSettings, optional
-        The simulated sensor (noise, quantisation, holes); None: the ideal ray cast.
-    reconstruct : tuple of {'grid', 'ball-pivoting', 'poisson'}
+    sensor : SensorSettings or dict, optional
+        The simulated sensor (noise, quantisation, holes), or a dict of its fields; None: the ideal ray cast.
+    reconstruct : str or tuple of {'grid', 'ball-pivoting', 'poisson'}
         Surfaces to reconstruct from the (sensed) depth image.
     seed : int
         Seed of the sensor's random stream.
@@ -148,8 +149,16 @@ def render(mesh: Any, camera: Any = "kinect-v1", view: Any = (0.0, 0.0, 4.3), *,
     >>> seen.depth_m.shape
     (480, 640)
     """
-    from wbsa.camera import MeshScene, View, resolve_camera
+    import warnings
+    from collections.abc import Mapping
 
+    from wbsa.camera import MeshScene, View, resolve_camera
+    from wbsa.sensor.settings import SensorSettings
+
+    if not (isinstance(camera, str) or hasattr(camera, "__fspath__") or hasattr(camera, "fx")
+            or hasattr(camera, "intrinsic_matrix")):
+        raise WbsaError(f"camera must be a preset name, an intrinsics JSON path, wbsa Intrinsics or an Open3D "
+                        f"PinholeCameraIntrinsic, got {type(camera).__name__}")
     intrinsics = resolve_camera(camera)
     if isinstance(mesh, str) or hasattr(mesh, "__fspath__"):
         from wbsa.core.mesh_io import read_mesh
@@ -158,9 +167,21 @@ def render(mesh: Any, camera: Any = "kinect-v1", view: Any = (0.0, 0.0, 4.3), *,
     if not isinstance(view, View):
         try:
             view = View(*(float(v) for v in view))
-        except TypeError:
-            raise WbsaError(f"a view is a View or (azimuth_deg, elevation_deg[, distance_m]), got {view!r}") from None
-    return simulate_view(MeshScene(mesh), intrinsics, view, sensor=sensor, seed=seed, reconstruct=tuple(reconstruct),
+        except (TypeError, ValueError):
+            raise WbsaError(f"view must be a View or (azimuth_deg, elevation_deg[, distance_m]) in degrees and "
+                            f"metres, got {view!r}") from None
+    if isinstance(reconstruct, str):
+        reconstruct = (reconstruct,)
+    if isinstance(sensor, Mapping):
+        sensor = SensorSettings(**sensor)
+    elif sensor is not None and not isinstance(sensor, SensorSettings):
+        raise WbsaError(f"sensor must be SensorSettings or a dict of its fields, got {type(sensor).__name__}")
+    scene = MeshScene(mesh)
+    size_m = float((scene.bbox_max - scene.bbox_min).max())
+    if size_m > 5.0:
+        warnings.warn(f"the mesh is {size_m:g} m across; wbsa expects metres (scale a millimetre mesh by 0.001)",
+                      stacklevel=2)
+    return simulate_view(scene, intrinsics, view, sensor=sensor, seed=seed, reconstruct=tuple(reconstruct),
                          keep_frame=True, keep_surfaces=True)
 
 

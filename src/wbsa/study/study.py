@@ -36,7 +36,7 @@ class Study:
     @classmethod
     def from_toml(cls, path: str | os.PathLike = "default") -> "Study":
         """Read a study file (only the keys that differ from the embedded default), or a shipped study by name
-        (``default``, ``paper``, ``distance-sweep``, ``reconstruction``)."""
+        (``default``, ``paper``, ``distance-sweep``, ``reconstruction``, ``varied``)."""
         from wbsa.study.settings import load_settings
 
         return cls(load_settings(path))
@@ -57,6 +57,17 @@ class Study:
     def run(self, out: str | os.PathLike, *, workers: int | None = None, show_progress: bool | None = None,
             stream: Any = "stderr") -> StudyResult:
         """Run (or resume) the study into the folder ``out``; finished stages found there are reused.
+
+        Parameters
+        ----------
+        out : path
+            The study folder (created if needed); one run at a time may write it.
+        workers : int, optional
+            Worker processes of the population and scan stages (0 = all cores); default ``[run] workers``.
+        show_progress : bool, optional
+            Progress bars on stderr (default: when stderr is a terminal).
+        stream : text stream, None or ``'stderr'``
+            Where the one-line-per-stage log goes (None: silent).
 
         Returns
         -------

@@ -8,6 +8,7 @@ from dataclasses import asdict, dataclass
 from wbsa.errors import check_field
 from wbsa.typing import (BOUNDARY_MODELS, DENOISE_METHODS, RECONSTRUCTION_METHODS, SMOOTHING_METHODS, BoundaryModel,
                          DenoiseMethod, ReconstructionMethod, SmoothingMethod)
+from wbsa.settings_io import check_types
 
 
 @dataclass(frozen=True)
@@ -71,6 +72,7 @@ class ReconstructionSettings:
     crop_distance_px: float = 1.5
 
     def __post_init__(self) -> None:
+        check_types(self)
         object.__setattr__(self, "methods", tuple(self.methods))
         object.__setattr__(self, "bpa_radii_px", tuple(self.bpa_radii_px))
         for name, value, valid in (("denoise", self.denoise, DENOISE_METHODS),

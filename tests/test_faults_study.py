@@ -35,7 +35,6 @@ seed = {seed}
 camera = "cam.json"
 azimuths_deg = [0.0, 90.0]
 elevations_deg = [0.0]
-chunk_size = {chunk}
 
 [fit]
 k = 2
@@ -47,6 +46,7 @@ dpi = 30
 
 [run]
 workers = 1
+chunk_size = {chunk}
 """
 
 #: Files of a study folder whose bytes depend only on the settings.

@@ -138,7 +138,7 @@ def test_bad_inputs_are_user_errors(tables):
         fit_views(pop, pd.concat([scan, scan.iloc[:1]]), FitSettings(k=3))
     with pytest.raises(WbsaError, match="not a population column"):
         fit_views(pop, scan, FitSettings(predictor_sets=(("shoe_size",),), k=3))
-    with pytest.raises(WbsaError, match="unknown model"):
+    with pytest.raises(WbsaError, match="models must be one of"):
         FitSettings(models=("spline",))
     with pytest.raises(WbsaError, match="k must be at least 2 folds"):
         FitSettings(k=1)

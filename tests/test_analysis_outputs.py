@@ -120,8 +120,8 @@ def test_wbsa_fit_writes_every_table(tables, tmp_path):
 
 
 @pytest.mark.parametrize("extra,message", [
-    (["--models", "spline"], "unknown model"),
-    (["--groups", "giants"], "unknown group"),
+    (["--models", "spline"], "models must be one of 'linear'"),
+    (["--groups", "giants"], "groups must be one of 'all'"),
     (["--correlation-view", "30,0"], "no view at azimuth 30"),
     (["--stature-cuts", "2.1,1.4"], "stature cuts 0 < small < big"),
     (["--vbsa", "vbsa_recon_m2:poisson"], "vbsa_recon_poisson_m2"),

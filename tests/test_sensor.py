@@ -218,7 +218,7 @@ def test_triangle_holes_need_triangle_ids():
 
 
 def test_settings_errors_name_the_field():
-    with pytest.raises(WbsaError, match="^noise must be one of none, nguyen2012, got 'kinect'$"):
+    with pytest.raises(WbsaError, match="^noise must be one of 'none', 'nguyen2012', got 'kinect'$"):
         SensorSettings(noise="kinect")
     with pytest.raises(WbsaError, match=r"^holes_fraction must be a fraction in \[0, 1\], got 1.5$"):
         SensorSettings(holes_fraction=1.5)

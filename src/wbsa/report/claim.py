@@ -64,16 +64,23 @@ def _view(role: str, az: float, el: float) -> str:
     return f"{role} ({az:g}°, {el:g}°)"
 
 
+def _view_columns(t: pd.DataFrame) -> dict[str, list]:
+    """The columns every claim table starts with: group, view area, view, n and the view's MAPE."""
+    return {
+        "group": [GROUP_PLAIN.get(g, g) for g in t["group"]],
+        "view area": [_area_short(v) for v in t["vbsa_column"]],
+        "view (θ, φ)": [_view(r, a, e) for r, a, e in zip(t["role"], t["azimuth_deg"], t["elevation_deg"])],
+        "n": list(t["n"].astype(int)),
+        "view MAPE %": [f"{x:.2f}" for x in t["view_mape_pct"]],
+    }
+
+
 def headline_display(result: ClaimResult) -> pd.DataFrame:
     """The headline table as printed: one row per group × VBSA × view, MAPE in %, differences in points."""
     h = result.headline
     pct = int(round(100 * result.settings.level))
     return pd.DataFrame({
-        "group": [GROUP_PLAIN.get(g, g) for g in h["group"]],
-        "view area": [_area_short(c) for c in h["vbsa_column"]],
-        "view (θ, φ)": [_view(r, a, e) for r, a, e in zip(h["role"], h["azimuth_deg"], h["elevation_deg"])],
-        "n": h["n"].astype(int),
-        "view MAPE %": [f"{x:.2f}" for x in h["view_mape_pct"]],
+        **_view_columns(h),
         "refitted H/W MAPE %": [f"{x:.2f}" for x in h["hw_refit_mape_pct"]],
         f"view − H/W [{pct} % CI]": [_interval(*t) for t in zip(h["diff_vs_hw"], h["lo_vs_hw"], h["hi_vs_hw"])],
         "vs H/W": [_short_verdict(v) for v in h["verdict_vs_hw"]],
@@ -91,11 +98,7 @@ def comparisons_display(result: ClaimResult) -> pd.DataFrame:
     c = result.comparisons
     pct = int(round(100 * result.settings.level))
     return pd.DataFrame({
-        "group": [GROUP_PLAIN.get(g, g) for g in c["group"]],
-        "view area": [_area_short(v) for v in c["vbsa_column"]],
-        "view (θ, φ)": [_view(r, a, e) for r, a, e in zip(c["role"], c["azimuth_deg"], c["elevation_deg"])],
-        "n": c["n"].astype(int),
-        "view MAPE %": [f"{x:.2f}" for x in c["view_mape_pct"]],
+        **_view_columns(c),
         "compared with": c["comparator_label"],
         "its MAPE %": [f"{x:.2f}" for x in c["comparator_mape_pct"]],
         f"view − it [{pct} % CI]": [_interval(*t) for t in zip(c["diff_pct_points"], c["diff_lo"],

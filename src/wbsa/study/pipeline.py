@@ -40,7 +40,7 @@ from wbsa.analysis.data import reference_distance
 from wbsa.core.versions import package_versions
 from wbsa.errors import WbsaError
 from wbsa.folder_lock import folder_lock
-from wbsa.io import (RUN_LOG_ATTR, copy_file, os_error_message, remove_stale_temporaries, staged_files, write_json,
+from wbsa.io import (RUN_LOG_ATTR, copy_file, remove_stale_temporaries, staged_files, write_json,
                      write_text)
 from wbsa.parallel import RunSettings
 from wbsa.settings_io import to_table
@@ -157,19 +157,13 @@ def run_study(settings: StudySettings, out_dir: str | os.PathLike, *, workers: i
     """
     t0 = time.perf_counter()
     out = Path(out_dir)
-    if out.exists() and not out.is_dir():
-        raise WbsaError(f"study folder {out} is a file; give a folder for the study")
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise WbsaError(os_error_message(exc, out, "create the study folder")) from None
     log = _Log(sys.stderr if stream == "stderr" else stream)
     run = settings.run
     if workers is not None:
         run = dataclasses.replace(run, workers=int(workers))
     if show_progress is not None:
         run = dataclasses.replace(run, progress=show_progress)
-    with folder_lock(out, "study folder"):
+    with folder_lock(out, "study folder"):  # creates the folder, or names why it cannot
         remove_stale_temporaries(out, all_of_them=True)
         return _run_locked(settings, out, run, log, scan_chunk_fn, t0)
 

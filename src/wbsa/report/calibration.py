@@ -79,8 +79,8 @@ def calibration_sentences(summary: dict, spec: GroupSpec = GroupSpec()) -> list[
         mesh, ll = _weighted(obese, "mesh_over_dubois_mean"), _weighted(obese, "livingston_lee_over_dubois_mean")
         out.append(
             f"Obese adults (BMI ≥ {spec.obese_min_bmi:g}, n = {int(obese['n'].sum())}): mesh / Du Bois is "
-            f"{mesh:.3f} here, Livingston & Lee's law fitted on obese patients gives {ll:.3f} at the same heights "
-            f"and weights: these bodies lie {abs(100 * (ll - mesh)):.1f} points of Du Bois "
+            f"{mesh:.3f} here, Livingston & Lee's law, fitted on normal-weight and obese patients, gives {ll:.3f} at "
+            f"the same heights and weights: these bodies lie {abs(100 * (ll - mesh)):.1f} points of Du Bois "
             f"{'below' if ll > mesh else 'above'} that law (those patients had Du Bois under by as much as "
             f"{FIGURES['dubois_obese_underestimate_max_percent'].text()}). With BMI, mesh / Du Bois moves by "
             f"{_signed(slopes['mesh'], 3, '')} % per kg/m² here, against {_signed(slopes['livingston_lee'], 3, '')} "

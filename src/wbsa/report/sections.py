@@ -117,10 +117,10 @@ class SectionBuilder:
                 "source gives an equation, not a table); 'not found': the stored sources do not give it.")
         self._figure("fig-calibration", "calibration figure", lambda: calibration_figure(d.population, spec, self.dpi),
                      "(a) Mesh area / Du Bois against BMI for every subject (children hollow), with Livingston & "
-                     "Lee's law fitted on obese patients (band: 10–90 % of the adults in each BMI bin) and the 3-D-scan "
-                     "formulae of Yu and Schlich, all divided by Du Bois at the same adults; (b) adults' density "
-                     "against BMI with Deurenberg's body-fat equation and Siri's density at the median age (band: "
-                     "± the equation's standard error).")
+                     "Lee's law fitted on normal-weight and obese patients (band: 10–90 % of the adults in each BMI "
+                     "bin) and the 3-D-scan formulae of Yu and Schlich, all divided by Du Bois at the same adults; "
+                     "(b) adults' density against BMI with Deurenberg's body-fat equation and Siri's density at the "
+                     "median age (band: ± the equation's standard error).")
         p.table("tab-calibration-dubois", cal.dubois_display(summary), "Mesh area / Du Bois by sex and BMI class "
                 "(mean ± SD; adults in WHO classes, children one class), beside the formulae fitted on measured "
                 "areas, divided by Du Bois at the same subjects.")

@@ -13,8 +13,8 @@ from wbsa.report.figures.style import FigureUnavailable, new_figure
 SEX_COLORS = {"male": "#4C72B0", "female": "#DD8452"}
 _SEX_PLAIN = {"female": "women", "male": "men"}
 #: Adults per BMI bin of the published formulae's lines and band (bins of equal count, at most :data:`MAX_BINS`).
-PER_BIN = 6
-MAX_BINS = 12
+PER_BIN = 8
+MAX_BINS = 6
 
 
 def _bins(bmi: np.ndarray) -> list[np.ndarray]:
@@ -41,10 +41,12 @@ def calibration_figure(population: pd.DataFrame, spec: GroupSpec = GroupSpec(), 
     """Mesh / Du Bois and body density against BMI, beside the published real-body relations.
 
     (a) Every subject's mesh area / Du Bois against BMI (women and men coloured, children hollow), with
-    Livingston & Lee's law for obese patients / Du Bois at the same adults (band: 10–90 % per BMI bin
-    of equal count) and Yu's and Schlich's scan-fitted formulae / Du Bois (bin means); (b) adults' density
-    (mass / volume) against BMI with Deurenberg's body-fat equation and Siri's density at the adults'
-    median age per sex (line: the equation's mean; band: ± its standard error of estimate).
+    Livingston & Lee's law (normal-weight and obese patients) / Du Bois at the same adults (band: 10–90 %
+    per BMI bin of equal count) and Yu's and Schlich's scan-fitted formulae / Du Bois (bin means); (b)
+    adults' density (mass / volume) against BMI with Deurenberg's body-fat equation and Siri's density at
+    the adults' median age per sex (line: the equation's mean; band: ± its standard error of estimate).
+    A formula's line needs two bins (2 × :data:`PER_BIN` adults, per sex for Schlich's); fewer, and it is
+    left out.
 
     Parameters
     ----------
@@ -78,18 +80,19 @@ def calibration_figure(population: pd.DataFrame, spec: GroupSpec = GroupSpec(), 
     # the published formulae at the same adults, by BMI bin
     ab, ah, aw, asex = bmi[adult], h[adult], w[adult], sex[adult]
     bins = _bins(ab)
-    if bins:
+    if len(bins) >= 2:  # a line needs two bins
         centre = np.array([ab[m].mean() for m in bins])
         ll = np.asarray(bsa("livingston_lee", ah, aw, check=False)) / dubois[adult]
         ax.fill_between(centre, [np.percentile(ll[m], 10) for m in bins], [np.percentile(ll[m], 90) for m in bins],
-                        color="0.55", alpha=0.25, lw=0, label="Livingston & Lee 2001, obese patients: 10–90 %")
+                        color="0.55", alpha=0.25, lw=0,
+                        label="Livingston & Lee 2001 (normal-weight and obese patients): 10–90 %")
         ax.plot(centre, [ll[m].mean() for m in bins], color="0.45", lw=1.6, label="Livingston & Lee 2001: mean")
         yu = np.asarray(bsa("yu", ah, aw, check=False)) / dubois[adult]
         ax.plot(centre, [yu[m].mean() for m in bins], color="0.2", ls="--", lw=1.2, label="Yu 2010, 3-D scans")
         sch = np.asarray(bsa("schlich", ah, aw, asex, check=False)) / dubois[adult]
         for s in ("female", "male"):
             sb = _bins(ab[asex == s])
-            if sb:
+            if len(sb) >= 2:
                 ax.plot([ab[asex == s][m].mean() for m in sb], [sch[asex == s][m].mean() for m in sb],
                         color=SEX_COLORS[s], ls=":", lw=1.6, label=f"Schlich 2010, 3-D scans, {_SEX_PLAIN[s]}")
     for s in ("female", "male"):

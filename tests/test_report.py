@@ -96,7 +96,7 @@ def test_report_command_embeds_every_figure_as_png_and_every_table(cli_report):
     assert stdout.strip() == str(out)  # stdout: just the report's path
     html = out.read_text()
     figs = embedded_figures(html)
-    expected = {"fig-wbsa-distribution", "fig-vbsa-wbsa", "fig-group-errors", "fig-models", "fig-nonlinear",
+    expected = {"fig-calibration", "fig-wbsa-distribution", "fig-vbsa-wbsa", "fig-group-errors", "fig-models", "fig-nonlinear",
                 "fig-residuals", "fig-reconstruction", "fig-distance", "fig-formulae",
                 *(f"fig-view-{g}" for g in GROUPS)}
     assert set(figs) == expected
@@ -106,7 +106,7 @@ def test_report_command_embeds_every_figure_as_png_and_every_table(cli_report):
     # synthetic subjects have no body parameters, so there is no point cloud to draw: said, not faked
     assert re.findall(r'class="na" id="([^"]+)"', html) == ["fig-snapshots-na"]
     assert "body parameters" in html
-    for tab in ("tab-claim", "tab-summary", "tab-population", "tab-correlation", "tab-groups", "tab-models", "tab-distance",
+    for tab in ("tab-claim", "tab-calibration", "tab-summary", "tab-population", "tab-correlation", "tab-groups", "tab-models", "tab-distance",
                 "tab-formulae", "tab-fits", "tab-stages", "tab-settings", "tab-versions"):
         assert f'id="{tab}"' in html, tab
     assert html.startswith("<!DOCTYPE html>") and html.rstrip().endswith("</html>")

@@ -18,6 +18,7 @@ Modules (small, one job each):
 - ``outputs``: :func:`run_fit` reads the tables and writes every output file
 - ``command``: the ``wbsa fit`` subcommand
 - ``realism``: how varied a population is (log H/W law, Du Bois ratios, composition by sex and BMI class)
+- ``calibration_refs``: the published real-body figures (with citations) that ``realism`` is set beside
 
 Names are imported lazily so that ``wbsa --help`` stays fast.
 """

@@ -8,9 +8,13 @@ Pure functions of a population table (``wbsa population``), for the realism benc
 * :func:`dubois_table`: mesh area / Du Bois by sex and BMI class, beside what the formulae fitted on
   real scans (Schlich 2010, Yu 2010) and on obese patients (Livingston & Lee 2001) give for the same
   statures and masses;
-* :func:`composition_table`: body density and fat fraction by sex and BMI class;
+* :func:`dubois_bmi_slopes`: how fast mesh / Du Bois and those formulae / Du Bois rise with BMI;
+* :func:`composition_table`: body density and fat fraction by sex and BMI class, beside what
+  Deurenberg's equation and Siri's density give for the same subjects;
 * :func:`group_counts`: subjects per group (all, adults, children, obese, underweight, small, tall,
-  women, men) and the posture mix when the table has a ``posture`` column.
+  women, men), :func:`posture_mix` and :func:`posed_area_change` when the table has a ``posture`` column.
+
+The published figures these are set beside are in :mod:`wbsa.analysis.calibration_refs`.
 
 Adult BMI classes (WHO) are used for adults only (age > 15 y); children are one class of their own,
 as a child's BMI is read against its age.
@@ -80,7 +84,7 @@ def _check(table: pd.DataFrame) -> None:
         raise WbsaError(f"the realism summary needs at least 5 subjects, got {len(table)}")
 
 
-def _one_row_per_body(table: pd.DataFrame) -> pd.DataFrame:
+def one_row_per_body(table: pd.DataFrame) -> pd.DataFrame:
     """Survey tables: the matched bodies only (variation 0); other tables as they are."""
     return table[table["variation"] == 0] if "variation" in table.columns else table
 
@@ -95,7 +99,7 @@ def dubois_m2(table: pd.DataFrame) -> np.ndarray:
 def hw_law(table: pd.DataFrame, spec: GroupSpec = GroupSpec()) -> HWLaw:
     """Fit the log H/W law to ``table`` (see :class:`HWLaw`)."""
     _check(table)
-    t = _one_row_per_body(table)
+    t = one_row_per_body(table)
     y = np.log(t["wbsa_m2"].to_numpy())
     x = np.column_stack([np.ones(len(t)), np.log(t["stature_m"].to_numpy()), np.log(t["mass_kg"].to_numpy())])
     coef, *_ = np.linalg.lstsq(x, y, rcond=None)
@@ -103,17 +107,43 @@ def hw_law(table: pd.DataFrame, spec: GroupSpec = GroupSpec()) -> HWLaw:
     female = (t["sex"] == "female").to_numpy(dtype=np.float64)
     xs = np.column_stack([x, female])
     coef_s, *_ = np.linalg.lstsq(xs, y, rcond=None)
-    adults = t["age_years"].to_numpy() > spec.kid_max_age_years
-    slope = np.nan
-    if adults.sum() >= 3:
-        ratio = 100 * (t["wbsa_m2"].to_numpy()[adults] / dubois_m2(t)[adults] - 1)
-        slope = float(np.polyfit(t["bmi"].to_numpy()[adults], ratio, 1)[0])
+    slope = _bmi_slope(t, t["wbsa_m2"].to_numpy() / dubois_m2(t), spec)
     return HWLaw(n=len(t), a=float(coef[0]), b=float(coef[1]), c=float(coef[2]),
                  r2=float(1 - resid.var() / y.var()),
                  residual_sd_percent=float(100 * np.sqrt((resid**2).sum() / (len(t) - 3))),
                  female_effect_percent=float(100 * np.expm1(coef_s[3])) if female.any() and (1 - female).any()
                  else float("nan"),
                  dubois_bmi_slope_percent=slope)
+
+
+def _bmi_slope(table: pd.DataFrame, ratio: np.ndarray, spec: GroupSpec) -> float:
+    """Slope of 100·(ratio − 1) against BMI over the adults, % per kg/m² (NaN with fewer than 3 adults)."""
+    adults = table["age_years"].to_numpy() > spec.kid_max_age_years
+    if adults.sum() < 3:
+        return float("nan")
+    return float(np.polyfit(table["bmi"].to_numpy()[adults], 100 * (ratio[adults] - 1), 1)[0])
+
+
+def dubois_bmi_slopes(table: pd.DataFrame, spec: GroupSpec = GroupSpec()) -> dict[str, float]:
+    """How fast mesh / Du Bois and each measured formula / Du Bois rise with BMI over the adults.
+
+    Returns
+    -------
+    dict
+        ``mesh`` and each key of :data:`MEASURED_FORMULAE` -> slope of 100·(x / Du Bois − 1) against
+        BMI, % per kg/m², the formulae evaluated at the same subjects' stature and mass (NaN with
+        fewer than 3 adults). ``mesh`` equals :attr:`HWLaw.dubois_bmi_slope_percent`.
+    """
+    from wbsa.formulae import bsa
+
+    _check(table)
+    t = one_row_per_body(table)
+    dubois = dubois_m2(t)
+    h, w = 100 * t["stature_m"].to_numpy(), t["mass_kg"].to_numpy()
+    out = {"mesh": _bmi_slope(t, t["wbsa_m2"].to_numpy() / dubois, spec)}
+    for key in MEASURED_FORMULAE:
+        out[key] = _bmi_slope(t, np.asarray(bsa(key, h, w, t["sex"].to_numpy(), check=False)) / dubois, spec)
+    return out
 
 
 def bmi_class(table: pd.DataFrame, spec: GroupSpec = GroupSpec()) -> pd.Series:
@@ -154,7 +184,7 @@ def dubois_table(table: pd.DataFrame, spec: GroupSpec = GroupSpec()) -> pd.DataF
     from wbsa.formulae import bsa
 
     _check(table)
-    t = _one_row_per_body(table)
+    t = one_row_per_body(table)
     h, w = 100 * t["stature_m"].to_numpy(), t["mass_kg"].to_numpy()
     dubois = dubois_m2(t)
     values = {"mesh_over_dubois": t["wbsa_m2"].to_numpy() / dubois}
@@ -164,18 +194,31 @@ def dubois_table(table: pd.DataFrame, spec: GroupSpec = GroupSpec()) -> pd.DataF
 
 
 def composition_table(table: pd.DataFrame, spec: GroupSpec = GroupSpec()) -> pd.DataFrame:
-    """Body density (kg/m³, mass / volume) and fat fraction per sex and BMI class.
+    """Body density (kg/m³, mass / volume) and fat fraction per sex and BMI class, beside Deurenberg's.
 
     The fat fraction is the table's ``fat_fraction`` column; a constant-density table has none,
     and gets the fat fraction its density means by Siri's equation (55 % at 980 kg/m³).
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``sex, bmi_class, n``, then mean and SD of ``density_kg_m3``, ``fat_fraction`` and of
+        ``deurenberg_density_kg_m3`` / ``deurenberg_fat_fraction``: what Deurenberg's body-fat
+        equation (its mean, no residual) and Siri's density give at the same subjects' BMI, age and sex
+        (:mod:`wbsa.analysis.calibration_refs`).
     """
-    from wbsa.bodies.composition import fat_from_density
+    from wbsa.analysis.calibration_refs import deurenberg_fat_fraction
+    from wbsa.bodies.composition import density_from_fat, fat_from_density
 
     _check(table)
-    t = _one_row_per_body(table)
+    t = one_row_per_body(table)
     density = t["mass_kg"].to_numpy() / t["volume_m3"].to_numpy()
     fat = t["fat_fraction"].to_numpy() if "fat_fraction" in t.columns else fat_from_density(density)
-    return _by_sex_and_class(t, {"density_kg_m3": density, "fat_fraction": fat}, spec)
+    expected = deurenberg_fat_fraction(t["bmi"].to_numpy(), t["age_years"].to_numpy(),
+                                       (t["sex"] == "male").to_numpy())
+    return _by_sex_and_class(t, {"density_kg_m3": density, "fat_fraction": fat,
+                                 "deurenberg_density_kg_m3": density_from_fat(expected, "siri"),
+                                 "deurenberg_fat_fraction": expected}, spec)
 
 
 def group_masks(table: pd.DataFrame, spec: GroupSpec = GroupSpec()) -> dict[str, np.ndarray]:
@@ -202,28 +245,61 @@ def group_masks(table: pd.DataFrame, spec: GroupSpec = GroupSpec()) -> dict[str,
 def group_counts(table: pd.DataFrame, spec: GroupSpec = GroupSpec()) -> dict[str, int]:
     """Subjects per :data:`REALISM_GROUPS` group (see :func:`group_masks`)."""
     _check(table)
-    return {name: int(mask.sum()) for name, mask in group_masks(_one_row_per_body(table), spec).items()}
+    return {name: int(mask.sum()) for name, mask in group_masks(one_row_per_body(table), spec).items()}
 
 
 def posture_mix(table: pd.DataFrame) -> dict[str, int]:
     """Subjects per named posture (``posture`` column); ``{}`` when the table has none."""
     if "posture" not in table.columns:
         return {}
-    counts = _one_row_per_body(table)["posture"].value_counts()
+    counts = one_row_per_body(table)["posture"].value_counts()
     return {str(k): int(v) for k, v in counts.sort_index().items()}
 
 
+def posed_area_change(table: pd.DataFrame) -> pd.DataFrame:
+    """How much posing changes the skin area: 100·(``wbsa_posed_m2`` / ``wbsa_m2`` − 1) per posture.
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``posture`` (``all`` first, then each name), ``n``, ``mean_percent``, ``sd_percent``,
+        ``min_percent``, ``max_percent``; empty when the table has no posture columns.
+    """
+    from wbsa.bodies.posture_table import POSED_AREA_COLUMN
+
+    cols = ["posture", "n", "mean_percent", "sd_percent", "min_percent", "max_percent"]
+    if "posture" not in table.columns or POSED_AREA_COLUMN not in table.columns:
+        return pd.DataFrame(columns=cols)
+    t = one_row_per_body(table)
+    change = pd.Series(100 * (t[POSED_AREA_COLUMN].to_numpy() / t["wbsa_m2"].to_numpy() - 1), index=t.index)
+    rows = [("all", change)] + [(str(k), change[t["posture"] == k]) for k in sorted(t["posture"].unique())]
+    return pd.DataFrame([(name, len(c), c.mean(), c.std(), c.min(), c.max()) for name, c in rows], columns=cols)
+
+
 def realism_summary(table: pd.DataFrame, spec: GroupSpec = GroupSpec()) -> dict[str, object]:
-    """Everything above as plain data (JSON-able): ``hw_law``, ``groups``, ``posture``,
-    ``dubois`` and ``composition`` (lists of row dicts), and ``bmi_range_adults``."""
+    """Everything above as plain data (JSON-able).
+
+    Keys: ``hw_law`` (:class:`HWLaw` as a dict), ``dubois_bmi_slopes``, ``schlich_female_effect_percent``
+    (Schlich's women / men at the adults' stature and mass, :mod:`wbsa.analysis.calibration_refs`),
+    ``groups``, ``posture``, ``posed_area`` (list of row dicts, empty without postures),
+    ``bmi_range_adults``, ``composition_columns`` (whether the table has its own fat fractions),
+    ``dubois`` and ``composition`` (lists of row dicts).
+    """
+    from wbsa.analysis.calibration_refs import schlich_female_effect_percent
+
     _check(table)
-    t = _one_row_per_body(table)
-    adults = t[t["age_years"] > spec.kid_max_age_years]["bmi"]
+    t = one_row_per_body(table)
+    adults = t[t["age_years"] > spec.kid_max_age_years]
     return {
         "hw_law": hw_law(t, spec).to_dict(),
+        "dubois_bmi_slopes": dubois_bmi_slopes(t, spec),
+        "schlich_female_effect_percent": schlich_female_effect_percent(adults["stature_m"].to_numpy(),
+                                                                       adults["mass_kg"].to_numpy()),
         "groups": group_counts(t, spec),
         "posture": posture_mix(t),
-        "bmi_range_adults": [float(adults.min()), float(adults.max())] if len(adults) else [],
+        "posed_area": posed_area_change(t).to_dict("records"),
+        "bmi_range_adults": [float(adults["bmi"].min()), float(adults["bmi"].max())] if len(adults) else [],
+        "composition_columns": "fat_fraction" in t.columns,
         "dubois": dubois_table(t, spec).to_dict("records"),
         "composition": composition_table(t, spec).to_dict("records"),
     }

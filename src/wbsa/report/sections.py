@@ -13,7 +13,7 @@ import pandas as pd
 
 from wbsa.core.versions import WBSA_VERSION as __version__
 from wbsa.errors import WbsaError
-from wbsa.report.claim import comparisons_display, compute_claim, headline_display, method_text
+from wbsa.report.claim import comparisons_display, compute_claim, group_spec_of, headline_display, method_text
 from wbsa.report.data import ReportData, select
 from wbsa.report.figures.by_view import coefficients_by_view, group_errors, model_comparison
 from wbsa.report.figures.distance import distance_effect
@@ -62,7 +62,7 @@ class SectionBuilder:
         return dict(distance_m=d.distance_m, camera=d.camera, dpi=self.dpi)
 
     def steps(self) -> list[Callable[[], None]]:
-        steps = [self.claim, self.summary, self.population, self.scatter]
+        steps = [self.claim, self.calibration, self.summary, self.population, self.scatter]
         steps += [lambda g=g: self.view_figure(g) for g in self.d.groups]
         steps += [self.groups, self.nonlinear, self.residuals, self.snapshots, self.reconstruction, self.distance,
                   self.formulae, self.claim_details, self.fit_table, self.run_info]
@@ -92,6 +92,47 @@ class SectionBuilder:
                 "interval; W/T/L counts the published formulae the view beats, ties with and loses to (each "
                 "comparison is listed in 'The central claim: every comparison').", nowrap=True)
         p.paragraph(method_text(r, k))
+
+    def calibration(self) -> None:
+        """The study's own bodies beside the published real-body figures (issue 10, point 4)."""
+        from wbsa.analysis.realism import realism_summary
+        from wbsa.report import calibration as cal
+        from wbsa.report.figures.calibration import calibration_figure
+
+        d, p = self.d, self.page
+        spec = group_spec_of(d.fit_info)
+        p.section("calibration", "How real are these bodies?",
+                  "The claim above can only be as good as the bodies it is tested on: a view beats height and weight "
+                  "only where bodies of the same stature and mass differ in area. This section puts this study's "
+                  "population beside what real bodies are published to do (docs/calibration.md).")
+        try:
+            summary = realism_summary(d.population, spec)
+        except WbsaError as exc:
+            self.unavailable["tab-calibration"] = str(exc)
+            p.unavailable("tab-calibration", "calibration tables", str(exc))
+            return
+        p.bullets(cal.calibration_sentences(summary, spec))
+        p.table("tab-calibration", cal.reference_table(summary, spec), "This population beside the published "
+                "real-body figures (the published formulae evaluated at these subjects' height and weight where a "
+                "source gives an equation, not a table); 'not found': the stored sources do not give it.")
+        self._figure("fig-calibration", "calibration figure", lambda: calibration_figure(d.population, spec, self.dpi),
+                     "(a) Mesh area / Du Bois against BMI for every subject (children hollow), with Livingston & "
+                     "Lee's law fitted on normal-weight and obese patients (band: 10–90 % of the adults in each BMI "
+                     "bin) and the 3-D-scan formulae of Yu and Schlich, all divided by Du Bois at the same adults; "
+                     "(b) adults' density against BMI with Deurenberg's body-fat equation and Siri's density at the "
+                     "median age (band: ± the equation's standard error).")
+        p.table("tab-calibration-dubois", cal.dubois_display(summary), "Mesh area / Du Bois by sex and BMI class "
+                "(mean ± SD; adults in WHO classes, children one class), beside the formulae fitted on measured "
+                "areas, divided by Du Bois at the same subjects.")
+        p.table("tab-calibration-composition", cal.composition_display(summary), "Density (mass / volume) and fat "
+                "by sex and BMI class (mean ± SD), beside Deurenberg's body-fat equation (its mean) and Siri's "
+                "density at the same BMI, age and sex.")
+        p.table("tab-calibration-groups", cal.groups_display(summary, spec), "Subjects per group, and per posture.")
+        posed = cal.posture_display(summary)
+        if not posed.empty:
+            p.table("tab-calibration-posture", posed, "Posed skin area − rest-pose WBSA, % of WBSA, per posture "
+                    "(WBSA is the rest-pose area; the scans see the posed bodies).")
+        p.paragraph("Sources: " + " · ".join(cal.sources_text()))
 
     def summary(self) -> None:
         d, p = self.d, self.page

@@ -9,6 +9,8 @@ the figure.
 Modules, one figure family each:
 
 - :mod:`~wbsa.report.figures.style`: the dm² unit, group labels, the figure factory, axis styling.
+- :mod:`~wbsa.report.figures.calibration`: mesh / Du Bois and density against BMI beside the published
+  real-body relations (the calibration section).
 - :mod:`~wbsa.report.figures.population`: WBSA distribution (Fig 5).
 - :mod:`~wbsa.report.figures.one_view`: VBSA against WBSA at one view (Fig 10, S1 Fig) and the
   non-linear view (Fig 16).
@@ -27,6 +29,7 @@ from __future__ import annotations
 
 #: Figures of the report in order: id -> what it reproduces.
 FIGURES: dict[str, str] = {
+    "fig-calibration": "issue 10: mesh / Du Bois and density against BMI beside published real-body figures",
     "fig-wbsa-distribution": "paper Fig 5",
     "fig-vbsa-wbsa": "paper Fig 10 and S1 Fig",
     "fig-view-<group>": "paper Figs 11, 13, 14",

@@ -33,7 +33,9 @@ def test_boundaries_follow_the_paper():
     assert m["small"].tolist() == [True, False, False, False]  # <= 140 cm is small
     assert m["normal"].tolist() == [False, True, True, False]  # 140 < S <= 200
     assert m["big"].tolist() == [False, False, False, True]  # > 200 cm
-    assert m["obese"].tolist() == [True, False, False, True]  # BMI >= 30
+    assert m["obese"].tolist() == [False, False, False, False]  # adults with BMI >= 30: none here (ages 15, 8)
+    adults = pop.assign(age_years=40.0)
+    assert assign_groups(adults)["obese"].tolist() == [True, False, False, True]  # BMI >= 30 (WHO, adults)
 
 
 def test_custom_thresholds_move_subjects():
@@ -44,7 +46,7 @@ def test_custom_thresholds_move_subjects():
     assert m["kids"].tolist() == [True, True, False]
     assert m["small"].tolist() == [True, False, False]
     assert m["big"].tolist() == [False, False, True]
-    assert m["obese"].tolist() == [False, True, True]
+    assert m["obese"].tolist() == [False, False, True]  # adults (> 18 y) with BMI >= 25
 
 
 def test_missing_values_leave_a_subject_only_in_all():

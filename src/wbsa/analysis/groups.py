@@ -56,7 +56,7 @@ def assign_groups(population: pd.DataFrame, spec: GroupSpec = GroupSpec()) -> pd
             "small": stature <= spec.small_max_stature_m,
             "normal": (stature > spec.small_max_stature_m) & (stature <= spec.big_min_stature_m),
             "big": stature > spec.big_min_stature_m,
-            "obese": bmi >= spec.obese_min_bmi,
+            "obese": (age > spec.kid_max_age_years) & (bmi >= spec.obese_min_bmi),
             "underweight": (age > spec.kid_max_age_years) & (bmi < spec.underweight_max_bmi),
             "tall": stature >= spec.tall_min_stature_m,
         }

@@ -27,7 +27,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import pandas as pd
 
-from wbsa.analysis.groups import GroupSpec
+from wbsa.analysis.groups import GroupSpec, assign_groups
 from wbsa.errors import WbsaError
 
 #: WHO adult BMI classes ``(label, low, high)``, kg/m², low inclusive.
@@ -37,6 +37,8 @@ BMI_CLASSES = (("<18.5", 0.0, 18.5), ("18.5-25", 18.5, 25.0), ("25-30", 25.0, 30
 CHILDREN = "children"
 #: Group names of :func:`group_counts`, in order.
 REALISM_GROUPS = ("all", "adults", "children", "obese", "underweight", "small", "tall", "women", "men")
+#: The analysis group (:data:`wbsa.typing.GROUP_NAMES`) of each plain name that differs.
+_GROUP_OF = {"children": "kids", "women": "females", "men": "males"}
 #: Formulae fitted on measured areas that :func:`dubois_table` sets beside the mesh (keys of
 #: :data:`wbsa.formulae.FORMULAE`): 3-D scans (Schlich 2010, Yu 2010) and obese patients
 #: (Livingston & Lee 2001).
@@ -222,24 +224,11 @@ def composition_table(table: pd.DataFrame, spec: GroupSpec = GroupSpec()) -> pd.
 
 
 def group_masks(table: pd.DataFrame, spec: GroupSpec = GroupSpec()) -> dict[str, np.ndarray]:
-    """Membership ``(n,) bool`` of every :data:`REALISM_GROUPS` group.
-
-    Obese (BMI ≥ ``spec.obese_min_bmi``) and underweight (BMI < 18.5) are adult cut-offs and count
-    adults only; small is stature ≤ ``spec.small_max_stature_m``, tall > ``spec.big_min_stature_m``.
-    """
-    age, bmi, stature = (table[c].to_numpy(dtype=float) for c in ("age_years", "bmi", "stature_m"))
-    adults = age > spec.kid_max_age_years
-    return {
-        "all": np.ones(len(table), dtype=bool),
-        "adults": adults,
-        "children": ~adults,
-        "obese": adults & (bmi >= spec.obese_min_bmi),
-        "underweight": adults & (bmi < 18.5),
-        "small": stature <= spec.small_max_stature_m,
-        "tall": stature > spec.big_min_stature_m,
-        "women": (table["sex"] == "female").to_numpy(),
-        "men": (table["sex"] == "male").to_numpy(),
-    }
+    """Membership ``(n,) bool`` of every :data:`REALISM_GROUPS` group: the analysis groups
+    (:func:`wbsa.analysis.groups.assign_groups`, the same definitions as the fits and the claim) under the
+    issue's plain names (children = kids, women = females, men = males)."""
+    members = assign_groups(table, spec)
+    return {name: members[_GROUP_OF.get(name, name)].to_numpy(dtype=bool) for name in REALISM_GROUPS}
 
 
 def group_counts(table: pd.DataFrame, spec: GroupSpec = GroupSpec()) -> dict[str, int]:

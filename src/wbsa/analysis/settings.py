@@ -57,7 +57,8 @@ class GroupSpec:
     big_min_stature_m : float
         Big stature is ``stature_m > big_min_stature_m`` (paper: 2.00 m); normal lies between.
     obese_min_bmi : float
-        Obese is ``bmi >= obese_min_bmi`` (WHO: 30 kg/m²).
+        Obese is an adult with ``bmi >= obese_min_bmi`` (WHO: 30 kg/m²; children are left out because their
+        BMI cut-offs depend on age and sex).
     underweight_max_bmi : float
         Underweight is an adult with ``bmi < underweight_max_bmi`` (WHO: 18.5 kg/m²; children are left out
         because their BMI cut-offs depend on age and sex).
@@ -110,7 +111,7 @@ class GroupSpec:
             "small": f"stature <= {self.small_max_stature_m:g} m",
             "normal": f"{self.small_max_stature_m:g} m < stature <= {self.big_min_stature_m:g} m",
             "big": f"stature > {self.big_min_stature_m:g} m",
-            "obese": f"BMI >= {self.obese_min_bmi:g} kg/m2",
+            "obese": f"adults with BMI >= {self.obese_min_bmi:g} kg/m2",
             "underweight": f"adults with BMI < {self.underweight_max_bmi:g} kg/m2",
             "tall": f"stature >= {self.tall_min_stature_m:g} m",
         }

@@ -195,10 +195,9 @@ def composition_display(summary: dict) -> pd.DataFrame:
 
 def groups_display(summary: dict, spec: GroupSpec = GroupSpec()) -> pd.DataFrame:
     """Subjects per group with each group's definition, then the posture mix."""
-    what = {"all": "", "adults": f"age > {spec.kid_max_age_years:g} y",
-            "children": f"age ≤ {spec.kid_max_age_years:g} y", "obese": f"adults, BMI ≥ {spec.obese_min_bmi:g}",
-            "underweight": "adults, BMI < 18.5", "small": f"stature ≤ {spec.small_max_stature_m:g} m",
-            "tall": f"stature > {spec.big_min_stature_m:g} m", "women": "", "men": ""}
+    defined = spec.describe()  # the analysis groups' own definitions, under the plain names
+    what = {name: ("" if name in ("all", "women", "men") else defined[{"children": "kids"}.get(name, name)])
+            for name in summary["groups"]}
     rows = [(g, what.get(g, ""), n) for g, n in summary["groups"].items()]
     rows += [(f"posture: {k}", "", v) for k, v in summary["posture"].items()]
     return pd.DataFrame(rows, columns=["group", "definition", "subjects"])

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from wbsa.camera.area import GRAZING_COS
+from wbsa.camera.area import GRAZING_COS, GRAZING_SPLIT_PX
 from wbsa.camera.extrinsics import pose_from_view
 from wbsa.camera.frame import DepthFrame
 from wbsa.camera.intrinsics import Intrinsics
@@ -14,7 +14,8 @@ from wbsa.camera.views import View
 
 def measure_view(scene: MeshScene, intrinsics: Intrinsics, view: View, target: np.ndarray | None = None, *,
                  roi: bool | RoiMode = True, return_frame: bool = True,
-                 grazing_cos: float = GRAZING_COS) -> tuple[dict, DepthFrame | None]:
+                 grazing_cos: float = GRAZING_COS,
+                 grazing_split_px: float | None = GRAZING_SPLIT_PX) -> tuple[dict, DepthFrame | None]:
     """Render ``view`` of ``scene`` and measure the visible areas.
 
     Parameters
@@ -33,6 +34,9 @@ def measure_view(scene: MeshScene, intrinsics: Intrinsics, view: View, target: n
         Triangles seen at cos θ below this are measured in object space for ``vbsa_visible_m2``
         (:func:`wbsa.camera.area.visible_area_m2`); 0.2 casts about two thirds as many visibility rays and
         stays within 1 % on the tested spheres and bodies; 0 gives the plain pixel sum (fastest, 1–5 % low).
+    grazing_split_px : float or None
+        Grazing triangles that may look larger than this many pixels count in proportion to their visible
+        sub-triangles (:func:`wbsa.camera.area.grazing_area_m2`); None: by their centroid alone.
 
     Returns
     -------
@@ -52,7 +56,7 @@ def measure_view(scene: MeshScene, intrinsics: Intrinsics, view: View, target: n
         "distance_m": view.distance_m,
         "camera": intrinsics.name,
         "vbsa_hit_m2": float(np.einsum("i,i->", scene.triangle_areas_m2, seen)),
-        "vbsa_visible_m2": hits.visible_area_m2(scene, grazing_cos),
+        "vbsa_visible_m2": hits.visible_area_m2(scene, grazing_cos, grazing_split_px),
         "n_pixels": hits.n_pixels,
         "n_triangles_hit": int(np.count_nonzero(seen)),
         "fits_in_frame": not hits.touches_border,

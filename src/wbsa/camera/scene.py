@@ -33,6 +33,8 @@ class MeshScene:
         True for a consistently oriented, (nearly) closed surface: then only triangles facing the camera
         can be visible, which halves the object-space visibility tests of the visible-area estimate.
     centroids : (m, 3) float64
+    longest_edges_m : (m,) float64
+        Longest edge of each triangle; ``max_edge_m`` is the largest of them.
     bbox_corners : (8, 3) float64
     bbox_min, bbox_max : (3,) float64
     center : (3,) float64
@@ -58,6 +60,11 @@ class MeshScene:
         self.center = 0.5 * (self.bbox_min + self.bbox_max)
         self.bbox_corners = self.bbox_min + _CORNERS * (self.bbox_max - self.bbox_min)
         self.centroids = (v0 + v1 + v2) / 3.0
+        e12 = v2 - v1
+        self.longest_edges_m = np.sqrt(np.maximum(np.maximum(np.einsum("ij,ij->i", e01, e01),
+                                                             np.einsum("ij,ij->i", e12, e12)),
+                                                  np.einsum("ij,ij->i", e20, e20)))
+        self.max_edge_m = float(self.longest_edges_m.max())
         local = self.centroids - self.center
         self.one_sided, sign = _orientation(faces, vertices.shape[0], self.triangle_areas_m2,
                                             np.einsum("ij,ij->i", self.face_normals, local))

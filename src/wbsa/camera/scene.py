@@ -32,6 +32,8 @@ class MeshScene:
     one_sided : bool
         True for a consistently oriented, (nearly) closed surface: then only triangles facing the camera
         can be visible, which halves the object-space visibility tests of the visible-area estimate.
+    orientation_sign : float
+        +1 or −1: ``orientation_sign * face_normals`` point outward (+1 when ``one_sided`` is False).
     centroids : (m, 3) float64
     longest_edges_m : (m,) float64
         Longest edge of each triangle; ``max_edge_m`` is the largest of them.
@@ -72,6 +74,7 @@ class MeshScene:
         # n·(C − c) = n·C − n·c and |C − c|² = |C|² − 2 C·c + |c|²,
         # with the per-triangle columns stored contiguously (structure of arrays), n outward and positions
         # relative to the bounding-box centre (so float32 keeps its precision wherever the mesh lies).
+        self.orientation_sign = float(sign)
         outward = sign * self.face_normals
         self._soa = np.ascontiguousarray(np.concatenate([
             outward.T, local.T, np.einsum("ij,ij->i", outward, local)[None],

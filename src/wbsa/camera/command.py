@@ -29,6 +29,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--subject", type=int, default=0, help="subject_id in --population (default 0)")
     add_camera_arguments(p)
     add_view_arguments(p)
+    add_backend_argument(p)
     from wbsa.sensor.cli import add_sensor_arguments
     from wbsa.surface.cli import add_reconstruct_arguments
 
@@ -54,6 +55,16 @@ def add_camera_arguments(p: argparse.ArgumentParser) -> None:
         g.add_argument(f"--{name}", type=float, help=f"{what} in pixels (overrides --camera)")
     g.add_argument("--scale", type=float, default=1.0,
                    help="multiply the resolution (and focal lengths) by this factor, same field of view (default 1)")
+
+
+def add_backend_argument(p: argparse.ArgumentParser) -> None:
+    """``--backend open3d|warp|auto``: the ray-casting back end (:mod:`wbsa.camera.backends`)."""
+    from wbsa.camera.backends import BACKENDS, DEFAULT_BACKEND
+
+    p.add_argument("--backend", choices=BACKENDS, default=DEFAULT_BACKEND,
+                   help="ray-casting back end: open3d (the reference, default), warp (NVIDIA Warp kernels on a CUDA "
+                        "GPU if present, else the CPU; same numbers within float32 rounding) or auto (warp on a GPU, "
+                        "else open3d)")
 
 
 def add_view_arguments(p: argparse.ArgumentParser) -> None:
@@ -121,7 +132,7 @@ def run_view(args: argparse.Namespace) -> int:
     from wbsa.population.export import write_mesh
     from wbsa.surface import reconstruct, recon_column
     from wbsa.camera.intrinsics import Intrinsics
-    from wbsa.camera.measure import measure_view
+    from wbsa.camera.measure import measure_views
     from wbsa.camera.scene import MeshScene
     from wbsa.camera.target import load_target
     from wbsa.io import write_json, write_table
@@ -141,9 +152,10 @@ def run_view(args: argparse.Namespace) -> int:
     views = views_from_args(args, intrinsics, stature)
     out = Path(args.out) if args.out else None
     rows = []
-    for view in views:
-        need_frame = out is not None or not sensor.is_ideal or bool(methods)
-        row, frame = measure_view(scene, intrinsics, view, return_frame=need_frame)
+    need_frame = out is not None or not sensor.is_ideal or bool(methods)
+    measured = measure_views(scene, intrinsics, views, backend=getattr(args, "backend", "open3d"),
+                             return_frames=need_frame)
+    for view, (row, frame) in zip(views, measured):
         row = {"mesh": source, "mesh_area_m2": float(scene.triangle_areas_m2.sum()), **row}
         if not sensor.is_ideal:
             subject = args.subject if args.population else 0

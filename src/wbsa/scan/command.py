@@ -41,6 +41,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="use an existing dask scheduler, e.g. tcp://10.0.0.5:8786 (default: $DASK_SCHEDULER_ADDRESS)")
     p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                    help="progress bar on stderr (default: when stderr is a terminal)")
+    from wbsa.camera.command import add_backend_argument
+
+    add_backend_argument(p)
     _add_optional_stage_arguments(p)
     p.set_defaults(func=handle)
 
@@ -84,7 +87,7 @@ def settings_from_args(args: argparse.Namespace):
         reconstruction = reconstruction_settings_from_args(args)
     return ScanSettings(camera=camera, views=tuple(views), sensor=sensor, reconstruct=methods,
                         reconstruction=reconstruction, seed=args.seed,
-                        chunk_size=args.chunk_size)
+                        chunk_size=args.chunk_size, backend=args.backend)
 
 
 def handle(args: argparse.Namespace) -> int:

@@ -53,6 +53,9 @@ class ScanSettings:
         depend on chunking, on the view list or on the number of workers.
     chunk_size : int
         Subjects per chunk: one Parquet part and one unit of parallel work.
+    backend : {'open3d', 'warp', 'auto'}
+        Ray-casting back end (:mod:`wbsa.camera.backends`); ``auto`` is resolved on construction. Only a
+        back end other than ``open3d`` enters :meth:`to_dict` (and the hash).
     """
 
     camera: Intrinsics
@@ -62,8 +65,12 @@ class ScanSettings:
     reconstruction: ReconstructionSettings | None = None
     seed: int = 0
     chunk_size: int = DEFAULT_CHUNK_SIZE
+    backend: str = "open3d"
 
     def __post_init__(self) -> None:
+        from wbsa.camera.backends import resolve_backend
+
+        object.__setattr__(self, "backend", resolve_backend(self.backend))
         object.__setattr__(self, "views", tuple(self.views))
         object.__setattr__(self, "reconstruct", tuple(self.reconstruct))
         if not self.views:
@@ -98,6 +105,7 @@ class ScanSettings:
             if self.reconstruct else None,
             "seed": int(self.seed),
             "chunk_size": int(self.chunk_size),
+            **({} if self.backend == "open3d" else {"backend": self.backend}),
         })
 
 

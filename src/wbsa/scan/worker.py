@@ -113,7 +113,8 @@ def scan_subject(mesh, subject_id: int, settings: ScanSettings, *, nthreads: int
         ``vbsa_recon_<method>_m2`` for each reconstruction method (from the sensor's frame when there is
         a sensor, else from the ideal frame).
     """
-    from wbsa.camera import MeshScene, measure_view
+    from wbsa.camera import MeshScene
+    from wbsa.camera.measure import measure_views
 
     scene = MeshScene(mesh, nthreads=nthreads)
     sensor, methods = settings.sensor, settings.reconstruct
@@ -124,8 +125,9 @@ def scan_subject(mesh, subject_id: int, settings: ScanSettings, *, nthreads: int
         from wbsa.surface import recon_column, vbsa_recon_m2
 
     rows = []
-    for view in settings.views:
-        row, frame = measure_view(scene, settings.camera, view, scene.center, return_frame=need_frame)
+    measured = measure_views(scene, settings.camera, settings.views, scene.center, backend=settings.backend,
+                             return_frames=need_frame)
+    for view, (row, frame) in zip(settings.views, measured):
         row = {"subject_id": subject_id, **row}
         if sensor is not None:
             frame, sensed = sense_view(frame, scene, sensor, view_rng(settings.seed, subject_id, view))

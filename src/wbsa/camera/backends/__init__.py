@@ -50,7 +50,7 @@ class Backend(Protocol):
 def check_backend(name: str) -> str:
     """``name`` if it is a back end, else a one-line :class:`WbsaError`."""
     if name not in BACKENDS:
-        raise WbsaError(f"unknown ray-casting backend {name!r}; use one of {', '.join(BACKENDS)}")
+        raise WbsaError(f"unknown ray-casting backend {name!r}: backend must be one of {', '.join(BACKENDS)}")
     return name
 
 

@@ -27,6 +27,9 @@ from wbsa.errors import WbsaError
 GRID_SLACK_PX = 0.05
 #: Triangles per partial sum of :func:`~.warp_kernels.reduce_triangles`.
 REDUCE_CHUNK = 1024
+#: Skip back faces that cannot be a first hit (one-sided scenes, away from holes); False only to test that
+#: it changes nothing.
+CULL_BACK_FACES = True
 #: Views per batch of launches on the CPU (all of them on a GPU): keeps the per-view buffers in cache.
 CPU_VIEWS_PER_BATCH = 16
 _EMPTY = np.uint64(0xFFFFFFFFFFFFFFFF)
@@ -34,11 +37,26 @@ _EMPTY = np.uint64(0xFFFFFFFFFFFFFFFF)
 
 @lru_cache(maxsize=1)
 def warp_module():
-    """``import warp``, initialised quietly (once per process)."""
+    """``import warp``, initialised quietly (once per process).
+
+    Warp's banner is switched off; its native library prints a warning on stderr when a machine has no
+    CUDA driver, which is the normal case here, so stderr is muted while it starts.
+    """
+    import os
+    import sys
+
     import warp as wp
 
-    wp.config.quiet = True
-    wp.init()
+    wp.config.log_level = wp.LOG_ERROR
+    sys.stderr.flush()
+    saved = os.dup(2)
+    try:
+        with open(os.devnull, "w") as null:
+            os.dup2(null.fileno(), 2)
+            wp.init()
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
     return wp
 
 
@@ -209,7 +227,7 @@ def _camera(intrinsics: Intrinsics, scene: MeshScene, grazing_cos: float, split_
     cam.t_tol = float(_CENTROID_T_TOL)
     cam.one_sided = int(bool(scene.one_sided))
     cam.sign = float(scene.orientation_sign)
-    cam.cull = 1
+    cam.cull = int(CULL_BACK_FACES)
     cam.stop = 0
     return cam
 

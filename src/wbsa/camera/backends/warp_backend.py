@@ -151,13 +151,8 @@ class _MeshData:
         self._indices = wp.array(faces.reshape(-1), dtype=wp.int32, device=device)
         self.areas = wp.array(scene.triangle_areas_m2, dtype=wp.float64, device=device)
         self.edges = wp.array(scene.longest_edges_m, dtype=wp.float64, device=device)
-        # Outward unit normals, centroids relative to the centre, n · c and |c|² (float64 columns).
-        normals = scene.orientation_sign * scene.face_normals
-        local = scene.centroids - scene.center
-        self.normals = wp.array(normals, dtype=wp.vec3d, device=device)
-        self.centroids = wp.array(local, dtype=wp.vec3d, device=device)
-        self.n_dot_c = wp.array(np.einsum("ij,ij->i", normals, local), dtype=wp.float64, device=device)
-        self.c_dot_c = wp.array(np.einsum("ij,ij->i", local, local), dtype=wp.float64, device=device)
+        # The reference's float32 per-triangle columns: outward normal, centroid − centre, n · c, |c|².
+        self.soa = wp.array(scene._soa, dtype=wp.float32, device=device)
         # Holes of a one-sided scene (loops of boundary edges): back faces are rasterized only near them.
         loops = boundary_loops(faces.tobytes(), self.n_vertices) if scene.one_sided else []
         members = np.concatenate(loops) if loops else np.zeros(0, dtype=np.int32)
@@ -218,18 +213,33 @@ def _camera(intrinsics: Intrinsics, scene: MeshScene, grazing_cos: float, split_
     cam = _kernels().Camera()
     cam.fx, cam.fy, cam.cx, cam.cy, cam.skew = float(k.fx), float(k.fy), float(k.cx), float(k.cy), float(k.skew)
     cam.width, cam.height = int(k.width), int(k.height)
-    cam.grazing_cos = float(grazing_cos)
+    cam.grazing_cos = float(np.float32(grazing_cos))
     cam.split_px = -1.0 if split_px is None else float(split_px)
     cam.sample_px = float(GRAZING_SAMPLE_PX)
     cam.max_split = int(GRAZING_MAX_SPLIT)
-    cam.clear_px = float(CENTROID_CLEAR_PX)
-    cam.hidden_px = float(CENTROID_HIDDEN_PX)
+    cam.clear_px = float(np.float32(CENTROID_CLEAR_PX))
+    cam.hidden_px = float(np.float32(CENTROID_HIDDEN_PX))
+    cam.footprint = float(np.float32(math.sqrt(k.fx * k.fy)))
     cam.t_tol = float(_CENTROID_T_TOL)
     cam.one_sided = int(bool(scene.one_sided))
     cam.sign = float(scene.orientation_sign)
     cam.cull = int(CULL_BACK_FACES)
     cam.stop = 0
     return cam
+
+
+def _view_terms(scene: MeshScene, k: Intrinsics, poses: list[Pose]) -> np.ndarray:
+    """(B, 19) float32 per-view terms of :mod:`.warp_kernels` (``N_VIEW_TERMS``), rounded as the reference rounds
+    them (:func:`wbsa.camera.area.triangle_view_terms`, :func:`wbsa.camera.roi.homogeneous_pixels`)."""
+    out = np.empty((len(poses), 19), dtype=np.float32)
+    for b, pose in enumerate(poses):
+        C = np.asarray(pose.camera_center, dtype=np.float64) - scene.center
+        out[b, 0:3] = C.astype(np.float32)
+        out[b, 3:6] = (-2.0 * C).astype(np.float32)
+        out[b, 6] = np.float32(C @ C)
+        out[b, 7:16] = (k.K @ pose.R).astype(np.float32).reshape(-1)
+        out[b, 16:19] = (k.K @ (pose.R @ scene.center + pose.T)).astype(np.float32)
+    return out
 
 
 def _grid(k: Intrinsics, lo: np.ndarray, hi: np.ndarray) -> tuple[int, int, int, int]:
@@ -274,6 +284,7 @@ def _measure_batch(data: _MeshData, k: Intrinsics, poses: list[Pose], grazing_co
     keys = wp.full(n_cells, _EMPTY, dtype=wp.uint64, device=dev)
     depth = wp.full(n_cells, np.inf, dtype=wp.float32, device=dev)
     centers = wp.array(np.array([p.camera_center - scene.center for p in poses]), dtype=wp.vec3d, device=dev)
+    vt = wp.array(_view_terms(scene, k, poses), dtype=wp.float32, device=dev)
     boxes = wp.empty((B, data.n_holes), dtype=wp.vec4d, device=dev)
     if data.n_holes:
         wp.launch(K.hole_boxes, dim=(B, data.n_holes),
@@ -281,8 +292,8 @@ def _measure_batch(data: _MeshData, k: Intrinsics, poses: list[Pose], grazing_co
                   device=dev)
     split = wp.empty((B, m), dtype=int, device=dev)
     wp.launch(K.raster_triangles, dim=(B, m),
-              inputs=[data.faces, xyz, uv, data.normals, data.centroids, data.n_dot_c, data.c_dot_c, data.edges, centers,
-                      cam, grids_w, offsets_w, boxes, keys, split], device=dev)
+              inputs=[data.faces, xyz, uv, data.soa, data.edges, vt, cam, grids_w, offsets_w, boxes, keys, split],
+              device=dev)
 
     rows_max = int(grids[:, 3].max())
     seen = wp.zeros((B, m), dtype=wp.uint8, device=dev)
@@ -290,12 +301,11 @@ def _measure_batch(data: _MeshData, k: Intrinsics, poses: list[Pose], grazing_co
     foot = wp.zeros((B, rows_max), dtype=wp.float64, device=dev)
     border = wp.zeros((B, rows_max), dtype=int, device=dev)
     wp.launch(K.resolve_pixels, dim=(B, rows_max),
-              inputs=[data.normals, data.centroids, data.n_dot_c, data.c_dot_c, centers, cam, grids_w, offsets_w,
-                      keys, depth, seen, n_pix, foot, border], device=dev)
+              inputs=[data.soa, vt, cam, grids_w, offsets_w, keys, depth, seen, n_pix, foot, border], device=dev)
 
     graze = np.zeros(B)
     if grazing_cos > 0:
-        graze = _grazing(data, cam, rot, trans, centers, grids_w, offsets_w, depth, split, B)
+        graze = _grazing(data, cam, vt, centers, grids_w, offsets_w, depth, split, B)
 
     chunks = -(-m // REDUCE_CHUNK)
     hit_area = wp.zeros((B, chunks), dtype=wp.float64, device=dev)
@@ -328,7 +338,7 @@ def _measure_batch(data: _MeshData, k: Intrinsics, poses: list[Pose], grazing_co
     return out
 
 
-def _grazing(data: _MeshData, cam, rot, trans, centers, grids_w, offsets_w, depth, split, B: int) -> np.ndarray:
+def _grazing(data: _MeshData, cam, vt, centers, grids_w, offsets_w, depth, split, B: int) -> np.ndarray:
     """(B,) visible area of the grazing triangles of each view of the batch.
 
     The grazing triangles and their sub-sampling (``split``, from :func:`~.warp_kernels.raster_triangles`)
@@ -357,12 +367,13 @@ def _grazing(data: _MeshData, cam, rot, trans, centers, grids_w, offsets_w, dept
     state = wp.empty(total, dtype=int, device=dev)
     point = wp.empty(total, dtype=wp.vec3, device=dev)
     wp.launch(K.grazing_points, dim=cand.size,
-              inputs=[cand_view, cand_tri, cand_split, cand_slot, data.faces, data.verts, data.centroids, data.normals,
-                      rot, trans, centers, cam, grids_w, offsets_w, depth, state, point], device=dev)
+              inputs=[cand_view, cand_tri, cand_split, cand_slot, data.faces, data.verts, data.soa, vt, cam, grids_w,
+                      offsets_w, depth, state, point], device=dev)
     if dev == "cpu":  # Embree's any-hit rays (Open3D) are about 3x faster than Warp's BVH on a CPU
         state_h = state.numpy()  # views of the same memory: the updates below are seen by the kernels
         ask = np.flatnonzero(state_h == 2)
         if ask.size:
+            # as wbsa.camera.area.points_visible: origin C, direction (point − centre) − (C − centre) in float32
             origins = centers.numpy()[np.repeat(view, n_points)[ask]]
             rays = np.empty((ask.size, 6), dtype=np.float32)
             rays[:, :3] = origins + data.scene.center

@@ -31,7 +31,8 @@ from __future__ import annotations
 
 import warp as wp
 
-wp.set_module_options({"enable_backward": False})
+# No adjoints; no fused multiply-adds, so float32 sums round as numpy's (same order, same bits).
+wp.set_module_options({"enable_backward": False, "fuse_fp": False})
 
 f64 = wp.float64
 
@@ -53,12 +54,13 @@ class Camera:
     skew: wp.float64
     width: int
     height: int
-    grazing_cos: wp.float64
+    grazing_cos: wp.float32    # as the reference compares its float32 cosines
     split_px: wp.float64       # < 0: never split
     sample_px: wp.float64
     max_split: int
-    clear_px: wp.float64
-    hidden_px: wp.float64
+    clear_px: wp.float32
+    hidden_px: wp.float32
+    footprint: wp.float32      # float32(√(fx · fy)): a pixel footprint at depth z is z / footprint
     t_tol: wp.float64
     one_sided: int
     sign: wp.float64           # orientation sign: sign · (e01 × e02) points outward
@@ -105,24 +107,52 @@ def inside_triangle(ax: wp.float64, ay: wp.float64, bx: wp.float64, by: wp.float
     return e0 <= zero and e1 <= zero and e2 <= zero
 
 
-@wp.func
-def facing(C: wp.vec3d, CC: wp.float64, normal: wp.vec3d, centroid: wp.vec3d, n_dot_c: wp.float64,
-           c_dot_c: wp.float64):
-    """(n · (C − c), |C − c|²) of a triangle (outward unit normal n, centroid c) and the camera centre C,
-    from per-triangle columns relative to the scene centre (as :func:`wbsa.camera.area.triangle_view_terms`)."""
-    height = wp.dot(normal, C) - n_dot_c
-    dist2 = CC - f64(2.0) * wp.dot(C, centroid) + c_dot_c
-    return height, wp.max(dist2, f64(1.0e-30))
+#: Columns of the per-view float32 terms ``vt`` (host: :func:`wbsa.camera.backends.warp_backend._view_terms`):
+#: C − centre (0–2), −2 (C − centre) (3–5), |C − centre|² (6), K·R row-major (7–15), K·(R·centre + T) (16–18).
+N_VIEW_TERMS = 19
 
 
 @wp.func
-def grazing_test(cam: Camera, height: wp.float64, dist2: wp.float64):
-    """Whether cos θ = height / √dist2 is grazing (one-sided: 0 < cos θ < g; else |cos θ| < g), without a root."""
-    g2 = cam.grazing_cos * cam.grazing_cos * dist2
-    small = height * height < g2
+def facing(vt: wp.array2d(dtype=wp.float32), b: int, soa: wp.array2d(dtype=wp.float32), tri: int):
+    """(n · (C − c), cos θ) of a triangle, float32, operation for operation as
+    :func:`wbsa.camera.area.triangle_view_terms` (``soa``: the scene's per-triangle float32 columns)."""
+    h = vt[b, 0] * soa[0, tri]
+    h = h + vt[b, 1] * soa[1, tri]
+    h = h + vt[b, 2] * soa[2, tri]
+    h = h - soa[6, tri]
+    d = vt[b, 3] * soa[3, tri]
+    d = d + vt[b, 4] * soa[4, tri]
+    d = d + vt[b, 5] * soa[5, tri]
+    d = d + soa[7, tri]
+    d = d + vt[b, 6]
+    d = wp.sqrt(wp.max(d, wp.float32(1.0e-30)))
+    return h, h / d
+
+
+@wp.func
+def is_grazing(cam: Camera, cos_t: wp.float32):
+    """One-sided scene: 0 < cos θ < g; otherwise |cos θ| < g (as :func:`wbsa.camera.area.grazing_area_m2`)."""
     if cam.one_sided != 0:
-        return height > f64(0.0) and small
-    return small
+        return cos_t > wp.float32(0.0) and cos_t < cam.grazing_cos
+    return wp.abs(cos_t) < cam.grazing_cos
+
+
+@wp.func
+def project32(vt: wp.array2d(dtype=wp.float32), b: int, P: wp.vec3):
+    """(u, v, z) float32 of a point relative to the scene centre, as :func:`wbsa.camera.roi.homogeneous_pixels`."""
+    uz = vt[b, 7] * P[0]
+    uz = uz + vt[b, 8] * P[1]
+    uz = uz + vt[b, 9] * P[2]
+    uz = uz + vt[b, 16]
+    vz = vt[b, 10] * P[0]
+    vz = vz + vt[b, 11] * P[1]
+    vz = vz + vt[b, 12] * P[2]
+    vz = vz + vt[b, 17]
+    z = vt[b, 13] * P[0]
+    z = z + vt[b, 14] * P[1]
+    z = z + vt[b, 15] * P[2]
+    z = z + vt[b, 18]
+    return uz / z, vz / z, z
 
 
 @wp.kernel
@@ -167,11 +197,10 @@ def hole_boxes(hole_vertices: wp.array(dtype=int), hole_start: wp.array(dtype=in
 
 @wp.kernel
 def raster_triangles(faces: wp.array(dtype=wp.vec3i), xyz: wp.array2d(dtype=wp.vec3d), uv: wp.array2d(dtype=wp.vec2d),
-                     normals: wp.array(dtype=wp.vec3d), centroids: wp.array(dtype=wp.vec3d),
-                     n_dot_c: wp.array(dtype=wp.float64), c_dot_c: wp.array(dtype=wp.float64),
-                     edges: wp.array(dtype=wp.float64), centers: wp.array(dtype=wp.vec3d),
-                     cam: Camera, grids: wp.array(dtype=wp.vec4i), offsets: wp.array(dtype=int),
-                     boxes: wp.array2d(dtype=wp.vec4d), keys: wp.array(dtype=wp.uint64), split: wp.array2d(dtype=int)):
+                     soa: wp.array2d(dtype=wp.float32), edges: wp.array(dtype=wp.float64),
+                     vt: wp.array2d(dtype=wp.float32), cam: Camera, grids: wp.array(dtype=wp.vec4i),
+                     offsets: wp.array(dtype=int), boxes: wp.array2d(dtype=wp.vec4d), keys: wp.array(dtype=wp.uint64),
+                     split: wp.array2d(dtype=int)):
     """Classify a triangle (grazing: sub-triangles per side in ``split``, else 0) and write its depth keys at
     every pixel centre its projection holds (atomic minimum).
 
@@ -180,21 +209,19 @@ def raster_triangles(faces: wp.array(dtype=wp.vec3i), xyz: wp.array2d(dtype=wp.v
     enters through a hole, so back faces outside every hole's cap box (``boxes``) are not rasterized.
     """
     b, tri = wp.tid()
-    C = centers[b]
-    height, dist2 = facing(C, wp.dot(C, C), normals[tri], centroids[tri], n_dot_c[tri], c_dot_c[tri])
+    height, cos_t = facing(vt, b, soa, tri)
     s = int(0)
-    if grazing_test(cam, height, dist2):
+    if is_grazing(cam, cos_t):
         s = 1
-        if cam.split_px >= f64(0.0):
-            # depth of the centroid: the camera's z axis is the third row of R; z = |C − c| cos(angle)
-            X = xyz[b, faces[tri][0]] + xyz[b, faces[tri][1]] + xyz[b, faces[tri][2]]
-            nearest = X[2] / f64(3.0) - edges[tri]
+        if cam.split_px >= f64(0.0):  # as wbsa.camera.area.split_counts
+            u, v, zc = project32(vt, b, wp.vec3(soa[3, tri], soa[4, tri], soa[5, tri]))
+            nearest = f64(zc) - edges[tri]
             if nearest <= f64(0.0):
                 s = cam.max_split
             else:
                 size = wp.max(cam.fx, cam.fy) * edges[tri] / nearest
                 if size > cam.split_px:
-                    s = wp.min(int(wp.ceil(size / cam.sample_px)), cam.max_split)
+                    s = wp.min(int(wp.ceil(wp.min(size, f64(1.0e9)) / cam.sample_px)), cam.max_split)
     split[b, tri] = s
     if cam.stop == 1:
         return
@@ -219,7 +246,7 @@ def raster_triangles(faces: wp.array(dtype=wp.vec3i), xyz: wp.array2d(dtype=wp.v
         return
     if cam.stop == 2:
         return
-    if cam.cull != 0 and cam.one_sided != 0 and height <= f64(0.0):
+    if cam.cull != 0 and cam.one_sided != 0 and height <= wp.float32(0.0):
         near_hole = int(0)
         for h in range(boxes.shape[1]):
             box = boxes[b, h]
@@ -246,39 +273,38 @@ def raster_triangles(faces: wp.array(dtype=wp.vec3i), xyz: wp.array2d(dtype=wp.v
 
 
 @wp.kernel
-def resolve_pixels(normals: wp.array(dtype=wp.vec3d), centroids: wp.array(dtype=wp.vec3d),
-                   n_dot_c: wp.array(dtype=wp.float64), c_dot_c: wp.array(dtype=wp.float64),
-                   centers: wp.array(dtype=wp.vec3d), cam: Camera, grids: wp.array(dtype=wp.vec4i),
-                   offsets: wp.array(dtype=int), keys: wp.array(dtype=wp.uint64), depth: wp.array(dtype=wp.float32),
-                   seen: wp.array2d(dtype=wp.uint8), n_pixels: wp.array2d(dtype=int),
-                   footprint: wp.array2d(dtype=wp.float64), border: wp.array2d(dtype=int)):
+def resolve_pixels(soa: wp.array2d(dtype=wp.float32), vt: wp.array2d(dtype=wp.float32), cam: Camera,
+                   grids: wp.array(dtype=wp.vec4i), offsets: wp.array(dtype=int), keys: wp.array(dtype=wp.uint64),
+                   depth: wp.array(dtype=wp.float32), seen: wp.array2d(dtype=wp.uint8),
+                   n_pixels: wp.array2d(dtype=int), footprint: wp.array2d(dtype=wp.float64),
+                   border: wp.array2d(dtype=int)):
     """Per grid row of a view: z-depth of each hit pixel (from its key, 6e-8 m steps), pixel count,
-    Σ z³ / h over the pixels on non-grazing triangles (h = |n · (C − c)|), whether a pixel on the image
-    border is hit; marks the triangles hit."""
+    Σ z³ · w over the pixels (w = 1 / |n · (C − c)| in float32 on non-grazing triangles, 0 on grazing ones,
+    as :func:`wbsa.camera.area.visible_area_m2`), whether a pixel on the image border is hit; marks the
+    triangles hit."""
     b, r = wp.tid()
     g = grids[b]
     if r < 1 or r >= g[3] - 1:
         return
-    C = centers[b]
-    CC = wp.dot(C, C)
     row = g[0] + r
     base = offsets[b] + r * g[2]
     count = int(0)
     total = f64(0.0)
     edge = int(0)
-    g2 = cam.grazing_cos * cam.grazing_cos
     for j in range(1, g[2] - 1):
         key = keys[base + j]
         if key == EMPTY_KEY:
             continue
         tri = key_triangle(key)
-        z = (f64(key >> wp.uint64(32)) + f64(0.5)) / DEPTH_SCALE
-        depth[base + j] = wp.float32(z)
+        z = wp.float32((f64(key >> wp.uint64(32)) + f64(0.5)) / DEPTH_SCALE)
+        depth[base + j] = z
         seen[b, tri] = wp.uint8(1)
         count += 1
-        height, dist2 = facing(C, CC, normals[tri], centroids[tri], n_dot_c[tri], c_dot_c[tri])
-        if height * height >= g2 * dist2 and height != f64(0.0):
-            total += z * z * z / wp.abs(height)
+        height, cos_t = facing(vt, b, soa, tri)
+        if wp.abs(cos_t) >= cam.grazing_cos:
+            w = wp.float32(1.0) / wp.max(wp.abs(height), wp.float32(1.0e-30))
+            z64 = f64(z)
+            total += z64 * z64 * z64 * f64(w)
         col = g[1] + j
         if row == 0 or row == cam.height - 1 or col == 0 or col == cam.width - 1:
             edge = 1
@@ -300,17 +326,16 @@ def lookup(depth: wp.array(dtype=wp.float32), base: int, g: wp.vec4i, row: int, 
 @wp.kernel
 def grazing_points(cand_view: wp.array(dtype=int), cand_tri: wp.array(dtype=int), cand_split: wp.array(dtype=int),
                    cand_slot: wp.array(dtype=int), faces: wp.array(dtype=wp.vec3i), verts: wp.array(dtype=wp.vec3f),
-                   centroids: wp.array(dtype=wp.vec3d), normals: wp.array(dtype=wp.vec3d),
-                   rot: wp.array(dtype=wp.mat33d), trans: wp.array(dtype=wp.vec3d), centers: wp.array(dtype=wp.vec3d),
-                   cam: Camera, grids: wp.array(dtype=wp.vec4i), offsets: wp.array(dtype=int),
-                   depth: wp.array(dtype=wp.float32), state: wp.array(dtype=int), point: wp.array(dtype=wp.vec3)):
+                   soa: wp.array2d(dtype=wp.float32), vt: wp.array2d(dtype=wp.float32), cam: Camera,
+                   grids: wp.array(dtype=wp.vec4i), offsets: wp.array(dtype=int), depth: wp.array(dtype=wp.float32),
+                   state: wp.array(dtype=int), point: wp.array(dtype=wp.vec3)):
     """Decide the points of one grazing triangle from the depth buffer: its centroid, or the centroids of
-    its s × s equal sub-triangles.
+    its s × s equal sub-triangles (float32, as :func:`wbsa.camera.area.points_visible`).
 
     A point in the image is visible (state 1) when none of the 2 × 2 pixels around it has a return more
     than ``clear_px`` footprints in front of it (front faces only), hidden (0) when all have one more than
     ``hidden_px`` in front, otherwise a query (2, ``point`` its position relative to the scene centre) for
-    :func:`anyhit_queries`. Points outside the image are 0.
+    an any-hit ray. Points outside the image are 0.
     """
     k = wp.tid()
     b = cand_view[k]
@@ -319,44 +344,43 @@ def grazing_points(cand_view: wp.array(dtype=int), cand_tri: wp.array(dtype=int)
     slot = cand_slot[k]
     g = grids[b]
     base = offsets[b]
-    R = rot[b]
-    T = trans[b]
-    C = centers[b]
-    front = cam.one_sided != 0 or wp.dot(normals[tri], C - centroids[tri]) > f64(0.0)
+    height, cos_t = facing(vt, b, soa, tri)
+    front = cam.one_sided != 0 or cos_t > wp.float32(0.0)
     f = faces[tri]
     V0 = wp.vec3d(verts[f[0]])
     V1 = wp.vec3d(verts[f[1]])
     V2 = wp.vec3d(verts[f[2]])
-    scale = wp.sqrt(cam.fx * cam.fy)
-    inv = f64(1.0) / f64(s)
+    third = f64(1.0) / f64(3.0)
     for i in range(s):
         for half in range(2):
             # half 0: the s − i sub-triangles pointing like the triangle; half 1: the s − i − 1 others
             for j in range(s - i - half):
-                P = centroids[tri]
-                if s > 1:
-                    a1 = (f64(i) + f64(1.0 + float(half)) / f64(3.0)) * inv
-                    a2 = (f64(j) + f64(1.0 + float(half)) / f64(3.0)) * inv
-                    P = V0 + (V1 - V0) * a1 + (V2 - V0) * a2
-                X = R * P + T
+                P = wp.vec3(soa[3, tri], soa[4, tri], soa[5, tri])
+                if s > 1:  # as wbsa.camera.area.subtriangle_centroids and split_area_m2, in float64
+                    a1 = (f64(i) + third * f64(1 + half)) / f64(s)
+                    a2 = (f64(j) + third * f64(1 + half)) / f64(s)
+                    a0 = f64(1.0) - a1 - a2
+                    P = wp.vec3(V0 * a0 + V1 * a1 + V2 * a2)
+                u, v, z = project32(vt, b, P)
                 result = int(0)
-                if X[2] > f64(0.0):
-                    u, v = to_pixel(cam, X)
-                    if u >= f64(-0.5) and u < f64(cam.width) - f64(0.5) and v >= f64(-0.5) and v < f64(cam.height) - f64(0.5):
-                        col = int(wp.floor(u))
-                        row = int(wp.floor(v))
-                        d0 = lookup(depth, base, g, row, col)
-                        d1 = lookup(depth, base, g, row, col + 1)
-                        d2 = lookup(depth, base, g, row + 1, col)
-                        d3 = lookup(depth, base, g, row + 1, col + 1)
-                        near = f64(wp.min(wp.min(d0, d1), wp.min(d2, d3)))
-                        far = f64(wp.max(wp.max(d0, d1), wp.max(d2, d3)))
-                        fp = X[2] / scale
-                        if front and near >= X[2] - cam.clear_px * fp:
-                            result = 1
-                        elif far >= X[2] - cam.hidden_px * fp:
-                            result = 2
-                            point[slot] = wp.vec3(P)
+                inside = z > wp.float32(0.0)
+                inside = inside and u >= wp.float32(-0.5) and u < wp.float32(float(cam.width) - 0.5)
+                inside = inside and v >= wp.float32(-0.5) and v < wp.float32(float(cam.height) - 0.5)
+                if inside:
+                    col = int(wp.floor(u))
+                    row = int(wp.floor(v))
+                    d0 = lookup(depth, base, g, row, col)
+                    d1 = lookup(depth, base, g, row, col + 1)
+                    d2 = lookup(depth, base, g, row + 1, col)
+                    d3 = lookup(depth, base, g, row + 1, col + 1)
+                    near = wp.min(wp.min(d0, d1), wp.min(d2, d3))
+                    far = wp.max(wp.max(d0, d1), wp.max(d2, d3))
+                    fp = z / cam.footprint
+                    if front and near >= z - cam.clear_px * fp:
+                        result = 1
+                    elif far >= z - cam.hidden_px * fp:
+                        result = 2
+                        point[slot] = P
                 state[slot] = result
                 slot += 1
 

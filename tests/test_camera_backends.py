@@ -11,7 +11,7 @@ pytest.importorskip("warp")
 from wbsa.camera import Intrinsics, MeshScene, View, measure_view, paper_views, pose_from_view, preset  # noqa: E402
 from wbsa.camera.backends import check_backend, get_backend, resolve_backend  # noqa: E402
 from wbsa.camera.measure import measure_views  # noqa: E402
-from wbsa.camera.reference import box_solid, monte_carlo_visible_area_m2, scene_mesh, sphere_solid  # noqa: E402
+from wbsa.camera.reference import coarse_scenes, monte_carlo_visible_area_m2, scene_mesh  # noqa: E402
 from wbsa.camera.shapes import body_like, icosphere  # noqa: E402
 from wbsa.errors import WbsaError  # noqa: E402
 from wbsa.population.mesh import TriangleMesh  # noqa: E402
@@ -97,7 +97,7 @@ def test_back_faces_seen_through_a_hole(warp, monkeypatch):
 
 
 def test_coarse_scene_with_warp():
-    solids = [box_solid((1.2, 0.03, 0.9), (0.0, 0.0, 0.0)), sphere_solid(0.12, (0.2, -0.16, 0.15), 2)]
+    solids = coarse_scenes()["thin wall"]
     scene = MeshScene(scene_mesh(solids))
     views = [View(86, 5, 4.3), View(88, 5, 4.3), View(30, 20, 4.3)]
     ref = [r for r, _ in measure_views(scene, KINECT, views, backend="open3d", return_frames=False)]

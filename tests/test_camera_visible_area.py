@@ -9,22 +9,17 @@ pytest.importorskip("open3d")
 
 from wbsa.camera import MeshScene, View, measure_view, paper_views, pose_from_view, preset  # noqa: E402
 from wbsa.camera.area import split_counts, subtriangle_centroids  # noqa: E402
-from wbsa.camera.reference import (box_solid, monte_carlo_visible_area_m2, scene_mesh,  # noqa: E402
-                                   sphere_solid)
+from wbsa.camera.reference import (AXIS_VIEWS, EDGE_ON_VIEWS, OBLIQUE_VIEWS, box_solid,  # noqa: E402
+                                   coarse_scenes, monte_carlo_visible_area_m2, scene_mesh)
 from wbsa.camera.shapes import body_like  # noqa: E402
 
 KINECT = preset("kinect-v1")
 
-#: A box, a box and a sphere in front of and behind it, and a thin wall beside it; two triangles per box face.
-BOXES = [box_solid((1.0, 0.4, 1.6), (0.0, 0.0, 0.0)), box_solid((0.3, 0.3, 0.3), (0.45, -0.45, 0.3)),
-         sphere_solid(0.2, (-0.5, 0.45, -0.4)), box_solid((0.02, 1.0, 0.8), (0.8, 0.1, 0.5))]
-#: A thin wall (3 cm) with a sphere just in front of it: seen nearly edge-on, the sphere hides part of a
-#: face that is a single grazing triangle pair (the centroid rule counted it whole or not at all: −41 % at 86°/5°).
-THIN_WALL = [box_solid((1.2, 0.03, 0.9), (0.0, 0.0, 0.0)), sphere_solid(0.12, (0.2, -0.16, 0.15), 2)]
-
-AXES = [(0, 0), (90, 0), (180, 0), (270, 0), (0, 90), (0, -90)]
-OBLIQUE = [(30, 20), (135, -35), (250, 50), (2, 0), (358, 0), (88, 5), (178, -3)]
-EDGE_ON = [(86, 5), (88, 5), (92, 5), (94, 5), (266, 5), (268, -5), (272, 5), (274, 5), (2, 88), (1, 0), (359, 0)]
+BOXES = coarse_scenes()["boxes"]
+#: Seen nearly edge-on, the sphere hides part of a face that is a single grazing triangle pair (the centroid
+#: rule counted it whole or not at all: −41 % at 86°/5°).
+THIN_WALL = coarse_scenes()["thin wall"]
+AXES, OBLIQUE, EDGE_ON = list(AXIS_VIEWS), list(OBLIQUE_VIEWS), list(EDGE_ON_VIEWS)
 
 
 def check(solids, az: float, el: float, n_samples: int) -> tuple[float, float]:

@@ -152,3 +152,26 @@ def monte_carlo_visible_area_m2(solids: list[ConvexSolid], intrinsics: Intrinsic
             area += tri_area * frac
             variance += tri_area**2 * frac * (1.0 - frac) / m
     return area, math.sqrt(variance)
+
+
+def coarse_scenes() -> dict[str, list[ConvexSolid]]:
+    """The coarse test scenes of the visible-area checks (tests and ``benchmarks/bench_raycast.py --accuracy``).
+
+    ``boxes``: a 1.0 × 0.4 × 1.6 m box, a 0.3 m cube in front of it, a sphere (80 faces) behind it and a
+    2 cm thin wall beside it; ``thin wall``: a 1.2 × 0.03 × 0.9 m wall with a sphere (320 faces) just in
+    front of it, so that seen nearly edge-on one grazing face (two triangles) is partly hidden. Two
+    triangles per box face.
+    """
+    return {
+        "boxes": [box_solid((1.0, 0.4, 1.6), (0.0, 0.0, 0.0)), box_solid((0.3, 0.3, 0.3), (0.45, -0.45, 0.3)),
+                  sphere_solid(0.2, (-0.5, 0.45, -0.4)), box_solid((0.02, 1.0, 0.8), (0.8, 0.1, 0.5))],
+        "thin wall": [box_solid((1.2, 0.03, 0.9), (0.0, 0.0, 0.0)), sphere_solid(0.12, (0.2, -0.16, 0.15), 2)],
+    }
+
+
+#: (azimuth, elevation) of the coarse-scene checks: the six axis directions, oblique views, and views
+#: that see the thin wall's large faces nearly edge-on.
+AXIS_VIEWS = ((0, 0), (90, 0), (180, 0), (270, 0), (0, 90), (0, -90))
+OBLIQUE_VIEWS = ((30, 20), (135, -35), (250, 50), (2, 0), (358, 0), (88, 5), (178, -3))
+EDGE_ON_VIEWS = ((86, 5), (92, 5), (94, 5), (266, 5), (268, -5), (272, 5), (274, 5), (2, 88), (1, 0),
+                 (359, 0))

@@ -387,15 +387,21 @@ def grazing_points(cand_view: wp.array(dtype=int), cand_tri: wp.array(dtype=int)
 
 @wp.kernel
 def anyhit_queries(mesh: wp.uint64, view_of: wp.array(dtype=int), centers: wp.array(dtype=wp.vec3d),
-                   cam: Camera, state: wp.array(dtype=int), point: wp.array(dtype=wp.vec3)):
+                   origins: wp.array(dtype=wp.vec3), cam: Camera, state: wp.array(dtype=int),
+                   point: wp.array(dtype=wp.vec3)):
     """Queries (state 2): visible (1) unless Warp's BVH finds a triangle on the segment from the camera
-    centre before ``1 − t_tol`` of the way to the point, hidden (0) otherwise."""
+    centre before ``1 − t_tol`` of the way to the point, hidden (0) otherwise.
+
+    The rays are the reference's (:func:`wbsa.camera.area.points_visible`): origin the camera centre in
+    world coordinates (``origins``, float32), direction (point − centre) − (C − centre) in float32, against
+    the mesh's float32 world coordinates (``mesh``), as Embree sees them.
+    """
     k = wp.tid()
     if state[k] != 2:
         return
-    C = wp.vec3(centers[view_of[k]])
-    d = point[k] - C
-    if wp.mesh_query_ray_anyhit(mesh, C, d, float(f64(1.0) - cam.t_tol)):
+    b = view_of[k]
+    d = point[k] - wp.vec3(centers[b])
+    if wp.mesh_query_ray_anyhit(mesh, origins[b], d, float(f64(1.0) - cam.t_tol)):
         state[k] = 0
     else:
         state[k] = 1

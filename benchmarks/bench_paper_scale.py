@@ -168,8 +168,10 @@ def main() -> None:
             rate = "timed at 19,995"
         elif s == "population":
             rate = f"{1 / b:,.1f} subjects/s" if b > 0 else "n/a"
-        else:
+        elif s == "scan":
             rate = f"{65 / b:,.0f} views/s" if b > 0 else "n/a"
+        else:
+            rate = f"{b * 1e3:,.1f} ms/subject"
         total += proj
         total_cpu += cpu_proj
         print(f"{s:12s} " + " ".join(f"{med[n][s][0]:9.1f}" for n in sizes)

@@ -197,6 +197,39 @@ def _patches(faces_bytes: bytes, n_vertices: int, levels: int = 2) -> np.ndarray
     return out
 
 
+@lru_cache(maxsize=8)
+def boundary_loops(faces_bytes: bytes, n_vertices: int) -> list[np.ndarray]:
+    """Vertex sets of the connected groups of boundary edges (edges of one face) of a mesh (cached per topology).
+
+    Each group is a hole; its cap (a fan from the mean of its vertices) closes it.
+    """
+    faces = np.frombuffer(faces_bytes, dtype=np.int64).reshape(-1, 3)
+    a = faces.reshape(-1)
+    b = faces[:, [1, 2, 0]].reshape(-1)
+    key = np.minimum(a, b) * n_vertices + np.maximum(a, b)
+    uniq, counts = np.unique(key, return_counts=True)
+    edges = uniq[counts == 1]
+    if edges.size == 0:
+        return []
+    u, v = np.divmod(edges, n_vertices)
+    # connected components of the boundary edges (union-find by repeated label propagation)
+    verts = np.unique(np.concatenate([u, v]))
+    label = {int(x): int(x) for x in verts}
+
+    def find(x: int) -> int:
+        while label[x] != x:
+            label[x] = label[label[x]]
+            x = label[x]
+        return x
+
+    for x, y in zip(u.tolist(), v.tolist()):
+        rx, ry = find(x), find(y)
+        if rx != ry:
+            label[max(rx, ry)] = min(rx, ry)
+    roots = np.array([find(int(x)) for x in verts])
+    return [verts[roots == r].astype(np.int32) for r in np.unique(roots)]
+
+
 def _orientation(faces: np.ndarray, n_vertices: int, areas: np.ndarray,
                  normal_dot_centroid: np.ndarray) -> tuple[bool, float]:
     """Whether the mesh is a consistently oriented, (nearly) closed surface, and the sign that turns its normals out.

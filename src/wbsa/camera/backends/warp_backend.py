@@ -14,12 +14,12 @@ from functools import lru_cache
 
 import numpy as np
 
-from wbsa.camera.area import (CENTROID_CLEAR_PX, CENTROID_HIDDEN_PX, GRAZING_COS, GRAZING_MAX_SPLIT,
-                              GRAZING_SAMPLE_PX, GRAZING_SPLIT_PX, _CENTROID_T_TOL)
+from wbsa.camera.grazing import (CENTROID_CLEAR_PX, CENTROID_HIDDEN_PX, GRAZING_COS, GRAZING_MAX_SPLIT,
+                                 GRAZING_SAMPLE_PX, GRAZING_SPLIT_PX, _CENTROID_T_TOL)
 from wbsa.camera.extrinsics import Pose, pose_from_view
 from wbsa.camera.frame import DepthFrame
 from wbsa.camera.intrinsics import Intrinsics
-from wbsa.camera.scene import MeshScene
+from wbsa.camera.scene import MeshScene, boundary_loops
 from wbsa.camera.views import View
 from wbsa.errors import WbsaError
 
@@ -96,11 +96,18 @@ class WarpBackend:
                       grazing_split_px: float | None = GRAZING_SPLIT_PX) -> list[tuple[dict, DepthFrame | None]]:
         """One ``(row, frame)`` per view, as :func:`wbsa.camera.measure.measure_view` returns them.
 
+        ``grazing_cos`` ≤ 0 (the plain pixel sum, with its cos θ clip) is left to the Open3D back end.
+
         Raises
         ------
         WbsaError
             If the camera centre of a view lies inside the body.
         """
+        if grazing_cos <= 0:
+            from wbsa.camera.backends.open3d_backend import Open3DBackend
+
+            return Open3DBackend().measure_views(scene, intrinsics, views, target, return_frames=return_frames,
+                                                 grazing_cos=grazing_cos, grazing_split_px=grazing_split_px)
         views = list(views)
         target = scene.center if target is None else np.asarray(target, dtype=np.float64)
         poses = [pose_from_view(v, target) for v in views]
@@ -157,7 +164,7 @@ class _MeshData:
         # The reference's float32 per-triangle columns: outward normal, centroid − centre, n · c, |c|².
         self.soa = wp.array(scene._soa, dtype=wp.float32, device=device)
         # Holes of a one-sided scene (loops of boundary edges): back faces are rasterized only near them.
-        loops = boundary_loops(faces.tobytes(), self.n_vertices) if scene.one_sided else []
+        loops = boundary_loops(faces.astype(np.int64).tobytes(), self.n_vertices) if scene.one_sided else []
         members = np.concatenate(loops) if loops else np.zeros(0, dtype=np.int32)
         starts = np.concatenate([[0], np.cumsum([len(x) for x in loops])]).astype(np.int32)
         local_vertices = scene._local_vertices_f32.T.astype(np.float64)
@@ -180,39 +187,6 @@ class _MeshData:
         return self._mesh
 
 
-@lru_cache(maxsize=8)
-def boundary_loops(faces_bytes: bytes, n_vertices: int) -> list[np.ndarray]:
-    """Vertex sets of the connected groups of boundary edges (edges of one face) of a mesh (cached per topology).
-
-    Each group is a hole; its cap (a fan from the mean of its vertices) closes it.
-    """
-    faces = np.frombuffer(faces_bytes, dtype=np.int32).reshape(-1, 3).astype(np.int64)
-    a = faces.reshape(-1)
-    b = faces[:, [1, 2, 0]].reshape(-1)
-    key = np.minimum(a, b) * n_vertices + np.maximum(a, b)
-    uniq, counts = np.unique(key, return_counts=True)
-    edges = uniq[counts == 1]
-    if edges.size == 0:
-        return []
-    u, v = np.divmod(edges, n_vertices)
-    # connected components of the boundary edges (union-find by repeated label propagation)
-    verts = np.unique(np.concatenate([u, v]))
-    label = {int(x): int(x) for x in verts}
-
-    def find(x: int) -> int:
-        while label[x] != x:
-            label[x] = label[label[x]]
-            x = label[x]
-        return x
-
-    for x, y in zip(u.tolist(), v.tolist()):
-        rx, ry = find(x), find(y)
-        if rx != ry:
-            label[max(rx, ry)] = min(rx, ry)
-    roots = np.array([find(int(x)) for x in verts])
-    return [verts[roots == r].astype(np.int32) for r in np.unique(roots)]
-
-
 def _camera(intrinsics: Intrinsics, scene: MeshScene, grazing_cos: float, split_px: float | None):
     k = intrinsics
     cam = _kernels().Camera()
@@ -229,7 +203,6 @@ def _camera(intrinsics: Intrinsics, scene: MeshScene, grazing_cos: float, split_
     cam.one_sided = int(bool(scene.one_sided))
     cam.sign = float(scene.orientation_sign)
     cam.cull = int(CULL_BACK_FACES)
-    cam.stop = 0
     return cam
 
 
@@ -378,7 +351,7 @@ def _grazing(data: _MeshData, cam, vt, centers, grids_w, offsets_w, depth, split
         state_h = state.numpy()  # views of the same memory: the updates below are seen by the kernels
         ask = np.flatnonzero(state_h == 2)
         if ask.size:
-            # as wbsa.camera.area.points_visible: origin C, direction (point − centre) − (C − centre) in float32
+            # as wbsa.camera.grazing.points_visible: origin C, direction (point − centre) − (C − centre) in float32
             origins = centers.numpy()[np.repeat(view, n_points)[ask]]
             rays = np.empty((ask.size, 6), dtype=np.float32)
             rays[:, :3] = origins + data.scene.center

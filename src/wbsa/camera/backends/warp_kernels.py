@@ -65,7 +65,6 @@ class Camera:
     one_sided: int
     sign: wp.float64           # orientation sign: sign · (e01 × e02) points outward
     cull: int                  # 1: skip back faces away from holes in a one-sided scene (exact); 0: raster all
-    stop: int                  # profiling only: 1 return after classifying, 2 after the bounding box
 
 
 @wp.func
@@ -114,8 +113,9 @@ N_VIEW_TERMS = 19
 
 @wp.func
 def facing(vt: wp.array2d(dtype=wp.float32), b: int, soa: wp.array2d(dtype=wp.float32), tri: int):
-    """(n · (C − c), cos θ) of a triangle, float32, operation for operation as
-    :func:`wbsa.camera.area.triangle_view_terms` (``soa``: the scene's per-triangle float32 columns)."""
+    """(h, d) = (n · (C − c), max(|C − c|², 1e-30)) of a triangle, float32, operation for operation as
+    :func:`wbsa.camera.area.triangle_view_terms` (``soa``: the scene's per-triangle float32 columns); its
+    cos θ is h / √d (:func:`is_grazing`)."""
     h = vt[b, 0] * soa[0, tri]
     h = h + vt[b, 1] * soa[1, tri]
     h = h + vt[b, 2] * soa[2, tri]
@@ -125,16 +125,28 @@ def facing(vt: wp.array2d(dtype=wp.float32), b: int, soa: wp.array2d(dtype=wp.fl
     d = d + vt[b, 5] * soa[5, tri]
     d = d + soa[7, tri]
     d = d + vt[b, 6]
-    d = wp.sqrt(wp.max(d, wp.float32(1.0e-30)))
-    return h, h / d
+    return h, wp.max(d, wp.float32(1.0e-30))
 
 
 @wp.func
-def is_grazing(cam: Camera, cos_t: wp.float32):
-    """One-sided scene: 0 < cos θ < g; otherwise |cos θ| < g (as :func:`wbsa.camera.area.grazing_area_m2`)."""
+def below_grazing(cam: Camera, h: wp.float32, d: wp.float32):
+    """|cos θ| < g for cos θ = h / √d rounded in float32 as the reference does; the root and the division
+    are taken only within 2 % of the threshold (elsewhere h² against g² d decides: the same answer)."""
+    hh = f64(h) * f64(h)
+    gg = f64(cam.grazing_cos) * f64(cam.grazing_cos) * f64(d)
+    if hh < f64(0.98) * gg:
+        return True
+    if hh > f64(1.02) * gg:
+        return False
+    return wp.abs(h / wp.sqrt(d)) < cam.grazing_cos
+
+
+@wp.func
+def is_grazing(cam: Camera, h: wp.float32, d: wp.float32):
+    """One-sided scene: 0 < cos θ < g; otherwise |cos θ| < g (as :func:`wbsa.camera.grazing.grazing_area_m2`)."""
     if cam.one_sided != 0:
-        return cos_t > wp.float32(0.0) and cos_t < cam.grazing_cos
-    return wp.abs(cos_t) < cam.grazing_cos
+        return h > wp.float32(0.0) and below_grazing(cam, h, d)
+    return below_grazing(cam, h, d)
 
 
 @wp.func
@@ -209,11 +221,11 @@ def raster_triangles(faces: wp.array(dtype=wp.vec3i), xyz: wp.array2d(dtype=wp.v
     enters through a hole, so back faces outside every hole's cap box (``boxes``) are not rasterized.
     """
     b, tri = wp.tid()
-    height, cos_t = facing(vt, b, soa, tri)
+    height, dist2 = facing(vt, b, soa, tri)
     s = int(0)
-    if is_grazing(cam, cos_t):
+    if is_grazing(cam, height, dist2):
         s = 1
-        if cam.split_px >= f64(0.0):  # as wbsa.camera.area.split_counts
+        if cam.split_px >= f64(0.0):  # as wbsa.camera.grazing.split_counts
             u, v, zc = project32(vt, b, wp.vec3(soa[3, tri], soa[4, tri], soa[5, tri]))
             nearest = f64(zc) - edges[tri]
             if nearest <= f64(0.0):
@@ -223,8 +235,6 @@ def raster_triangles(faces: wp.array(dtype=wp.vec3i), xyz: wp.array2d(dtype=wp.v
                 if size > cam.split_px:
                     s = wp.min(int(wp.ceil(wp.min(size, f64(1.0e9)) / cam.sample_px)), cam.max_split)
     split[b, tri] = s
-    if cam.stop == 1:
-        return
     g = grids[b]
     if g[3] <= 2:
         return
@@ -243,8 +253,6 @@ def raster_triangles(faces: wp.array(dtype=wp.vec3i), xyz: wp.array2d(dtype=wp.v
     r0 = wp.max(int(wp.ceil(vmin)), g[0] + 1)
     r1 = wp.min(int(wp.floor(vmax)), g[0] + g[3] - 2)
     if r1 < r0:
-        return
-    if cam.stop == 2:
         return
     if cam.cull != 0 and cam.one_sided != 0 and height <= wp.float32(0.0):
         near_hole = int(0)
@@ -300,8 +308,8 @@ def resolve_pixels(soa: wp.array2d(dtype=wp.float32), vt: wp.array2d(dtype=wp.fl
         depth[base + j] = z
         seen[b, tri] = wp.uint8(1)
         count += 1
-        height, cos_t = facing(vt, b, soa, tri)
-        if wp.abs(cos_t) >= cam.grazing_cos:
+        height, dist2 = facing(vt, b, soa, tri)
+        if not below_grazing(cam, height, dist2):
             w = wp.float32(1.0) / wp.max(wp.abs(height), wp.float32(1.0e-30))
             z64 = f64(z)
             total += z64 * z64 * z64 * f64(w)
@@ -330,7 +338,7 @@ def grazing_points(cand_view: wp.array(dtype=int), cand_tri: wp.array(dtype=int)
                    grids: wp.array(dtype=wp.vec4i), offsets: wp.array(dtype=int), depth: wp.array(dtype=wp.float32),
                    state: wp.array(dtype=int), point: wp.array(dtype=wp.vec3)):
     """Decide the points of one grazing triangle from the depth buffer: its centroid, or the centroids of
-    its s × s equal sub-triangles (float32, as :func:`wbsa.camera.area.points_visible`).
+    its s × s equal sub-triangles (float32, as :func:`wbsa.camera.grazing.points_visible`).
 
     A point in the image is visible (state 1) when none of the 2 × 2 pixels around it has a return more
     than ``clear_px`` footprints in front of it (front faces only), hidden (0) when all have one more than
@@ -344,8 +352,8 @@ def grazing_points(cand_view: wp.array(dtype=int), cand_tri: wp.array(dtype=int)
     slot = cand_slot[k]
     g = grids[b]
     base = offsets[b]
-    height, cos_t = facing(vt, b, soa, tri)
-    front = cam.one_sided != 0 or cos_t > wp.float32(0.0)
+    height, dist2 = facing(vt, b, soa, tri)
+    front = cam.one_sided != 0 or height > wp.float32(0.0)
     f = faces[tri]
     V0 = wp.vec3d(verts[f[0]])
     V1 = wp.vec3d(verts[f[1]])
@@ -356,7 +364,7 @@ def grazing_points(cand_view: wp.array(dtype=int), cand_tri: wp.array(dtype=int)
             # half 0: the s − i sub-triangles pointing like the triangle; half 1: the s − i − 1 others
             for j in range(s - i - half):
                 P = wp.vec3(soa[3, tri], soa[4, tri], soa[5, tri])
-                if s > 1:  # as wbsa.camera.area.subtriangle_centroids and split_area_m2, in float64
+                if s > 1:  # as wbsa.camera.grazing.subtriangle_centroids and split_area_m2, in float64
                     a1 = (f64(i) + third * f64(1 + half)) / f64(s)
                     a2 = (f64(j) + third * f64(1 + half)) / f64(s)
                     a0 = f64(1.0) - a1 - a2
@@ -392,7 +400,7 @@ def anyhit_queries(mesh: wp.uint64, view_of: wp.array(dtype=int), centers: wp.ar
     """Queries (state 2): visible (1) unless Warp's BVH finds a triangle on the segment from the camera
     centre before ``1 − t_tol`` of the way to the point, hidden (0) otherwise.
 
-    The rays are the reference's (:func:`wbsa.camera.area.points_visible`): origin the camera centre in
+    The rays are the reference's (:func:`wbsa.camera.grazing.points_visible`): origin the camera centre in
     world coordinates (``origins``, float32), direction (point − centre) − (C − centre) in float32, against
     the mesh's float32 world coordinates (``mesh``), as Embree sees them.
     """

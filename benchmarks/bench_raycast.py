@@ -10,9 +10,14 @@ time of this process (all threads). Ratios are against the bare ``RaycastingScen
 exactly the rays the default (silhouette) ROI casts, the floor for one closest-hit ray per pixel, and
 against that floor plus the bare ``test_occlusions`` call on the visibility rays ``measure_view`` casts
 for the grazing triangles (recorded from a ``measure_view`` pass).
+``measure_views`` is timed with every back end (``--backends``, default open3d and warp; the Warp back
+end runs on the CPU here, all 65 views in one call).
 ``--anny`` adds a real body from ``wbsa.bodies.body_model`` when that module exists.
 ``--accuracy`` also prints the visible-area checks quoted in docs/camera.md: sphere caps against
-2πr²(1 − r/d), and both VBSA estimates of the bodies at 1×, 2×, 4× and 8× the camera's resolution.
+2πr²(1 − r/d), both VBSA estimates of the bodies at 1×, 2×, 4× and 8× the camera's resolution, and the
+coarse scenes of ``tests/helpers/reference.py`` (boxes and thin walls of two triangles per face, occluders)
+against a Monte Carlo answer from a million surface points, for both back ends and for the former
+centroid rule.
 """
 
 from __future__ import annotations
@@ -46,7 +51,7 @@ def best_pass(fn, views, repeat: int) -> tuple[float, float]:
     return wall / len(views), cpu / len(views)
 
 
-def bench(name: str, mesh, intrinsics, repeat: int, threads: int) -> None:
+def bench(name: str, mesh, intrinsics, repeat: int, threads: int, backends: tuple[str, ...] = ("open3d", "warp")) -> None:
     import open3d  # noqa: F401  (imported before timing the scene build)
 
     t0 = time.perf_counter()
@@ -93,6 +98,13 @@ def bench(name: str, mesh, intrinsics, repeat: int, threads: int) -> None:
         "render(roi=True) -> DepthFrame": best_pass(lambda v: render(scene, k, poses[v]), views, repeat),
         "render(roi=False) -> DepthFrame": best_pass(lambda v: render(scene, k, poses[v], roi=False), views, repeat),
     }
+    from wbsa.camera.measure import measure_views
+
+    for backend in backends:  # all views in one call (the scan's unit: one body)
+        measure_views(scene, k, views[:2], return_frames=False, backend=backend)  # compile / load kernels
+        wall, cpu = best_pass(lambda _: measure_views(scene, k, views, return_frames=False, backend=backend),
+                              [None], repeat)
+        timings[f"measure_views(backend={backend!r})"] = (wall / len(views), cpu / len(views))
     n = {key: np.mean([len(r) for r in rays.values()]) for key, rays in
          (("silhouette", sil_rays), ("bbox", bbox_rays))}
     n_vis = np.mean([sum(len(r) for r, _ in b) for b in vis_rays.values()])
@@ -147,6 +159,35 @@ def accuracy(name: str, mesh, intrinsics) -> None:
                   f"{row['vbsa_visible_m2']:8.4f} {vbsa_visible_m2(frame):11.4f}")
 
 
+def coarse_accuracy(intrinsics, n_samples: int = 1_000_000) -> None:
+    """Coarse scenes (two triangles per box face) against the Monte Carlo answer, every check view."""
+    from wbsa.camera import View
+    from wbsa.camera.measure import measure_views
+    from helpers.reference import (AXIS_VIEWS, EDGE_ON_VIEWS, OBLIQUE_VIEWS, coarse_scenes,
+                                       monte_carlo_visible_area_m2, scene_mesh)
+
+    print(f"\ncoarse scenes, camera {intrinsics.name} at 4.3 m: vbsa_visible_m2 against a Monte Carlo answer "
+          f"({n_samples:,} area-weighted surface points)")
+    print(f"{'scene':>10s} {'view':>9s} {'reference m²':>14s} {'open3d':>8s} {'warp':>8s} {'no split':>13s}")
+    worst = {"open3d": 0.0, "warp": 0.0, "centroid": 0.0}
+    for name, solids in coarse_scenes().items():
+        scene = MeshScene(scene_mesh(solids))
+        views = AXIS_VIEWS + OBLIQUE_VIEWS + (EDGE_ON_VIEWS if name == "thin wall" else ())
+        views = [View(az, el, 4.3) for az, el in views]
+        rows = {b: [r for r, _ in measure_views(scene, intrinsics, views, return_frames=False, backend=b)]
+                for b in ("open3d", "warp")}
+        rows["centroid"] = [r for r, _ in measure_views(scene, intrinsics, views, return_frames=False,
+                                                        grazing_split_px=None)]
+        for i, view in enumerate(views):
+            ref, se = monte_carlo_visible_area_m2(solids, intrinsics, pose_from_view(view, scene.center), n_samples)
+            err = {b: rows[b][i]["vbsa_visible_m2"] / ref - 1 for b in rows}
+            for b in err:
+                worst[b] = max(worst[b], abs(err[b]))
+            print(f"{name:>10s} {f'{view.azimuth_deg:g}/{view.elevation_deg:g}':>9s} {ref:9.4f}±{se:.4f} "
+                  f"{err['open3d']:+8.2%} {err['warp']:+8.2%} {err['centroid']:+13.2%}")
+    print(f"worst |error|: open3d {worst['open3d']:.2%}, warp {worst['warp']:.2%}, no split {worst['centroid']:.2%}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--camera", default="kinect-v1")
@@ -156,6 +197,7 @@ def main() -> None:
                              "per core)")
     parser.add_argument("--anny", action="store_true", help="also time a real anny body (slow first build)")
     parser.add_argument("--accuracy", action="store_true", help="also print the visible-area accuracy tables")
+    parser.add_argument("--backends", default="open3d,warp", help="back ends of the measure_views rows")
     args = parser.parse_args()
     intrinsics = resolve_camera(args.camera)
     bodies = [("body-like ellipsoid assembly", body_like())]
@@ -171,11 +213,13 @@ def main() -> None:
                                     "p_proportions": 0.5, "p_african": 1 / 3, "p_asian": 1 / 3,
                                     "p_caucasian": 1 / 3}])
             bodies.append(("anny body (male, age 0.8, other phenotypes 0.5)", BodyModel().skin_meshes(params)[0]))
+    backends = tuple(b.strip() for b in args.backends.split(",") if b.strip())
     for name, mesh in bodies:
-        bench(name, mesh, intrinsics, args.repeat, args.threads)
+        bench(name, mesh, intrinsics, args.repeat, args.threads, backends)
     if args.accuracy:
         for name, mesh in bodies:
             accuracy(name, mesh, intrinsics)
+        coarse_accuracy(intrinsics)
 
 
 if __name__ == "__main__":

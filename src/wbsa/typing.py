@@ -31,6 +31,8 @@ GroupName = Literal["all", "males", "females", "kids", "adults", "small", "norma
 DensityModel = Literal["constant", "deurenberg-siri", "deurenberg-brozek"]
 #: How a random population's body parameters are drawn: the paper's, or varied shapes (docs/population.md).
 Sampling = Literal["paper", "varied"]
+#: Ray-casting back ends (:mod:`wbsa.camera.backends`); ``auto`` picks Warp on CUDA when there is a GPU.
+RaycastBackend = Literal["auto", "open3d", "warp"]
 #: A named standing posture (:data:`wbsa.bodies.posture.POSTURES` has one entry per name, in this order).
 PostureName = Literal["a-pose", "arms-down", "arms-wide", "hands-on-hips", "elbows-bent", "feet-together",
                       "feet-apart"]
@@ -47,5 +49,6 @@ MODEL_KINDS: tuple[str, ...] = get_args(ModelKind)
 GROUP_NAMES: tuple[str, ...] = get_args(GroupName)
 DENSITY_MODELS: tuple[str, ...] = get_args(DensityModel)
 SAMPLINGS: tuple[str, ...] = get_args(Sampling)
+RAYCAST_BACKENDS: tuple[str, ...] = get_args(RaycastBackend)
 POSTURE_NAMES: tuple[str, ...] = get_args(PostureName)
 POSTURE_CHOICES: tuple[str, ...] = get_args(PostureChoice)

@@ -19,7 +19,8 @@
     occluded counts whole, and pixels that hit a grazing triangle add nothing. Whether a centroid is
     occluded is read from the depth already cast where the 2 × 2 pixels around it agree (all of them see
     nothing in front of it: visible; all of them see something well in front of it: hidden); only the
-    others cast one any-hit ray to the centroid.
+    others cast one any-hit ray to the centroid. Grazing triangles that may look large (coarse meshes)
+    count in proportion to their visible sub-triangles (:mod:`wbsa.camera.grazing`).
 """
 
 from __future__ import annotations
@@ -31,20 +32,14 @@ import numpy as np
 from wbsa.camera.extrinsics import Pose
 from wbsa.core.frame import DepthFrame
 from wbsa.camera.intrinsics import Intrinsics, pixel_rays
-from wbsa.camera.roi import PixelGrid, homogeneous_pixels
+from wbsa.camera.grazing import (_CENTROID_T_TOL, CENTROID_CLEAR_PX, CENTROID_HIDDEN_PX,  # noqa: F401 (re-exported)
+                                 GRAZING_COS, GRAZING_MAX_SPLIT, GRAZING_SAMPLE_PX, GRAZING_SPLIT_PX, depth_lookup,
+                                 grazing_area_m2, points_visible, split_area_m2, split_counts, subtriangle_centroids)
+from wbsa.camera.roi import PixelGrid
 
-#: Triangles seen at cos θ below this (θ > 72.5°) are measured in object space, not by pixel footprints.
-GRAZING_COS = 0.3
 #: Lower clip of cos θ in a pixel footprint (θ ≤ 88.85°), a guard against near-tangent hits; clipping at
 #: c removes about c/2 of a smooth convex cap, so it matters only in the frame-only estimate.
 FOOTPRINT_COS_MIN = 0.02
-#: A grazing triangle is visible when nothing lies on the ray to its centroid before this fraction of the way.
-_CENTROID_T_TOL = 1e-4
-#: Depth-buffer decisions about a grazing triangle's centroid at depth Z, in pixel footprints Z / √(fx·fy):
-#: visible when none of the 4 pixels around it has a return nearer than Z − CLEAR; hidden when all of
-#: them have one nearer than Z − HIDDEN; otherwise a ray decides.
-CENTROID_CLEAR_PX = 1.0
-CENTROID_HIDDEN_PX = 10.0
 
 
 def pixel_footprint_m2(z_m: np.ndarray, n_dot_d: np.ndarray, d_dot_d: np.ndarray, intrinsics: Intrinsics,
@@ -127,107 +122,9 @@ def triangle_view_cosines(scene, camera_center: np.ndarray) -> np.ndarray:
     return triangle_view_terms(scene, camera_center)[1]
 
 
-def depth_lookup(grid: PixelGrid, depth_m: np.ndarray, u: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Nearest and farthest return among the 2 × 2 pixels around image points.
-
-    Parameters
-    ----------
-    grid : PixelGrid
-        The cast pixels (:class:`wbsa.camera.roi.PixelGrid`); its rectangle must hold the points' 2 × 2
-        pixels or their empty border (true for points inside the image and inside the mesh's projection).
-    depth_m : (grid.n_rows · grid.stride,) float32
-        z-depth per grid cell, inf where a pixel has no return or was not cast (the border included).
-    u, v : (k,) float
-        Image coordinates (pixel centres at integers).
-
-    Returns
-    -------
-    nearest, farthest : (k,) float32
-        inf where the pixels see nothing.
-    """
-    cell = np.floor(v).astype(np.intp)
-    cell -= grid.v0
-    cell *= grid.stride
-    cell += np.floor(u).astype(np.intp)
-    cell -= grid.u0
-    d = [depth_m.take(cell)]
-    for step in (1, grid.stride - 1, 1):
-        cell += step
-        d.append(depth_m.take(cell))
-    near = np.minimum(d[0], d[1])
-    np.minimum(near, d[2], out=near)
-    np.minimum(near, d[3], out=near)
-    far = np.maximum(d[0], d[1])
-    np.maximum(far, d[2], out=far)
-    np.maximum(far, d[3], out=far)
-    return near, far
-
-
-def grazing_area_m2(scene, intrinsics: Intrinsics, pose: Pose, cos_t: np.ndarray, grid: PixelGrid,
-                    depth_m: np.ndarray, grazing_cos: float = GRAZING_COS) -> float:
-    """Area of the grazing triangles (``|cos θ| < grazing_cos``) that the camera sees.
-
-    A triangle counts when its centroid projects into the image and nothing lies on the ray from the
-    camera centre to the centroid. The depth already cast decides where the 2 × 2 pixels around the
-    centroid agree: none of them has a return nearer than ``CENTROID_CLEAR_PX`` pixel footprints in front
-    of it (visible), or all of them have one more than ``CENTROID_HIDDEN_PX`` footprints in front (hidden);
-    the others (about two thirds on a body, mostly where the surface next to the centroid turns towards
-    the camera) cast one any-hit ray to the centroid. In a one-sided scene (closed, outward-oriented
-    surface) only front faces (cos θ > 0) are candidates; back faces are hidden anyway. (Whether a pixel
-    happened to hit the triangle is deliberately not used: that would make the result grow with the
-    resolution.)
-
-    Parameters
-    ----------
-    scene : MeshScene
-    intrinsics : Intrinsics
-    pose : Pose
-    cos_t : (m,) float
-        :func:`triangle_view_cosines` of the view.
-    grid : PixelGrid
-        The cast pixels.
-    depth_m : (grid.n_rows · grid.stride,) float32
-        Their z-depth, inf for no return (and on the grid's border).
-    grazing_cos : float
-    """
-    if scene.one_sided:
-        cand = np.flatnonzero((cos_t > 0.0) & (cos_t < grazing_cos))
-    else:
-        cand = np.flatnonzero(np.abs(cos_t) < grazing_cos)
-    if cand.size == 0:
-        return 0.0
-    # Homogeneous image coordinates K (R c + T) of the centroids, from the float32 columns relative to the centre.
-    k = intrinsics
-    cols = np.take(scene._soa[3:6], cand, axis=1)
-    u, v, z = homogeneous_pixels(k, pose, scene.center, cols)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        u /= z
-        v /= z
-    if not grid.mesh_in_image:
-        inside = (z > 0) & (u >= -0.5) & (u < k.width - 0.5) & (v >= -0.5) & (v < k.height - 0.5)
-        if not inside.all():
-            keep = np.flatnonzero(inside)
-            if keep.size == 0:
-                return 0.0
-            cand, cols, z, u, v = cand[keep], cols[:, keep], z[keep], u[keep], v[keep]
-    near, far = depth_lookup(grid, depth_m, u, v)
-    footprint = z / np.float32(math.sqrt(k.fx * k.fy))
-    visible = near >= z - np.float32(CENTROID_CLEAR_PX) * footprint
-    ask = np.flatnonzero(~visible & (far >= z - np.float32(CENTROID_HIDDEN_PX) * footprint))
-    if ask.size:
-        # Rays from the camera centre C to the centroids c: direction c − C = c_local − (C − centre), t = 1 at c.
-        offset = pose.camera_center - scene.center
-        rays = np.empty((ask.size, 6), dtype=np.float32)
-        for j in range(3):
-            rays[:, j] = pose.camera_center[j]
-            np.subtract(cols[j].take(ask), np.float32(offset[j]), out=rays[:, 3 + j])
-        # Any hit strictly before the centroid (t < 1) hides it: an any-hit query, cheaper than a closest hit.
-        visible[ask] = ~scene.occluded(rays, 1.0 - _CENTROID_T_TOL)
-    return float(np.einsum("i,i->", scene.triangle_areas_m2.take(cand), visible.astype(np.float64)))
-
-
 def visible_area_m2(z_m: np.ndarray, triangle_ids: np.ndarray, scene, intrinsics: Intrinsics, pose: Pose,
-                    grid: PixelGrid, depth_m: np.ndarray, grazing_cos: float = GRAZING_COS) -> float:
+                    grid: PixelGrid, depth_m: np.ndarray, grazing_cos: float = GRAZING_COS,
+                    split_px: float | None = GRAZING_SPLIT_PX) -> float:
     """Visible area of one view: pixel footprints on non-grazing triangles + visible grazing triangles.
 
     Parameters
@@ -245,6 +142,8 @@ def visible_area_m2(z_m: np.ndarray, triangle_ids: np.ndarray, scene, intrinsics
     grazing_cos : float
         Triangles with |cos θ| below it are measured in object space (> 0; see
         :func:`pixel_footprint_m2` for the plain pixel sum).
+    split_px : float or None
+        Grazing triangles that may look larger are sub-sampled (:func:`grazing_area_m2`); None: never.
     """
     height, cos_t = triangle_view_terms(scene, pose.camera_center)
     # Footprint z² cos α / (fx fy cos θ) = z³ / (fx fy h) with h the camera's height above the hit triangle's
@@ -259,7 +158,7 @@ def visible_area_m2(z_m: np.ndarray, triangle_ids: np.ndarray, scene, intrinsics
     # (einsum rather than np.dot: OpenBLAS may thread a long dot product.)
     pixels = float(np.einsum("i,i->", z3, weight.take(np.asarray(triangle_ids, dtype=np.intp)).astype(np.float64)))
     pixels /= intrinsics.fx * intrinsics.fy
-    return pixels + grazing_area_m2(scene, intrinsics, pose, cos_t, grid, depth_m, grazing_cos)
+    return pixels + grazing_area_m2(scene, intrinsics, pose, cos_t, grid, depth_m, grazing_cos, split_px)
 
 
 def vbsa_hit_m2(frame: DepthFrame, scene) -> float:

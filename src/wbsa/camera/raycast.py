@@ -139,21 +139,25 @@ class RayHits:
 
         return pixel_footprint_m2(*self._footprint_terms(), self.intrinsics)
 
-    def visible_area_m2(self, scene: MeshScene, grazing_cos: float | None = None) -> float:
+    def visible_area_m2(self, scene: MeshScene, grazing_cos: float | None = None,
+                        split_px: float | None | Literal["default"] = "default") -> float:
         """Visible skin area of this view (m²); see :func:`wbsa.camera.area.visible_area_m2`.
 
-        ``grazing_cos`` 0 gives the plain sum of the pixel footprints (:meth:`pixel_areas_m2`).
+        ``grazing_cos`` 0 gives the plain sum of the pixel footprints (:meth:`pixel_areas_m2`);
+        ``split_px`` (default ``GRAZING_SPLIT_PX``; None: never) sub-samples large grazing triangles.
         A view in which no pixel sees the body has no visible area (0).
         """
-        from wbsa.camera.area import GRAZING_COS, visible_area_m2
+        from wbsa.camera.area import GRAZING_COS, GRAZING_SPLIT_PX, visible_area_m2
 
         if self.n_pixels == 0:
             return 0.0
         grazing_cos = GRAZING_COS if grazing_cos is None else grazing_cos
+        split_px = GRAZING_SPLIT_PX if split_px == "default" else split_px
         if grazing_cos <= 0:
             return float(self.pixel_areas_m2().sum())
         grid, depth = self.depth_grid()
-        return visible_area_m2(self.hit_t, self.hit_ids, scene, self.intrinsics, self.pose, grid, depth, grazing_cos)
+        return visible_area_m2(self.hit_t, self.hit_ids, scene, self.intrinsics, self.pose, grid, depth, grazing_cos,
+                               split_px)
 
     @property
     def touches_border(self) -> bool:

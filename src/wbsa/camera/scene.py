@@ -32,7 +32,11 @@ class MeshScene:
     one_sided : bool
         True for a consistently oriented, (nearly) closed surface: then only triangles facing the camera
         can be visible, which halves the object-space visibility tests of the visible-area estimate.
+    orientation_sign : float
+        +1 or −1: ``orientation_sign * face_normals`` point outward (+1 when ``one_sided`` is False).
     centroids : (m, 3) float64
+    longest_edges_m : (m,) float64
+        Longest edge of each triangle; ``max_edge_m`` is the largest of them.
     bbox_corners : (8, 3) float64
     bbox_min, bbox_max : (3,) float64
     center : (3,) float64
@@ -59,6 +63,11 @@ class MeshScene:
         self.center = 0.5 * (self.bbox_min + self.bbox_max)
         self.bbox_corners = self.bbox_min + _CORNERS * (self.bbox_max - self.bbox_min)
         self.centroids = (v0 + v1 + v2) / 3.0
+        e12 = v2 - v1
+        self.longest_edges_m = np.sqrt(np.maximum(np.maximum(np.einsum("ij,ij->i", e01, e01),
+                                                             np.einsum("ij,ij->i", e12, e12)),
+                                                  np.einsum("ij,ij->i", e20, e20)))
+        self.max_edge_m = float(self.longest_edges_m.max())
         local = self.centroids - self.center
         self.one_sided, sign = _orientation(faces, vertices.shape[0], self.triangle_areas_m2,
                                             np.einsum("ij,ij->i", self.face_normals, local))
@@ -66,6 +75,7 @@ class MeshScene:
         # n·(C − c) = n·C − n·c and |C − c|² = |C|² − 2 C·c + |c|²,
         # with the per-triangle columns stored contiguously (structure of arrays), n outward and positions
         # relative to the bounding-box centre (so float32 keeps its precision wherever the mesh lies).
+        self.orientation_sign = float(sign)
         outward = sign * self.face_normals
         self._soa = np.ascontiguousarray(np.concatenate([
             outward.T, local.T, np.einsum("ij,ij->i", outward, local)[None],
@@ -194,6 +204,39 @@ def _patches(faces_bytes: bytes, n_vertices: int, levels: int = 2) -> np.ndarray
     out = np.ascontiguousarray(table.T, dtype=np.intp)
     out.setflags(write=False)
     return out
+
+
+@lru_cache(maxsize=8)
+def boundary_loops(faces_bytes: bytes, n_vertices: int) -> list[np.ndarray]:
+    """Vertex sets of the connected groups of boundary edges (edges of one face) of a mesh (cached per topology).
+
+    Each group is a hole; its cap (a fan from the mean of its vertices) closes it.
+    """
+    faces = np.frombuffer(faces_bytes, dtype=np.int64).reshape(-1, 3)
+    a = faces.reshape(-1)
+    b = faces[:, [1, 2, 0]].reshape(-1)
+    key = np.minimum(a, b) * n_vertices + np.maximum(a, b)
+    uniq, counts = np.unique(key, return_counts=True)
+    edges = uniq[counts == 1]
+    if edges.size == 0:
+        return []
+    u, v = np.divmod(edges, n_vertices)
+    # connected components of the boundary edges (union-find by repeated label propagation)
+    verts = np.unique(np.concatenate([u, v]))
+    label = {int(x): int(x) for x in verts}
+
+    def find(x: int) -> int:
+        while label[x] != x:
+            label[x] = label[label[x]]
+            x = label[x]
+        return x
+
+    for x, y in zip(u.tolist(), v.tolist()):
+        rx, ry = find(x), find(y)
+        if rx != ry:
+            label[max(rx, ry)] = min(rx, ry)
+    roots = np.array([find(int(x)) for x in verts])
+    return [verts[roots == r].astype(np.int32) for r in np.unique(roots)]
 
 
 def _orientation(faces: np.ndarray, n_vertices: int, areas: np.ndarray,

@@ -44,6 +44,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="use an existing dask scheduler, e.g. tcp://10.0.0.5:8786 (default: $DASK_SCHEDULER_ADDRESS)")
     p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                    help="progress bar on stderr (default: when stderr is a terminal)")
+    from wbsa.simulate.command import add_backend_argument
+
+    add_backend_argument(p)
     _add_optional_stage_arguments(p)
     p.set_defaults(func=handle)
 
@@ -75,7 +78,7 @@ def settings_from_args(args: argparse.Namespace):
                         azimuths_deg=tuple(parse_angles(args.azimuths, "azimuths")) if args.azimuths is not None else (),
                         elevations_deg=tuple(parse_angles(args.elevations, "elevations"))
                         if args.elevations is not None else (),
-                        distances_m=(args.distance,), seed=args.seed)
+                        distances_m=(args.distance,), seed=args.seed, backend=args.backend)
     sensor = reconstruction = None
     if hasattr(args, "noise"):
         from wbsa.sensor.cli import sensor_settings_from_args

@@ -27,6 +27,7 @@ import numpy as np
 from wbsa.camera.views import PAPER_DISTANCE_M, VIEW_SPECS
 from wbsa.errors import SettingsError, WbsaError, check_field
 from wbsa.settings_io import check_types
+from wbsa.typing import RaycastBackend
 
 if TYPE_CHECKING:  # pragma: no cover - imported for type hints only
     import pandas as pd
@@ -55,6 +56,9 @@ class ScanSettings:
         Camera distances; each is scanned as its own job (the paper: 4.3 m, with 3.5–5 m in its S1 file).
     seed : int
         Root seed of the per-subject sensor noise.
+    backend : {'open3d', 'warp', 'auto'}
+        Ray-casting back end (:mod:`wbsa.camera.backends`); only a back end other than ``open3d`` enters the
+        scan's key (its rows agree with Open3D's within float32 rounding, see docs/scan.md).
     """
 
     camera: str = "kinect-v1"
@@ -63,6 +67,7 @@ class ScanSettings:
     elevations_deg: tuple[float, ...] = ()
     distances_m: tuple[float, ...] = (PAPER_DISTANCE_M,)
     seed: int = 0
+    backend: RaycastBackend = "open3d"
 
     def __post_init__(self) -> None:
         check_types(self)
@@ -127,7 +132,7 @@ class ScanSettings:
         if sensor is not None and sensor.is_ideal:
             sensor = None
         return ScanJob(camera=self.intrinsics(base_dir), views=self.view_list(distance_m), sensor=sensor,
-                       reconstruction=reconstruction, seed=self.seed)
+                       reconstruction=reconstruction, seed=self.seed, backend=self.backend)
 
 
 @dataclass(frozen=True)
@@ -150,6 +155,9 @@ class ScanJob:
         Root seed; subject ``s`` draws its sensor noise from ``numpy.random.SeedSequence([seed, s])``
         (one child stream per view, keyed by the view's angles and distance), so results do not
         depend on chunking, on the view list or on the number of workers.
+    backend : {'auto', 'open3d', 'warp'}
+        Ray-casting back end (:mod:`wbsa.camera.backends`); ``auto`` is resolved on construction. Only a
+        back end other than ``open3d`` enters :meth:`to_dict` (and the hash).
     """
 
     camera: Intrinsics
@@ -157,8 +165,12 @@ class ScanJob:
     sensor: SensorSettings | None = None
     reconstruction: ReconstructionSettings | None = None
     seed: int = 0
+    backend: str = "open3d"
 
     def __post_init__(self) -> None:
+        from wbsa.camera.backends import resolve_backend
+
+        object.__setattr__(self, "backend", resolve_backend(self.backend))
         object.__setattr__(self, "views", tuple(self.views))
         if self.reconstruction is not None and not self.reconstruction.methods:
             object.__setattr__(self, "reconstruction", None)
@@ -189,6 +201,7 @@ class ScanJob:
             "reconstruct": list(self.reconstruct),
             "reconstruction": _plain(self.reconstruction) if self.reconstruction is not None else None,
             "seed": int(self.seed),
+            **({} if self.backend == "open3d" else {"backend": self.backend}),
         })
 
 

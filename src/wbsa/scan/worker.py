@@ -125,23 +125,24 @@ def scan_subject(mesh, subject_id: int, settings: ScanJob, *, nthreads: int = 0)
     """
     from wbsa.camera import MeshScene
     from wbsa.camera.extrinsics import pose_from_view
-    from wbsa.simulate.view import simulate_view
+    from wbsa.simulate.view import simulate_views
 
     scene = MeshScene(mesh, nthreads=nthreads)
     rows = []
-    for view in settings.views:
-        if scene.contains(pose_from_view(view, scene.center).camera_center):
+    inside = [scene.contains(pose_from_view(view, scene.center).camera_center) for view in settings.views]
+    seen = iter(simulate_views(scene, settings.camera, [v for v, x in zip(settings.views, inside) if not x],
+                               backend=settings.backend, sensor=settings.sensor, seed=settings.seed,
+                               subject_id=subject_id, reconstruct=settings.reconstruct,
+                               reconstruction=settings.reconstruction))
+    for view, camera_inside in zip(settings.views, inside):
+        if camera_inside:
             rows.append(invalid_view_row(subject_id, view, settings))
-            continue
-        rows.append({"subject_id": subject_id,
-                     **simulate_view(scene, settings.camera, view, sensor=settings.sensor, seed=settings.seed,
-                                     subject_id=subject_id, reconstruct=settings.reconstruct,
-                                     reconstruction=settings.reconstruction).row,
-                     "camera_inside": False})
+        else:
+            rows.append({"subject_id": subject_id, **next(seen).row, "camera_inside": False})
     return rows
 
 
-def invalid_view_row(subject_id: int, view, settings: ScanSettings) -> dict[str, Any]:
+def invalid_view_row(subject_id: int, view, settings: ScanJob) -> dict[str, Any]:
     """The row of a view whose camera stands inside the body: the view's keys, no pixels, NaN areas."""
     from wbsa.surface.settings import recon_column
 

@@ -17,6 +17,7 @@ _EXPORTS = {
     "points_world": "wbsa.simulate.view",
     "render": "wbsa.simulate.view",
     "simulate_view": "wbsa.simulate.view",
+    "simulate_views": "wbsa.simulate.view",
 }
 __all__ = sorted(_EXPORTS)
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -29,6 +29,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--subject", type=int, default=0, help="subject_id in --population (default 0)")
     add_camera_arguments(p)
     add_view_arguments(p)
+    add_backend_argument(p)
     from wbsa.sensor.cli import add_sensor_arguments
     from wbsa.surface.cli import add_reconstruct_arguments
 
@@ -54,6 +55,16 @@ def add_camera_arguments(p: argparse.ArgumentParser) -> None:
         g.add_argument(f"--{name}", type=float, help=f"{what} in pixels (overrides --camera)")
     g.add_argument("--scale", type=float, default=1.0,
                    help="multiply the resolution (and focal lengths) by this factor, same field of view (default 1)")
+
+
+def add_backend_argument(p: argparse.ArgumentParser) -> None:
+    """``--backend open3d|warp|auto``: the ray-casting back end (:mod:`wbsa.camera.backends`)."""
+    from wbsa.camera.backends import BACKENDS, DEFAULT_BACKEND
+
+    p.add_argument("--backend", choices=BACKENDS, default=DEFAULT_BACKEND,
+                   help="ray-casting back end: open3d (the reference, default), warp (NVIDIA Warp kernels on a CUDA "
+                        "GPU if present, else the CPU; same numbers within float32 rounding) or auto (warp on a GPU, "
+                        "else open3d)")
 
 
 def add_view_arguments(p: argparse.ArgumentParser) -> None:
@@ -140,7 +151,7 @@ def run_view(args: argparse.Namespace) -> int:
     rows = []
     subject = args.subject if args.population else 0
     for view in views:
-        sim = simulate_view(scene, intrinsics, view, sensor=None if sensor.is_ideal else sensor,
+        sim = simulate_view(scene, intrinsics, view, backend=args.backend, sensor=None if sensor.is_ideal else sensor,
                             seed=args.sensor_seed, subject_id=subject, reconstruct=recon_settings.methods,
                             reconstruction=recon_settings, keep_frame=out is not None, keep_surfaces=out is not None)
         row = {"mesh": source, "mesh_area_m2": float(scene.triangle_areas_m2.sum()), **sim.row}

@@ -8,7 +8,7 @@ same subject, view and seeds give the same numbers everywhere.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Sequence
 
 import numpy as np
 
@@ -58,18 +58,33 @@ class SimulatedView:
                 f"{r['distance_m']:.3g} m, {r['n_pixels']} pixels, visible {r['vbsa_visible_m2']:.4f} m²)")
 
 
-def simulate_view(scene: MeshScene, camera: Intrinsics, view: View, *, sensor: SensorSettings | None = None,
-                  seed: int = 0, subject_id: int = 0, reconstruct: tuple[str, ...] = (),
-                  reconstruction: ReconstructionSettings | None = None, keep_frame: bool = False,
-                  keep_surfaces: bool = False) -> SimulatedView:
+def simulate_view(scene: MeshScene, camera: Intrinsics, view: View, **options: Any) -> SimulatedView:
     """Render one view of a body, read it through the sensor and reconstruct the visible surface.
+
+    :func:`simulate_views` of the one view; ``options`` are its keyword arguments.
+
+    Returns
+    -------
+    SimulatedView
+    """
+    return simulate_views(scene, camera, (view,), **options)[0]
+
+
+def simulate_views(scene: MeshScene, camera: Intrinsics, views: Sequence[View], *, backend: str = "open3d",
+                   sensor: SensorSettings | None = None, seed: int = 0, subject_id: int = 0,
+                   reconstruct: tuple[str, ...] = (), reconstruction: ReconstructionSettings | None = None,
+                   keep_frame: bool = False, keep_surfaces: bool = False) -> list[SimulatedView]:
+    """Render views of one body (all in one go with a compiled back end), sense and reconstruct each.
 
     Parameters
     ----------
     scene : wbsa.camera.MeshScene
         The body (its bounding-box centre is the camera's target).
     camera : wbsa.camera.Intrinsics
-    view : wbsa.camera.View
+    views : sequence of wbsa.camera.View
+    backend : {'open3d', 'warp', 'auto'}
+        Ray-casting back end (:mod:`wbsa.camera.backends`): ``open3d`` view by view (the reference), ``warp``
+        every view in a few compiled passes, with the same rows within float32 rounding.
     sensor : wbsa.sensor.SensorSettings, optional
         None: the ray-cast frame as it is (an ideal sensor model still adds its columns).
     seed, subject_id : int
@@ -80,34 +95,38 @@ def simulate_view(scene: MeshScene, camera: Intrinsics, view: View, *, sensor: S
     reconstruction : wbsa.surface.ReconstructionSettings, optional
         How to reconstruct (default settings when None).
     keep_frame, keep_surfaces : bool
-        Return the frame and the reconstructed surfaces (a scan keeps only the numbers).
+        Return the frames and the reconstructed surfaces (a scan keeps only the numbers).
 
     Returns
     -------
-    SimulatedView
+    list of SimulatedView
+        One per view, in order.
     """
-    from wbsa.camera.measure import measure_view
+    from wbsa.camera.measure import measure_views
     from wbsa.core.limits import check_seed
 
     check_seed(seed, "the sensor seed")
     need_frame = keep_frame or sensor is not None or bool(reconstruct)
-    row, frame = measure_view(scene, camera, view, scene.center, return_frame=need_frame)
-    if sensor is not None:
-        from wbsa.sensor.measure import sense_view, view_rng
+    measured = measure_views(scene, camera, views, scene.center, backend=backend, return_frames=need_frame)
+    out = []
+    for view, (row, frame) in zip(views, measured):
+        if sensor is not None:
+            from wbsa.sensor.measure import sense_view, view_rng
 
-        frame, sensed = sense_view(frame, scene, sensor, view_rng(seed, subject_id, view))
-        row.update(sensed)
-    surfaces = {}
-    if reconstruct:
-        from wbsa.surface import reconstruct as reconstruct_surface
-        from wbsa.surface.settings import recon_column
+            frame, sensed = sense_view(frame, scene, sensor, view_rng(seed, subject_id, view))
+            row.update(sensed)
+        surfaces = {}
+        if reconstruct:
+            from wbsa.surface import reconstruct as reconstruct_surface
+            from wbsa.surface.settings import recon_column
 
-        for method in reconstruct:
-            surface = reconstruct_surface(frame, method, reconstruction)
-            row[recon_column(method)] = surface.area_m2
-            if keep_surfaces:
-                surfaces[method] = surface
-    return SimulatedView(row=row, frame=frame if keep_frame else None, surfaces=surfaces)
+            for method in reconstruct:
+                surface = reconstruct_surface(frame, method, reconstruction)
+                row[recon_column(method)] = surface.area_m2
+                if keep_surfaces:
+                    surfaces[method] = surface
+        out.append(SimulatedView(row=row, frame=frame if keep_frame else None, surfaces=surfaces))
+    return out
 
 
 def render(mesh: Any, camera: Any = "kinect-v1", view: Any = (0.0, 0.0, 4.3), *, sensor: SensorSettings | None = None,

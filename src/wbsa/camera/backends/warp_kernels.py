@@ -1,0 +1,464 @@
+"""NVIDIA Warp kernels of the Warp back end: every view of one body in a few compiled passes (CPU or CUDA).
+
+One ray per pixel centre through ``K⁻¹ [u, v, 1]`` finds the nearest triangle whose projection holds
+that centre, so for a view with the whole mesh in front of the camera the pixel rays are answered by
+*rasterizing* the triangles: each triangle visits the pixel centres inside its projected bounding box,
+tests them with three edge functions (float64) and keeps the nearest z-depth per pixel with one atomic
+minimum on a 64-bit key (quantized depth, triangle id), which gives the same answer in any order (the
+same bits on CPU and GPU threads). The grazing triangles' visibility rays that the depth buffer cannot
+decide are any-hit queries to Warp's BVH (rasterizing them as well costs more: near a silhouette many
+thin triangles overlap each point).
+
+Passes, each launched over (view, item) for a batch of views of one body:
+
+1. :func:`project_vertices` — camera coordinates and pixel coordinates of every vertex, per-view bounds;
+2. :func:`hole_boxes`, :func:`raster_triangles` — the grazing triangles and how finely to sample each;
+   the nearest triangle per pixel (keys);
+3. :func:`resolve_pixels` — per grid row: depth, pixel count, footprint sum ``z³ / h``, border pixels,
+   the triangles hit;
+4. (host) the list of grazing triangles;
+5. :func:`grazing_points` — their points (centroids, or sub-triangle centroids of large triangles)
+   decided from the depth buffer, each in a slot of its own; :func:`anyhit_queries` — the undecided
+   ones by an any-hit ray through Warp's BVH; :func:`grazing_area` — area × visible share per triangle;
+6. :func:`reduce_triangles` — per chunk of triangles: hit area and triangles hit.
+
+Sums are taken per row or per chunk in a fixed order and added up on the host, so the results do not
+depend on thread scheduling. Importing this module imports Warp (and compiles the kernels on first use,
+cached in Warp's kernel cache).
+"""
+
+from __future__ import annotations
+
+import warp as wp
+
+# No adjoints; no fused multiply-adds, so float32 sums round as numpy's (same order, same bits).
+wp.set_module_options({"enable_backward": False, "fuse_fp": False})
+
+f64 = wp.float64
+
+#: Key of a pixel no triangle covers.
+EMPTY_KEY = wp.constant(wp.uint64(0xFFFFFFFFFFFFFFFF))
+#: Depth quantization of the keys: z · 2^24 in 32 bits (6e-8 m steps up to 256 m).
+DEPTH_SCALE = wp.constant(wp.float64(16777216.0))
+DEPTH_KEY_MAX = wp.constant(wp.float64(4294967295.0))
+
+
+@wp.struct
+class Camera:
+    """Pinhole intrinsics (pixels) and the grazing-triangle settings shared by a batch of views."""
+
+    fx: wp.float64
+    fy: wp.float64
+    cx: wp.float64
+    cy: wp.float64
+    skew: wp.float64
+    width: int
+    height: int
+    grazing_cos: wp.float32    # as the reference compares its float32 cosines
+    split_px: wp.float64       # < 0: never split
+    sample_px: wp.float64
+    max_split: int
+    clear_px: wp.float32
+    hidden_px: wp.float32
+    footprint: wp.float32      # float32(√(fx · fy)): a pixel footprint at depth z is z / footprint
+    t_tol: wp.float64
+    one_sided: int
+    sign: wp.float64           # orientation sign: sign · (e01 × e02) points outward
+    cull: int                  # 1: skip back faces away from holes in a one-sided scene (exact); 0: raster all
+
+
+@wp.func
+def to_pixel(cam: Camera, X: wp.vec3d):
+    """Image coordinates (u, v) of a camera-frame point with X[2] > 0."""
+    y = X[1] / X[2]
+    return cam.fx * X[0] / X[2] + cam.skew * y + cam.cx, cam.fy * y + cam.cy
+
+
+@wp.func
+def ray_depth(cam: Camera, n: wp.vec3d, w: wp.float64, px: wp.float64, py: wp.float64):
+    """z-depth at which the ray of pixel (px, py) meets the plane n · X = w."""
+    yn = (py - cam.cy) / cam.fy
+    xn = (px - cam.cx - cam.skew * yn) / cam.fx
+    return w / (n[0] * xn + n[1] * yn + n[2])
+
+
+@wp.func
+def depth_key(z: wp.float64, tri: int):
+    q = wp.min(wp.max(z * DEPTH_SCALE, f64(0.0)), DEPTH_KEY_MAX)
+    return (wp.uint64(q) << wp.uint64(32)) | wp.uint64(tri)
+
+
+@wp.func
+def key_triangle(key: wp.uint64):
+    return int(key & wp.uint64(0xFFFFFFFF))
+
+
+@wp.func
+def inside_triangle(ax: wp.float64, ay: wp.float64, bx: wp.float64, by: wp.float64, cx: wp.float64,
+                    cy: wp.float64, area: wp.float64, px: wp.float64, py: wp.float64):
+    """Whether (px, py) lies in the projected triangle (edges included), either orientation."""
+    e0 = (cx - bx) * (py - by) - (cy - by) * (px - bx)
+    e1 = (ax - cx) * (py - cy) - (ay - cy) * (px - cx)
+    e2 = (bx - ax) * (py - ay) - (by - ay) * (px - ax)
+    zero = f64(0.0)
+    if area > zero:
+        return e0 >= zero and e1 >= zero and e2 >= zero
+    return e0 <= zero and e1 <= zero and e2 <= zero
+
+
+#: Columns of the per-view float32 terms ``vt`` (host: :func:`wbsa.camera.backends.warp_backend._view_terms`):
+#: C − centre (0–2), −2 (C − centre) (3–5), |C − centre|² (6), K·R row-major (7–15), K·(R·centre + T) (16–18).
+N_VIEW_TERMS = 19
+
+
+@wp.func
+def facing(vt: wp.array2d(dtype=wp.float32), b: int, soa: wp.array2d(dtype=wp.float32), tri: int):
+    """(h, d) = (n · (C − c), max(|C − c|², 1e-30)) of a triangle, float32, operation for operation as
+    :func:`wbsa.camera.area.triangle_view_terms` (``soa``: the scene's per-triangle float32 columns); its
+    cos θ is h / √d (:func:`is_grazing`)."""
+    h = vt[b, 0] * soa[0, tri]
+    h = h + vt[b, 1] * soa[1, tri]
+    h = h + vt[b, 2] * soa[2, tri]
+    h = h - soa[6, tri]
+    d = vt[b, 3] * soa[3, tri]
+    d = d + vt[b, 4] * soa[4, tri]
+    d = d + vt[b, 5] * soa[5, tri]
+    d = d + soa[7, tri]
+    d = d + vt[b, 6]
+    return h, wp.max(d, wp.float32(1.0e-30))
+
+
+@wp.func
+def below_grazing(cam: Camera, h: wp.float32, d: wp.float32):
+    """|cos θ| < g for cos θ = h / √d rounded in float32 as the reference does; the root and the division
+    are taken only within 2 % of the threshold (elsewhere h² against g² d decides: the same answer)."""
+    hh = f64(h) * f64(h)
+    gg = f64(cam.grazing_cos) * f64(cam.grazing_cos) * f64(d)
+    if hh < f64(0.98) * gg:
+        return True
+    if hh > f64(1.02) * gg:
+        return False
+    return wp.abs(h / wp.sqrt(d)) < cam.grazing_cos
+
+
+@wp.func
+def is_grazing(cam: Camera, h: wp.float32, d: wp.float32):
+    """One-sided scene: 0 < cos θ < g; otherwise |cos θ| < g (as :func:`wbsa.camera.grazing.grazing_area_m2`)."""
+    if cam.one_sided != 0:
+        return h > wp.float32(0.0) and below_grazing(cam, h, d)
+    return below_grazing(cam, h, d)
+
+
+@wp.func
+def project32(vt: wp.array2d(dtype=wp.float32), b: int, P: wp.vec3):
+    """(u, v, z) float32 of a point relative to the scene centre, as :func:`wbsa.camera.roi.homogeneous_pixels`."""
+    uz = vt[b, 7] * P[0]
+    uz = uz + vt[b, 8] * P[1]
+    uz = uz + vt[b, 9] * P[2]
+    uz = uz + vt[b, 16]
+    vz = vt[b, 10] * P[0]
+    vz = vz + vt[b, 11] * P[1]
+    vz = vz + vt[b, 12] * P[2]
+    vz = vz + vt[b, 17]
+    z = vt[b, 13] * P[0]
+    z = z + vt[b, 14] * P[1]
+    z = z + vt[b, 15] * P[2]
+    z = z + vt[b, 18]
+    return uz / z, vz / z, z
+
+
+@wp.kernel
+def project_vertices(verts: wp.array(dtype=wp.vec3f), rot: wp.array(dtype=wp.mat33d), trans: wp.array(dtype=wp.vec3d),
+                     cam: Camera, xyz: wp.array2d(dtype=wp.vec3d), uv: wp.array2d(dtype=wp.vec2d),
+                     lo: wp.array2d(dtype=wp.float64), hi: wp.array2d(dtype=wp.float64),
+                     behind: wp.array(dtype=int)):
+    """Camera coordinates and pixel coordinates of every vertex in every view; per-view pixel bounds."""
+    b, i = wp.tid()
+    X = rot[b] * wp.vec3d(verts[i]) + trans[b]
+    xyz[b, i] = X
+    if X[2] <= f64(1.0e-6):
+        wp.atomic_max(behind, b, 1)
+        uv[b, i] = wp.vec2d(f64(0.0), f64(0.0))
+        return
+    u, v = to_pixel(cam, X)
+    uv[b, i] = wp.vec2d(u, v)
+    wp.atomic_min(lo, b, 0, u)
+    wp.atomic_min(lo, b, 1, v)
+    wp.atomic_max(hi, b, 0, u)
+    wp.atomic_max(hi, b, 1, v)
+
+
+@wp.kernel
+def hole_boxes(hole_vertices: wp.array(dtype=int), hole_start: wp.array(dtype=int),
+               hole_centroids: wp.array(dtype=wp.vec3d), uv: wp.array2d(dtype=wp.vec2d), rot: wp.array(dtype=wp.mat33d),
+               trans: wp.array(dtype=wp.vec3d), cam: Camera, boxes: wp.array2d(dtype=wp.vec4d)):
+    """Pixel box (u_min, u_max, v_min, v_max) of each hole's cap in each view: its boundary vertices and the
+    centroid of the fan that closes it (the whole image if the centroid is behind the camera)."""
+    b, h = wp.tid()
+    X = rot[b] * hole_centroids[h] + trans[b]
+    if X[2] <= f64(1.0e-6):
+        boxes[b, h] = wp.vec4d(f64(-1.0e30), f64(1.0e30), f64(-1.0e30), f64(1.0e30))
+        return
+    u0, v0 = to_pixel(cam, X)
+    box = wp.vec4d(u0, u0, v0, v0)
+    for k in range(hole_start[h], hole_start[h + 1]):
+        p = uv[b, hole_vertices[k]]
+        box = wp.vec4d(wp.min(box[0], p[0]), wp.max(box[1], p[0]), wp.min(box[2], p[1]), wp.max(box[3], p[1]))
+    boxes[b, h] = box
+
+
+@wp.kernel
+def raster_triangles(faces: wp.array(dtype=wp.vec3i), xyz: wp.array2d(dtype=wp.vec3d), uv: wp.array2d(dtype=wp.vec2d),
+                     soa: wp.array2d(dtype=wp.float32), edges: wp.array(dtype=wp.float64),
+                     vt: wp.array2d(dtype=wp.float32), cam: Camera, grids: wp.array(dtype=wp.vec4i),
+                     offsets: wp.array(dtype=int), boxes: wp.array2d(dtype=wp.vec4d), keys: wp.array(dtype=wp.uint64),
+                     split: wp.array2d(dtype=int)):
+    """Classify a triangle (grazing: sub-triangles per side in ``split``, else 0) and write its depth keys at
+    every pixel centre its projection holds (atomic minimum).
+
+    ``grids[b]`` = (v0, u0, stride, n_rows) of view b's pixel grid (an empty border of one cell on each side).
+    In a one-sided scene (closed, outward surface) a back face can be the first hit only of a ray that
+    enters through a hole, so back faces outside every hole's cap box (``boxes``) are not rasterized.
+    """
+    b, tri = wp.tid()
+    height, dist2 = facing(vt, b, soa, tri)
+    s = int(0)
+    if is_grazing(cam, height, dist2):
+        s = 1
+        if cam.split_px >= f64(0.0):  # as wbsa.camera.grazing.split_counts
+            u, v, zc = project32(vt, b, wp.vec3(soa[3, tri], soa[4, tri], soa[5, tri]))
+            nearest = f64(zc) - edges[tri]
+            if nearest <= f64(0.0):
+                s = cam.max_split
+            else:
+                size = wp.max(cam.fx, cam.fy) * edges[tri] / nearest
+                if size > cam.split_px:
+                    s = wp.min(int(wp.ceil(wp.min(size, f64(1.0e9)) / cam.sample_px)), cam.max_split)
+    split[b, tri] = s
+    g = grids[b]
+    if g[3] <= 2:
+        return
+    f = faces[tri]
+    a = uv[b, f[0]]
+    p = uv[b, f[1]]
+    q = uv[b, f[2]]
+    umin = wp.min(a[0], wp.min(p[0], q[0]))
+    umax = wp.max(a[0], wp.max(p[0], q[0]))
+    c0 = wp.max(int(wp.ceil(umin)), g[1] + 1)
+    c1 = wp.min(int(wp.floor(umax)), g[1] + g[2] - 2)
+    if c1 < c0:
+        return
+    vmin = wp.min(a[1], wp.min(p[1], q[1]))
+    vmax = wp.max(a[1], wp.max(p[1], q[1]))
+    r0 = wp.max(int(wp.ceil(vmin)), g[0] + 1)
+    r1 = wp.min(int(wp.floor(vmax)), g[0] + g[3] - 2)
+    if r1 < r0:
+        return
+    if cam.cull != 0 and cam.one_sided != 0 and height <= wp.float32(0.0):
+        near_hole = int(0)
+        for h in range(boxes.shape[1]):
+            box = boxes[b, h]
+            if umax >= box[0] and umin <= box[1] and vmax >= box[2] and vmin <= box[3]:
+                near_hole = 1
+        if near_hole == 0:
+            return
+    area = (p[0] - a[0]) * (q[1] - a[1]) - (p[1] - a[1]) * (q[0] - a[0])
+    if area == f64(0.0):
+        return
+    X0 = xyz[b, f[0]]
+    n = wp.cross(xyz[b, f[1]] - X0, xyz[b, f[2]] - X0)
+    w = wp.dot(n, X0)
+    base = offsets[b]
+    for row in range(r0, r1 + 1):
+        py = f64(row)
+        for col in range(c0, c1 + 1):
+            px = f64(col)
+            if inside_triangle(a[0], a[1], p[0], p[1], q[0], q[1], area, px, py):
+                z = ray_depth(cam, n, w, px, py)
+                if z > f64(0.0):
+                    cell = base + (row - g[0]) * g[2] + (col - g[1])
+                    wp.atomic_min(keys, cell, depth_key(z, tri))
+
+
+@wp.kernel
+def resolve_pixels(soa: wp.array2d(dtype=wp.float32), vt: wp.array2d(dtype=wp.float32), cam: Camera,
+                   grids: wp.array(dtype=wp.vec4i), offsets: wp.array(dtype=int), keys: wp.array(dtype=wp.uint64),
+                   depth: wp.array(dtype=wp.float32), seen: wp.array2d(dtype=wp.uint8),
+                   n_pixels: wp.array2d(dtype=int), footprint: wp.array2d(dtype=wp.float64),
+                   border: wp.array2d(dtype=int)):
+    """Per grid row of a view: z-depth of each hit pixel (from its key, 6e-8 m steps), pixel count,
+    Σ z³ · w over the pixels (w = 1 / |n · (C − c)| in float32 on non-grazing triangles, 0 on grazing ones,
+    as :func:`wbsa.camera.area.visible_area_m2`), whether a pixel on the image border is hit; marks the
+    triangles hit."""
+    b, r = wp.tid()
+    g = grids[b]
+    if r < 1 or r >= g[3] - 1:
+        return
+    row = g[0] + r
+    base = offsets[b] + r * g[2]
+    count = int(0)
+    total = f64(0.0)
+    edge = int(0)
+    for j in range(1, g[2] - 1):
+        key = keys[base + j]
+        if key == EMPTY_KEY:
+            continue
+        tri = key_triangle(key)
+        z = wp.float32((f64(key >> wp.uint64(32)) + f64(0.5)) / DEPTH_SCALE)
+        depth[base + j] = z
+        seen[b, tri] = wp.uint8(1)
+        count += 1
+        height, dist2 = facing(vt, b, soa, tri)
+        if not below_grazing(cam, height, dist2):
+            w = wp.float32(1.0) / wp.max(wp.abs(height), wp.float32(1.0e-30))
+            z64 = f64(z)
+            total += z64 * z64 * z64 * f64(w)
+        col = g[1] + j
+        if row == 0 or row == cam.height - 1 or col == 0 or col == cam.width - 1:
+            edge = 1
+    n_pixels[b, r] = count
+    footprint[b, r] = total
+    border[b, r] = edge
+
+
+@wp.func
+def lookup(depth: wp.array(dtype=wp.float32), base: int, g: wp.vec4i, row: int, col: int):
+    """Depth at image pixel (row, col) of a view's grid; inf outside the grid."""
+    r = row - g[0]
+    c = col - g[1]
+    if r < 0 or r >= g[3] or c < 0 or c >= g[2]:
+        return wp.float32(wp.inf)
+    return depth[base + r * g[2] + c]
+
+
+@wp.kernel
+def grazing_points(cand_view: wp.array(dtype=int), cand_tri: wp.array(dtype=int), cand_split: wp.array(dtype=int),
+                   cand_slot: wp.array(dtype=int), faces: wp.array(dtype=wp.vec3i), verts: wp.array(dtype=wp.vec3f),
+                   soa: wp.array2d(dtype=wp.float32), vt: wp.array2d(dtype=wp.float32), cam: Camera,
+                   grids: wp.array(dtype=wp.vec4i), offsets: wp.array(dtype=int), depth: wp.array(dtype=wp.float32),
+                   state: wp.array(dtype=int), point: wp.array(dtype=wp.vec3)):
+    """Decide the points of one grazing triangle from the depth buffer: its centroid, or the centroids of
+    its s × s equal sub-triangles (float32, as :func:`wbsa.camera.grazing.points_visible`).
+
+    A point in the image is visible (state 1) when none of the 2 × 2 pixels around it has a return more
+    than ``clear_px`` footprints in front of it (front faces only), hidden (0) when all have one more than
+    ``hidden_px`` in front, otherwise a query (2, ``point`` its position relative to the scene centre) for
+    an any-hit ray. Points outside the image are 0.
+    """
+    k = wp.tid()
+    b = cand_view[k]
+    tri = cand_tri[k]
+    s = cand_split[k]
+    slot = cand_slot[k]
+    g = grids[b]
+    base = offsets[b]
+    height, dist2 = facing(vt, b, soa, tri)
+    front = cam.one_sided != 0 or height > wp.float32(0.0)
+    f = faces[tri]
+    V0 = wp.vec3d(verts[f[0]])
+    V1 = wp.vec3d(verts[f[1]])
+    V2 = wp.vec3d(verts[f[2]])
+    third = f64(1.0) / f64(3.0)
+    for i in range(s):
+        for half in range(2):
+            # half 0: the s − i sub-triangles pointing like the triangle; half 1: the s − i − 1 others
+            for j in range(s - i - half):
+                P = wp.vec3(soa[3, tri], soa[4, tri], soa[5, tri])
+                if s > 1:  # as wbsa.camera.grazing.subtriangle_centroids and split_area_m2, in float64
+                    a1 = (f64(i) + third * f64(1 + half)) / f64(s)
+                    a2 = (f64(j) + third * f64(1 + half)) / f64(s)
+                    a0 = f64(1.0) - a1 - a2
+                    P = wp.vec3(V0 * a0 + V1 * a1 + V2 * a2)
+                u, v, z = project32(vt, b, P)
+                result = int(0)
+                inside = z > wp.float32(0.0)
+                inside = inside and u >= wp.float32(-0.5) and u < wp.float32(float(cam.width) - 0.5)
+                inside = inside and v >= wp.float32(-0.5) and v < wp.float32(float(cam.height) - 0.5)
+                if inside:
+                    col = int(wp.floor(u))
+                    row = int(wp.floor(v))
+                    d0 = lookup(depth, base, g, row, col)
+                    d1 = lookup(depth, base, g, row, col + 1)
+                    d2 = lookup(depth, base, g, row + 1, col)
+                    d3 = lookup(depth, base, g, row + 1, col + 1)
+                    near = wp.min(wp.min(d0, d1), wp.min(d2, d3))
+                    far = wp.max(wp.max(d0, d1), wp.max(d2, d3))
+                    fp = z / cam.footprint
+                    if front and near >= z - cam.clear_px * fp:
+                        result = 1
+                    elif far >= z - cam.hidden_px * fp:
+                        result = 2
+                        point[slot] = P
+                state[slot] = result
+                slot += 1
+
+
+@wp.kernel
+def anyhit_queries(mesh: wp.uint64, view_of: wp.array(dtype=int), centers: wp.array(dtype=wp.vec3d),
+                   origins: wp.array(dtype=wp.vec3), cam: Camera, state: wp.array(dtype=int),
+                   point: wp.array(dtype=wp.vec3)):
+    """Queries (state 2): visible (1) unless Warp's BVH finds a triangle on the segment from the camera
+    centre before ``1 − t_tol`` of the way to the point, hidden (0) otherwise.
+
+    The rays are the reference's (:func:`wbsa.camera.grazing.points_visible`): origin the camera centre in
+    world coordinates (``origins``, float32), direction (point − centre) − (C − centre) in float32, against
+    the mesh's float32 world coordinates (``mesh``), as Embree sees them.
+    """
+    k = wp.tid()
+    if state[k] != 2:
+        return
+    b = view_of[k]
+    d = point[k] - wp.vec3(centers[b])
+    if wp.mesh_query_ray_anyhit(mesh, origins[b], d, float(f64(1.0) - cam.t_tol)):
+        state[k] = 0
+    else:
+        state[k] = 1
+
+
+@wp.kernel
+def grazing_area(cand_tri: wp.array(dtype=int), cand_split: wp.array(dtype=int), cand_slot: wp.array(dtype=int),
+                 areas: wp.array(dtype=wp.float64), state: wp.array(dtype=int), out: wp.array(dtype=wp.float64)):
+    """Visible area of each grazing triangle: its area times its share of visible points."""
+    k = wp.tid()
+    s = cand_split[k]
+    n = s * s
+    start = cand_slot[k]
+    visible = int(0)
+    for i in range(start, start + n):
+        if state[i] == 1:
+            visible += 1
+    out[k] = areas[cand_tri[k]] * f64(visible) / f64(n)
+
+
+@wp.kernel
+def reduce_triangles(areas: wp.array(dtype=wp.float64), seen: wp.array2d(dtype=wp.uint8), chunk: int,
+                     hit_area: wp.array2d(dtype=wp.float64), n_hit: wp.array2d(dtype=int)):
+    """Per view and chunk of triangles, in order: area of the triangles hit and their number."""
+    b, k = wp.tid()
+    m = areas.shape[0]
+    start = k * chunk
+    end = wp.min(start + chunk, m)
+    hit = f64(0.0)
+    count = int(0)
+    for t in range(start, end):
+        if seen[b, t] != wp.uint8(0):
+            hit += areas[t]
+            count += 1
+    hit_area[b, k] = hit
+    n_hit[b, k] = count
+
+
+@wp.kernel
+def cast_rays(mesh: wp.uint64, rays: wp.array2d(dtype=wp.float32), t_hit: wp.array(dtype=wp.float32),
+              face: wp.array(dtype=int)):
+    """Bare closest-hit ray casting with Warp's BVH (origin, direction per row): the Warp ray-casting floor."""
+    i = wp.tid()
+    o = wp.vec3(rays[i, 0], rays[i, 1], rays[i, 2])
+    d = wp.vec3(rays[i, 3], rays[i, 4], rays[i, 5])
+    hit = wp.mesh_query_ray(mesh, o, d, 1.0e9)
+    if hit.result:
+        t_hit[i] = hit.t
+        face[i] = hit.face
+    else:
+        t_hit[i] = wp.inf
+        face[i] = -1

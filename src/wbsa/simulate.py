@@ -51,7 +51,7 @@ class SimulatedView:
 def simulate_view(scene: MeshScene, camera: Intrinsics, view: View, *, sensor: SensorModel | None = None,
                   seed: int = 0, subject_id: int = 0, reconstruct: tuple[str, ...] = (),
                   reconstruction: ReconstructionSettings | None = None, keep_frame: bool = False,
-                  keep_surfaces: bool = False) -> SimulatedView:
+                  keep_surfaces: bool = False, target: np.ndarray | None = None) -> SimulatedView:
     """Render one view of a body, read it through the sensor and reconstruct the visible surface.
 
     Parameters
@@ -71,6 +71,9 @@ def simulate_view(scene: MeshScene, camera: Intrinsics, view: View, *, sensor: S
         How to reconstruct (default settings when None).
     keep_frame, keep_surfaces : bool
         Return the frame and the reconstructed surfaces (a scan keeps only the numbers).
+    target : (3,) float, optional
+        The point the camera aims at; default the scene's bounding-box centre (give the subject's centre
+        when the scene also holds a room).
 
     Returns
     -------
@@ -79,7 +82,8 @@ def simulate_view(scene: MeshScene, camera: Intrinsics, view: View, *, sensor: S
     from wbsa.camera.measure import measure_view
 
     need_frame = keep_frame or sensor is not None or bool(reconstruct)
-    row, frame = measure_view(scene, camera, view, scene.center, return_frame=need_frame)
+    target = scene.center if target is None else np.asarray(target, dtype=np.float64)
+    row, frame = measure_view(scene, camera, view, target, return_frame=need_frame)
     if sensor is not None:
         from wbsa.sensor.measure import sense_view, view_rng
 

@@ -26,14 +26,20 @@ def depth_noise_m(z: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Plane:
-    """A plane ``n·p = d`` in the camera frame, ``n`` unit and pointing to the camera's side."""
+    """A plane ``n·p = d`` in the camera frame, ``n`` unit and pointing to the camera's side.
+
+    ``noise_scale`` (≥ 1) multiplies the depth-noise envelope where the plane's own returns are noisier
+    (measured on them by :func:`ransac_plane`; lateral noise on a grazing floor adds to the axial noise).
+    """
 
     normal: np.ndarray
     offset: float
+    noise_scale: float = 1.0
 
     def __post_init__(self) -> None:
         n = np.asarray(self.normal, dtype=np.float64).reshape(3)
         d = float(self.offset)
+        object.__setattr__(self, "noise_scale", max(1.0, float(self.noise_scale)))
         n_len = float(np.linalg.norm(n))
         n, d = n / n_len, d / n_len
         if d > 0:  # the camera (origin) must be on the positive side: height -d > 0
@@ -45,25 +51,55 @@ class Plane:
         """(k,) float64 signed height of (k, 3) points above the plane (positive on the camera's side)."""
         return np.asarray(points, dtype=np.float64) @ self.normal - self.offset
 
-    def tolerance(self, points: np.ndarray, k_sigma: float = 2.5, floor_m: float = 0.02) -> np.ndarray:
-        """(k,) float64 how far a return of this plane may stray from it: the depth noise seen along the normal."""
+    def tolerance(self, points: np.ndarray, k_sigma: float = 2.5, floor_m: float = 0.02,
+                  scaled: bool = True) -> np.ndarray:
+        """(k,) float64 how far a return of this plane may stray from it: the depth noise seen along the normal.
+
+        ``scaled`` False uses the envelope alone, without the plane's measured ``noise_scale``.
+        """
         p = np.asarray(points, dtype=np.float64)
         r = np.linalg.norm(p, axis=1)
         cos = np.abs(p @ self.normal) / np.maximum(r, 1e-9)
         # the depth error runs along the ray; its z-noise scales to range by r / z
-        return np.maximum(floor_m, k_sigma * depth_noise_m(p[:, 2]) * r / np.maximum(p[:, 2], 1e-9) * cos)
+        scale = self.noise_scale if scaled else 1.0
+        return np.maximum(floor_m, k_sigma * scale * self.unit_noise(p) * cos)
+
+    @staticmethod
+    def unit_noise(points: np.ndarray) -> np.ndarray:
+        """(k,) float64 the envelope's depth noise along each point's ray (before the angle to the plane)."""
+        p = np.asarray(points, dtype=np.float64)
+        return depth_noise_m(p[:, 2]) * np.linalg.norm(p, axis=1) / np.maximum(p[:, 2], 1e-9)
 
     def to_dict(self) -> dict:
         """JSON-ready ``{"normal": [...], "offset_m": ...}``."""
-        return {"normal": [float(x) for x in self.normal], "offset_m": float(self.offset)}
+        return {"normal": [float(x) for x in self.normal], "offset_m": float(self.offset),
+                "noise_scale": float(self.noise_scale)}
 
 
-def fit_plane(points: np.ndarray) -> Plane:
-    """Least-squares plane through (k, 3) points (the smallest principal axis)."""
-    c = points.mean(axis=0)
-    _, _, vt = np.linalg.svd(points - c, full_matrices=False)
+def fit_plane(points: np.ndarray, weights: np.ndarray | None = None) -> Plane:
+    """Weighted least-squares plane through (k, 3) points (the smallest principal axis)."""
+    w = np.ones(len(points)) if weights is None else np.asarray(weights, dtype=np.float64)
+    c = (w[:, None] * points).sum(axis=0) / w.sum()
+    _, _, vt = np.linalg.svd(np.sqrt(w)[:, None] * (points - c), full_matrices=False)
     n = vt[2]
     return Plane(n, float(n @ c))
+
+
+def _refit(points: np.ndarray, plane: Plane, k_sigma: float) -> tuple[Plane, np.ndarray]:
+    """Refit on the inliers, weighted by their inverse noise, and measure the plane's own noise."""
+    unit = Plane.unit_noise(points)
+    inliers = np.abs(plane.height(points)) <= plane.tolerance(points, k_sigma)
+    for _ in range(3):
+        if inliers.sum() < 3:
+            break
+        cos = np.abs(points[inliers] @ plane.normal) / np.linalg.norm(points[inliers], axis=1)
+        sigma = np.maximum(unit[inliers] * cos, 1e-3)
+        plane = fit_plane(points[inliers], 1.0 / sigma**2)
+        h = plane.height(points[inliers]) / sigma
+        scale = 1.4826 * float(np.median(np.abs(h - np.median(h))))  # robust spread in envelope units
+        plane = Plane(plane.normal, plane.offset, noise_scale=scale)
+        inliers = np.abs(plane.height(points)) <= plane.tolerance(points, k_sigma)
+    return plane, inliers
 
 
 def ransac_plane(points: np.ndarray, rng: np.random.Generator, iterations: int = 200,
@@ -100,24 +136,22 @@ def ransac_plane(points: np.ndarray, rng: np.random.Generator, iterations: int =
         tol = np.maximum(0.02, spread[:, None] * np.abs(rays @ n.T))
         counts[i:i + 16] = np.count_nonzero(dist <= tol, axis=0)
     best_i = int(np.argmax(counts))
-    best = Plane(normals[best_i], float(offsets[best_i]))
-    inliers = np.abs(best.height(points)) <= best.tolerance(points, k_sigma)
-    for _ in range(2):
-        if inliers.sum() < 3:
-            break
-        best = fit_plane(points[inliers])
-        inliers = np.abs(best.height(points)) <= best.tolerance(points, k_sigma)
-    return best, inliers
+    return _refit(points, Plane(normals[best_i], float(offsets[best_i])), k_sigma)
+
+
+#: The floor cut keeps returns higher than this above the floor, or than the floor's depth noise if more.
+FLOOR_CUT_M = 0.02
 
 
 def above_floor(points: np.ndarray, floor: Plane | None) -> np.ndarray:
-    """(k,) bool: points clearly above the floor (further than its noise tolerance); all when no floor.
+    """(k,) bool: points above the floor by more than the noise envelope; all when no floor.
 
-    The same cut is applied to training renders and to real images, so the feet lose the same strip.
+    This is the floor cut of the measures. It uses the envelope alone (not the floor's measured noise),
+    so training renders, whose floor is known, and real images lose the same strip of the feet.
     """
     if floor is None:
         return np.ones(len(points), dtype=bool)
-    return floor.height(points) > floor.tolerance(points)
+    return floor.height(points) > floor.tolerance(points, floor_m=FLOOR_CUT_M, scaled=False)
 
 
 @dataclass(frozen=True)

@@ -6,7 +6,10 @@
    The floor is the room surface whose normal is closest to the image's up (within 50°); the others are
    walls. Returns on or below the floor (within its noise) and on or behind a wall are background.
 3. What is left is clustered in 3-D: voxels closer than ``cluster_gap_m`` (or three pixel pitches at that
-   depth) are one object.
+   depth) are one object. Voxels in a band over the floor (10 cm, or twice the floor's noise) only join the
+   object they touch, so stray floor returns cannot chain objects together. Objects that touch in the image
+   with less than 0.5 m between them in depth (a body's near and far sides, an arm in front of the chest)
+   are one object if together they are still person-sized.
 4. A cluster is person-sized if it is 0.45–2.6 m tall (along the floor normal, or its long axis) and at
    most 2.6 m wide; with several, ``pick`` chooses (``nearest``, ``largest``, ``center`` of the image, or an
    ``(x, y)`` pixel), else a :class:`~wbsa.errors.WbsaError` lists them.
@@ -20,8 +23,11 @@ import numpy as np
 
 from wbsa.errors import WbsaError
 from wbsa.estimation.cloud import Plane, above_floor, ransac_plane
+from wbsa.estimation.clusters import attach_low, merge_occluding
 
 PICKS = ("nearest", "largest", "center")
+#: Height over the floor below which returns are not used to link objects (only to extend them).
+LOW_BAND_M = 0.10
 
 
 @dataclass(frozen=True)
@@ -191,23 +197,34 @@ def segment_subject(depth_m: np.ndarray, intrinsics, settings: SegmentSettings =
     points = backproject_depth(np.where(ok, depth, 0.0), intrinsics).reshape(-1, 3)[pix].astype(np.float64)
     cloud, voxel_of = _voxelise(points, settings.voxel_m)
     floor, walls = find_room(cloud, settings)
-    keep = above_floor(cloud, floor)
+    keep = np.ones(len(cloud), dtype=bool) if floor is None else floor.height(cloud) > floor.tolerance(cloud)
     for wall in walls:
         keep &= wall.height(cloud) > wall.tolerance(cloud)
-    idx = np.flatnonzero(keep)
+    # objects are clustered above a band over the floor, where the floor's noisy returns cannot link them;
+    # returns in the band join the object they touch (feet), or nothing (stray floor returns)
+    core = keep.copy()
+    if floor is not None:
+        core &= floor.height(cloud) > np.maximum(LOW_BAND_M, 2.0 * floor.tolerance(cloud))
+    idx = np.flatnonzero(core)
     if len(idx) == 0:
         raise WbsaError("the depth image holds only floor and walls; no subject found")
     pts = cloud[idx]
     pitch = float(np.max(pts[:, 2])) / min(float(intrinsics.fx), float(intrinsics.fy))
     gap = max(settings.cluster_gap_m, 3.0 * pitch)
-    pairs = cKDTree(pts).query_pairs(gap, output_type="ndarray")
+    tree = cKDTree(pts)
+    pairs = tree.query_pairs(gap, output_type="ndarray")
     graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(pts), len(pts)))
     _, labels = connected_components(graph, directed=False)
     voxel_label = np.full(len(cloud), -1)
     voxel_label[idx] = labels
+    low = np.flatnonzero(keep & ~core)
+    if len(low):
+        voxel_label[low] = attach_low(cloud[low], tree, labels, gap)
     pixel_label = voxel_label[voxel_of]
-    # the floor cut is applied per pixel, as in training (the voxel centroid may sit above a foot's sole)
-    pixel_label[~above_floor(points, floor)] = -1
+    pixel_label[~keep[voxel_of]] = -1
+    up = floor.normal if floor is not None else np.array([0.0, -1.0, 0.0])
+    pixel_label = merge_occluding(pixel_label, pix, points, (h, w), up, settings.max_person_height_m,
+                                  settings.max_person_width_m)
     clusters = _describe(pixel_label, pix, points, w, floor)
     people = [c for c in clusters if settings.min_person_height_m <= c.height_m <= settings.max_person_height_m
               and c.width_m <= settings.max_person_width_m]
@@ -219,8 +236,32 @@ def segment_subject(depth_m: np.ndarray, intrinsics, settings: SegmentSettings =
     chosen = _choose(people, settings.pick, (w, h), pixel_label, pix)
     mask = np.zeros(h * w, dtype=bool)
     mask[pix[pixel_label == chosen.label]] = True
+    mask = _grow_feet(mask.reshape(h, w), pix, points, pixel_label, floor, walls)
     others = tuple(c for c in people if c.label != chosen.label)
-    return Segmentation(mask.reshape(h, w), floor, tuple(walls), chosen, others)
+    return Segmentation(mask, floor, tuple(walls), chosen, others)
+
+
+def _grow_feet(mask: np.ndarray, pix: np.ndarray, points: np.ndarray, pixel_label: np.ndarray,
+               floor: Plane | None, walls: list[Plane]) -> np.ndarray:
+    """Add the returns between the measures' floor cut and the floor's noise that touch the subject in the image.
+
+    The floor's own noise hides the lowest centimetres of the feet; the returns there that are above the
+    measures' cut (:func:`~wbsa.estimation.cloud.above_floor`) and 8-connected to the subject in the image are
+    the subject's (the floor's stray returns are too sparse to reach far).
+    """
+    from scipy import ndimage
+
+    if floor is None:
+        return mask
+    cand = above_floor(points, floor) & (pixel_label < 0)
+    for wall in walls:
+        cand &= wall.height(points) > wall.tolerance(points)
+    grow = np.zeros(mask.size, dtype=bool)
+    grow[pix[cand]] = True
+    both = mask | grow.reshape(mask.shape)
+    labels, _ = ndimage.label(both, structure=np.ones((3, 3), dtype=bool))
+    touching = np.unique(labels[mask])
+    return np.isin(labels, touching[touching > 0])
 
 
 def _describe(pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarray, width: int,

@@ -4,10 +4,28 @@ from __future__ import annotations
 
 import numpy as np
 
-#: Parts that touch in the image are merged when their depths there differ by less than this (m).
-MERGE_DEPTH_GAP_M = 0.5
+#: Parts that touch in the image are merged when a fifth of their contact has a depth step under this (m)
+MERGE_DEPTH_GAP_M = 0.8
 #: ... and they share at least this many neighbouring pixel pairs.
 MERGE_MIN_CONTACTS = 5
+#: A person's legs and hips (10–40 % of its height) span at most this horizontally (m); two people more.
+MAX_FOOTPRINT_M = 0.9
+
+
+def footprint_m(points: np.ndarray, up: np.ndarray) -> float:
+    """Horizontal extent (m, bounding-box diagonal) of the points between 10 % and 40 % of the object's height."""
+    along = points @ up
+    lo, top = np.quantile(along, 0.002), np.quantile(along, 0.998)
+    band = points[(along >= lo + 0.1 * (top - lo)) & (along <= lo + 0.4 * (top - lo))]
+    if len(band) < 3:
+        return 0.0
+    flat = band - np.outer(band @ up, up)
+    e1 = np.array([1.0, 0.0, 0.0]) - up[0] * up
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(up, e1)
+    q = np.stack([flat @ e1, flat @ e2], axis=1)
+    ext = np.quantile(q, 0.99, axis=0) - np.quantile(q, 0.01, axis=0)
+    return float(np.hypot(*ext))
 
 
 def attach_low(low: np.ndarray, tree, labels: np.ndarray, gap: float) -> np.ndarray:
@@ -42,8 +60,10 @@ def merge_occluding(pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarray
     """Merge clusters that touch in the image across a small depth step, while the union stays person-sized.
 
     Seen from the side, a body's far leg and arm are hidden where they join it, so they form clusters of
-    their own; they touch the near side in the image with a depth step of a body's width. Pairs are merged
-    by decreasing contact length.
+    their own; they touch the near side in the image with a depth step of a body's width (or of an arm
+reaching towards the camera, which can hide the waist). Pairs are merged
+    by decreasing contact length when a fifth of the contact steps less than 0.8 m in depth and the union
+    is person-sized: not too tall or wide, and its legs and hips span at most 0.9 m (two people more).
 
     Parameters
     ----------
@@ -80,7 +100,7 @@ def merge_occluding(pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarray
     inverse = inverse.ravel()
     order = np.argsort(inverse, kind="stable")
     splits = np.split(gap[order], np.cumsum(counts)[:-1])
-    median_gap = np.array([np.median(g) for g in splits])
+    near_gap = np.array([np.quantile(g, 0.2) for g in splits])
     # extents of every cluster along up and two horizontal axes
     e1 = np.array([1.0, 0.0, 0.0]) - up[0] * up
     e1 /= np.linalg.norm(e1)
@@ -89,7 +109,8 @@ def merge_occluding(pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarray
     labels = np.unique(pixel_label[pixel_label >= 0])
     lo = {int(c): proj[pixel_label == c].min(axis=0) for c in labels}
     hi = {int(c): proj[pixel_label == c].max(axis=0) for c in labels}
-    size = {int(c): int(np.count_nonzero(pixel_label == c)) for c in labels}
+    members = {int(c): [np.flatnonzero(pixel_label == c)] for c in labels}
+    size = {c: len(m[0]) for c, m in members.items()}
     parent = {int(c): int(c) for c in labels}
 
     def root(c: int) -> int:
@@ -99,7 +120,7 @@ def merge_occluding(pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarray
         return c
 
     for i in np.argsort(-counts, kind="stable"):
-        if counts[i] < MERGE_MIN_CONTACTS or median_gap[i] > MERGE_DEPTH_GAP_M:
+        if counts[i] < MERGE_MIN_CONTACTS or near_gap[i] > MERGE_DEPTH_GAP_M:
             continue
         a, b = root(int(pairs[i, 0])), root(int(pairs[i, 1]))
         if a == b:
@@ -108,9 +129,13 @@ def merge_occluding(pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarray
         ext = new_hi - new_lo
         if ext[0] > max_height_m or np.hypot(ext[1], ext[2]) > max_width_m:
             continue
+        union = np.concatenate(members[a] + members[b])
+        if footprint_m(points[union], up) > MAX_FOOTPRINT_M:
+            continue
         keep, gone = (a, b) if size[a] >= size[b] else (b, a)
         parent[gone] = keep
         lo[keep], hi[keep], size[keep] = new_lo, new_hi, size[a] + size[b]
+        members[keep] = [union]
     lut = {c: root(c) for c in parent}
     out = pixel_label.copy()
     ok = out >= 0

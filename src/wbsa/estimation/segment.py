@@ -8,7 +8,7 @@
 3. What is left is clustered in 3-D: voxels closer than ``cluster_gap_m`` (or three pixel pitches at that
    depth) are one object. Voxels in a band over the floor (10 cm, or twice the floor's noise) only join the
    object they touch, so stray floor returns cannot chain objects together. Objects that touch in the image
-   with less than 0.5 m between them in depth (a body's near and far sides, an arm in front of the chest)
+   with less than 0.8 m between them in depth (a body's near and far sides, an arm in front of the waist)
    are one object if together they are still person-sized.
 4. A cluster is person-sized if it is 0.45–2.6 m tall (along the floor normal, or its long axis) and at
    most 2.6 m wide; with several, ``pick`` chooses (``nearest``, ``largest``, ``center`` of the image, or an
@@ -23,7 +23,7 @@ import numpy as np
 
 from wbsa.errors import WbsaError
 from wbsa.estimation.cloud import Plane, above_floor, ransac_plane
-from wbsa.estimation.clusters import attach_low, merge_occluding
+from wbsa.estimation.clusters import MAX_FOOTPRINT_M, attach_low, footprint_m, merge_occluding
 
 PICKS = ("nearest", "largest", "center")
 #: Height over the floor below which returns are not used to link objects (only to extend them).
@@ -93,6 +93,7 @@ class Cluster:
     distance_m: float
     height_m: float
     width_m: float
+    footprint_m: float = 0.0
 
     def describe(self) -> str:
         """``1.72 m tall at pixel (312, 240), 2.9 m away`` for messages."""
@@ -227,9 +228,12 @@ def segment_subject(depth_m: np.ndarray, intrinsics, settings: SegmentSettings =
                                   settings.max_person_width_m)
     clusters = _describe(pixel_label, pix, points, w, floor)
     people = [c for c in clusters if settings.min_person_height_m <= c.height_m <= settings.max_person_height_m
-              and c.width_m <= settings.max_person_width_m]
+              and c.width_m <= settings.max_person_width_m and c.footprint_m <= MAX_FOOTPRINT_M]
     if not people:
         big = max(clusters, key=lambda c: c.n_pixels) if clusters else None
+        if big is not None and big.footprint_m > MAX_FOOTPRINT_M and big.height_m <= settings.max_person_height_m:
+            raise WbsaError(f"the largest object, {big.describe()}, is {big.footprint_m:.1f} m wide at the hips: "
+                            "people touching each other? capture the subject standing apart")
         what = f"the largest object is {big.describe()}" if big else "no object is left after the floor and walls"
         raise WbsaError(f"no person-sized object ({settings.min_person_height_m:g}–{settings.max_person_height_m:g} m "
                         f"tall) in the depth image; {what}: check the depth scale (units per metre) and the camera")
@@ -286,7 +290,8 @@ def _describe(pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarray, widt
         width_m = 2.0 * float(np.quantile(np.linalg.norm(flat - centre, axis=1), 0.995))
         rows, cols = np.divmod(pix[sel], width)
         out.append(Cluster(int(lab), int(n), (int(np.median(cols)), int(np.median(rows))),
-                           float(np.median(np.linalg.norm(p, axis=1))), height, width_m))
+                           float(np.median(np.linalg.norm(p, axis=1))), height, width_m,
+                           footprint_m(p, up if up @ np.array([0.0, -1.0, 0.0]) >= 0 else -up)))
     return out
 
 

@@ -258,3 +258,24 @@ def test_estimate_finds_the_view_flags_and_writes_outputs(room_view, small_model
     with pytest.raises(SystemExit) as usage:
         main(base + ["--pick", "middle"])
     assert usage.value.code == 2 and "nearest, largest, center or x,y" in capsys.readouterr().err
+
+
+def test_a_wbsa_fit_model_is_used_with_its_mismatches_flagged(room_view, tmp_path, monkeypatch):
+    """A paper-style per-view model (Kinect v1, 4.3 m) on a Kinect v2 image at 3.2 m: estimated, flagged."""
+    from wbsa.analysis.fit_views import FitSettings, fit_all
+    from wbsa.analysis.synthetic import synthetic_population, synthetic_scan
+    from wbsa.estimation import SegmentSettings, estimate
+
+    monkeypatch.setenv("WBSA_CACHE_DIR", str(tmp_path / "empty-cache"))  # no default model to borrow a view from
+    pop = synthetic_population(200, seed=1)
+    out = fit_all(pop, synthetic_scan(pop, [(0.0, 0.0), (30.0, 0.0), (90.0, 0.0)], seed=1),
+                  FitSettings(models=("linear",), groups=("all",), k=5))
+    path = tmp_path / "model.json"
+    out.model.save(path)
+    room, camera, frame = room_view
+    with pytest.raises(WbsaError, match="needs the view"):
+        estimate(frame.depth_m, camera, path, segment=SegmentSettings(pick="center"))
+    est = estimate(frame.depth_m, camera, path, segment=SegmentSettings(pick="center"), azimuth_deg=15.0)
+    assert est.wbsa_lo_m2 < est.wbsa_m2 < est.wbsa_hi_m2
+    mismatch = est.flags["model_mismatch"]
+    assert "kinect-v1" in mismatch and "4.3 m" in mismatch and "nearest fitted view" in mismatch

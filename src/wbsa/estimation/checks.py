@@ -84,7 +84,7 @@ def view_flags(stated: tuple[float | None, float | None], estimated, tolerance_d
 
     az, el = stated
     parts = []
-    if az is not None:
+    if az is not None and math.isfinite(estimated.azimuth_deg):
         err = float(azimuth_error_deg(az, estimated.azimuth_deg))
         if err > tolerance_deg:
             parts.append(f"azimuth stated {az:g}°, estimated {estimated.azimuth_deg:.0f}° ± {estimated.azimuth_sd_deg:.0f}°"

@@ -65,19 +65,28 @@ def _check_legacy_finite(model, path) -> None:
                                 f"{e['azimuth_deg']:g}, elevation {e['elevation_deg']:g}); refit with wbsa fit")
 
 
-def _view(model, measures) -> ViewEstimate:
+def _view(model, measures, stated_azimuth: float | None) -> ViewEstimate:
+    """The estimated view; a ``wbsa fit`` model borrows the default model's azimuth if it is cached."""
     from wbsa.estimation.model import EstimatorModel
     from wbsa.estimation.view import ELEVATION_SD_DEG
 
-    floor = measures.floor_seen
-    el_sd = (model.view.elevation_sd_deg if isinstance(model, EstimatorModel) else ELEVATION_SD_DEG)
-    if isinstance(model, EstimatorModel):
-        psi, sd, p = (float(v[0]) for v in model.view.predict(measures.descriptor[None]))
+    el_sd = model.view.elevation_sd_deg if isinstance(model, EstimatorModel) else ELEVATION_SD_DEG
+    view_model = model.view if isinstance(model, EstimatorModel) else _cached_view_model()
+    if view_model is None:
+        if stated_azimuth is None:
+            raise WbsaError("a wbsa fit model needs the view: give --azimuth (and --elevation), or build the default "
+                            "model once (wbsa estimate without --model) so the azimuth can be estimated")
+        psi, sd, p = float("nan"), float("nan"), float("nan")
     else:
-        from wbsa.estimation.cache import default_model
+        psi, sd, p = (float(v[0]) for v in view_model.predict(measures.descriptor[None]))
+    return ViewEstimate(psi, sd, measures.elevation_deg, el_sd["floor" if measures.floor_seen else "axis"], p)
 
-        psi, sd, p = (float(v[0]) for v in default_model().view.predict(measures.descriptor[None]))
-    return ViewEstimate(psi, sd, measures.elevation_deg, el_sd["floor" if floor else "axis"], p)
+
+def _cached_view_model():
+    """The default model's view model if it is cached (None otherwise: nothing is trained for a legacy model)."""
+    from wbsa.estimation.cache import default_model, default_model_path
+
+    return default_model().view if default_model_path().is_file() else None
 
 
 def predict_wbsa(model, measures, camera, azimuth_deg: float | None, elevation_deg: float | None,
@@ -86,11 +95,11 @@ def predict_wbsa(model, measures, camera, azimuth_deg: float | None, elevation_d
     from wbsa.estimation.checks import range_flags
     from wbsa.estimation.model import EstimatorModel
 
-    view = _view(model, measures)
+    view = _view(model, measures, azimuth_deg)
     az = view.azimuth_deg if azimuth_deg is None else float(fold_azimuth(azimuth_deg))
     el = view.elevation_deg if elevation_deg is None else float(elevation_deg)
     flags: dict[str, str] = {}
-    if azimuth_deg is None and view.azimuth_sd_deg > 30.0:
+    if azimuth_deg is None and not view.azimuth_sd_deg <= 30.0:
         flags["uncertain_view"] = (f"azimuth {view.azimuth_deg:.0f}° ± {view.azimuth_sd_deg:.0f}° (camera in front "
                                    f"with probability {view.p_front:.2f}); give --azimuth if you know it")
     if isinstance(model, EstimatorModel):

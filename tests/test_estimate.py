@@ -260,6 +260,7 @@ def test_estimate_finds_the_view_flags_and_writes_outputs(room_view, small_model
     assert usage.value.code == 2 and "nearest, largest, center or x,y" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_a_wbsa_fit_model_is_used_with_its_mismatches_flagged(room_view, tmp_path, monkeypatch):
     """A paper-style per-view model (Kinect v1, 4.3 m) on a Kinect v2 image at 3.2 m: estimated, flagged."""
     from wbsa.analysis.fit_views import FitSettings, fit_all

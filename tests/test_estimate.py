@@ -1,4 +1,4 @@
-"""WBSA from one depth image: segmentation of a room, VBSA, prediction through a model file."""
+"""WBSA from one depth image: room segmentation, measures, view, checks, inputs, model file, CLI."""
 
 from __future__ import annotations
 
@@ -7,96 +7,277 @@ import json
 import numpy as np
 import pytest
 
-from wbsa.cli import main
 from wbsa.bodies.anthropometry import reference_adult
-from wbsa.core.mesh import TriangleMesh
-
-
-def _quad(corners: np.ndarray) -> TriangleMesh:
-    return TriangleMesh(np.asarray(corners, float), np.array([[0, 1, 2], [0, 2, 3]], dtype=np.int32))
-
-
-def _merge(*meshes: TriangleMesh) -> TriangleMesh:
-    verts, faces, offset = [], [], 0
-    for m in meshes:
-        verts.append(m.vertices)
-        faces.append(m.faces + offset)
-        offset += len(m.vertices)
-    return TriangleMesh(np.concatenate(verts), np.concatenate(faces).astype(np.int32))
+from wbsa.cli import main
+from wbsa.errors import WbsaError
 
 
 @pytest.fixture(scope="module")
-def room_views(body_model):
-    """The front view of an adult alone, and the same view with a floor and a back wall."""
-    from wbsa.camera import MeshScene, View, pose_from_view, preset, render
+def bodies(body_model):
+    """A tall man with arms wider than the A-pose and a woman, as posed meshes."""
+    from wbsa.estimation.posing import POSTURES, Poser
 
-    body = body_model.skin_meshes(reference_adult(0.0))[0]
-    floor = _quad([[-3, -3, 0], [3, -3, 0], [3, 3, 0], [-3, 3, 0]])  # counter-clockwise from above
-    wall = _quad([[-3, 1.0, 0], [-3, 1.0, 3], [3, 1.0, 3], [3, 1.0, 0]])
-    intr = preset("kinect-v1")
-    pose = pose_from_view(View(0.0, 0.0, 4.3), body.bbox_center)
-    alone = render(MeshScene(body), intr, pose)
-    room = render(MeshScene(_merge(body, floor, wall)), intr, pose, roi=False)
-    return intr, alone, room
+    poser = Poser(body_model)
+    man = body_model.rest_bodies(reference_adult(0.0))
+    woman = body_model.rest_bodies(reference_adult(1.0))
+    wide = poser.pose(man.vertices[0] * 1.05, man.bone_heads[0] * 1.05, POSTURES["arms-wide"])  # ~1.9 m tall
+    down = poser.pose(woman.vertices[0], woman.bone_heads[0], POSTURES["arms-down"])
+    return body_model.skin_mesh(wide), body_model.skin_mesh(down)
 
 
 @pytest.fixture(scope="module")
-def model_file(tmp_path_factory):
-    from wbsa.analysis.fit_views import FitSettings, fit_all
-    from helpers.synthetic import synthetic_population, synthetic_scan
+def room_view(bodies):
+    """A noisy Kinect v2 view at azimuth 20° of the tall man, a wall 0.8 m behind and the woman beside him."""
+    from wbsa.camera import MeshScene, View, preset
+    from wbsa.estimation.room import compose_room
+    from wbsa.sensor.settings import SensorSettings
+    from wbsa.simulate import simulate_view
 
-    pop = synthetic_population(200, seed=1)
-    scan = synthetic_scan(pop, [(0.0, 0.0), (90.0, 0.0)], seed=1)
-    out = fit_all(pop, scan, FitSettings(models=("linear",), groups=("all",), k=5))
-    path = tmp_path_factory.mktemp("model") / "model.json"
-    out.model.save(path)
+    man, woman = bodies
+    room = compose_room(man, 20.0, wall_behind_m=0.8, others=((woman, 1.3),))
+    camera = preset("kinect-v2")
+    sim = simulate_view(MeshScene(room.mesh), camera, View(20.0, 12.0, 3.2), sensor=SensorSettings(noise="nguyen2012"),
+                        seed=4, keep_frame=True, target=room.subject_center)
+    return room, camera, sim.frame
+
+
+def test_segmentation_keeps_a_wide_armed_tall_body_and_drops_the_room(room_view):
+    from wbsa.estimation.segment import SegmentSettings, segment_subject
+
+    room, camera, frame = room_view
+    truth = room.is_subject(frame.triangle_id)
+    assert frame.n_pixels > 4 * truth.sum()  # the room fills most of the image
+    seg = segment_subject(frame.depth_m, camera, SegmentSettings(pick="center"))
+    kept = (seg.mask & truth).sum() / truth.sum()
+    extra = (seg.mask & ~truth).sum() / seg.mask.sum()
+    assert kept > 0.97 and extra < 0.01, (kept, extra)
+    assert seg.floor is not None and len(seg.walls) >= 1
+    assert 1.8 < seg.subject.height_m < 2.0 and len(seg.others) == 1
+
+
+def test_several_people_are_listed_or_picked(room_view):
+    from wbsa.estimation.segment import SegmentSettings, segment_subject
+
+    room, camera, frame = room_view
+    with pytest.raises(WbsaError, match=r"2 person-sized objects .*pixel \(\d+, \d+\), 3\.\d m away.*pick") as err:
+        segment_subject(frame.depth_m, camera)
+    assert "\n" not in str(err.value)
+    truth = room.is_subject(frame.triangle_id)
+    near = segment_subject(frame.depth_m, camera, SegmentSettings(pick="nearest"))
+    assert (near.mask & truth).sum() > 0.97 * truth.sum()  # the woman stands further back (wall side)
+    x, y = near.others[0].pixel_xy
+    other = segment_subject(frame.depth_m, camera, SegmentSettings(pick=(x, y)))
+    assert not (other.mask & truth).any()
+
+
+def test_wrong_depth_scale_is_an_error_not_a_number(room_view):
+    from wbsa.estimation.segment import segment_subject
+
+    _, camera, frame = room_view
+    with pytest.raises(WbsaError, match="depth scale"):
+        segment_subject(frame.depth_m / 5.0, camera)
+
+
+def test_measures_use_the_reconstruction_the_simulation_reports(bodies):
+    """Without a floor the measured VBSA is simulate_view's vbsa_recon_grid_m2, to the last bit."""
+    from wbsa.camera import MeshScene, View, preset
+    from wbsa.estimation.measure import measure_subject
+    from wbsa.sensor.settings import SensorSettings
+    from wbsa.simulate import simulate_view
+
+    man, _ = bodies
+    camera = preset("realsense-d435")
+    sim = simulate_view(MeshScene(man), camera, View(150.0, 20.0, 2.6), sensor=SensorSettings(noise="nguyen2012"),
+                        reconstruct=("grid",), keep_frame=True)
+    m = measure_subject(sim.frame.depth_m, sim.frame.depth_m > 0, camera, None)
+    assert m.vbsa_m2 == sim.row["vbsa_recon_grid_m2"]
+    assert m.elevation_axis_deg == pytest.approx(20.0, abs=5.0)
+    assert m.distance_m == pytest.approx(2.6, abs=0.2) and m.descriptor.shape == (160,) and m.shape.shape == (40,)
+
+
+def test_floor_gives_stature_and_elevation(bodies):
+    from wbsa.camera import MeshScene, View, pose_from_view, preset
+    from wbsa.estimation.measure import measure_subject
+    from wbsa.estimation.renders import render_floor
+    from wbsa.simulate import simulate_view
+
+    man, _ = bodies
+    camera = preset("kinect-v1")
+    view = View(75.0, -5.0, 3.0)
+    sim = simulate_view(MeshScene(man), camera, view, keep_frame=True)
+    floor = render_floor(pose_from_view(view, man.bbox_center), np.random.default_rng(0), 0.0, 0.0)
+    m = measure_subject(sim.frame.depth_m, sim.frame.depth_m > 0, camera, floor)
+    stature = float(np.ptp(man.vertices[:, 2]))
+    assert m.stature_m == pytest.approx(stature, rel=0.03)
+    assert m.elevation_deg == pytest.approx(-5.0, abs=1.0)
+    assert m.n_pixels < sim.frame.n_pixels  # the soles' strip on the floor is cut, as in training
+
+
+def test_posing_moves_the_arms_and_keeps_the_rest_pose(body_model):
+    from wbsa.estimation.posing import POSTURES, Poser, Posture
+
+    rest = body_model.rest_bodies(reference_adult(0.0))
+    poser = Poser(body_model)
+    v0, heads = rest.vertices[0], rest.bone_heads[0]
+    assert np.allclose(poser.pose(v0, heads, Posture("still")), v0, atol=1e-9)
+    down = poser.pose(v0, heads, POSTURES["arms-down"])
+    wrist = body_model.bone_index("wrist.L")
+    near = np.linalg.norm(v0 - heads[wrist], axis=1) < 0.03
+    assert down[near, 0].mean() < v0[near, 0].mean() - 0.1  # the left hand comes in towards the body
+    assert down[near, 2].mean() < v0[near, 2].mean()
+
+
+def test_read_depth_formats(tmp_path):
+    from PIL import Image
+
+    from wbsa.core.depth_image import read_depth, write_depth_png
+
+    depth = np.zeros((6, 8), np.float32)
+    depth[2:4, 3:6] = 2.345
+    write_depth_png(tmp_path / "d.png", depth)
+    np.save(tmp_path / "m.npy", depth)
+    np.save(tmp_path / "mm.npy", (depth * 1000).astype(np.uint16))
+    Image.fromarray(depth).save(tmp_path / "f.tiff")
+    for name in ("d.png", "m.npy", "mm.npy", "f.tiff"):
+        assert np.allclose(read_depth(tmp_path / name), depth, atol=1e-3), name
+    assert np.allclose(read_depth(tmp_path / "m.npy", depth_scale=0.001), depth * 1000)
+    np.save(tmp_path / "rgb.npy", np.zeros((4, 4, 3)))
+    for name, words in (("rgb.npy", "single-channel"), ("x.jpg", "use a"), ("none.npy", "does not exist")):
+        with pytest.raises(WbsaError, match=words):
+            read_depth(tmp_path / name)
+    (tmp_path / "d.exr").write_bytes(b"not an exr")
+    with pytest.raises(WbsaError, match="exr|EXR"):
+        read_depth(tmp_path / "d.exr")
+
+
+def test_camera_presets_have_the_documented_fields_of_view():
+    from wbsa.camera import preset
+
+    fov = {name: preset(name).fov_deg for name in ("azure-kinect-nfov", "realsense-d435", "realsense-d455",
+                                                     "phone-lidar", "kinect-v2")}
+    assert fov["realsense-d435"][0] == pytest.approx(89.8, abs=1) and fov["realsense-d455"][0] == pytest.approx(91, abs=1)
+    assert fov["kinect-v2"][0] == pytest.approx(70.6, abs=1.0)
+    assert 60 < fov["phone-lidar"][0] < 65 and 60 < fov["azure-kinect-nfov"][0] < 70
+
+
+def test_checks_errors_and_flags():
+    from wbsa.camera import preset
+    from wbsa.estimation import checks
+    from wbsa.estimation.view import ViewEstimate
+
+    with pytest.raises(WbsaError, match="424.*kinect-v1 is 640x480"):
+        checks.check_image_size(np.zeros((424, 512)), preset("kinect-v1"))
+    with pytest.raises(WbsaError, match="depth scale"):
+        checks.check_height(8.9)
+    with pytest.raises(WbsaError, match="non-finite"):
+        checks.check_finite_model({"coef": np.array([1.0, np.nan])}, "m.npz")
+    est = ViewEstimate(30.0, 5.0, 10.0, 1.0, 0.9)
+    assert checks.view_flags((-30.0, None), est) == {}  # mirror-equivalent
+    assert "view_disagrees" in checks.view_flags((90.0, None), est)
+    assert "view_disagrees" in checks.view_flags((None, 50.0), est)
+    assert checks.range_flags({"stature_m": 2.3}, {"stature_m": (1.0, 2.0)})["out_of_training_range"].startswith("stature")
+    assert checks.sensor_range_flags(4.3, preset("kinect-v1"))
+
+
+def test_trees_predict_like_scikit_learn():
+    from sklearn.ensemble import HistGradientBoostingClassifier, HistGradientBoostingRegressor
+
+    from wbsa.estimation.trees import TreeEnsemble
+
+    rng = np.random.default_rng(0)
+    X = rng.normal(size=(400, 4))
+    X[::9, 1] = np.nan
+    y = X[:, 0] + np.nan_to_num(X[:, 1]) ** 2
+    reg = HistGradientBoostingRegressor(max_iter=30).fit(X, y)
+    clf = HistGradientBoostingClassifier(max_iter=30).fit(X, y > 1)
+    assert np.allclose(TreeEnsemble.from_sklearn(reg).predict_raw(X), reg.predict(X))
+    t = TreeEnsemble.from_arrays(TreeEnsemble.from_sklearn(clf).to_arrays("c_"), "c_")
+    assert np.allclose(1 / (1 + np.exp(-t.predict_raw(X))), clf.predict_proba(X)[:, 1])
+
+
+# ---------------------------------------------------------------- with a (small) trained model
+@pytest.fixture(scope="module")
+def small_model(tmp_path_factory):
+    from wbsa.estimation.train import TrainSettings, train_model
+
+    model = train_model(TrainSettings(n_random=32, n_survey=0, views_per_subject=2, calibration_fraction=0.5,
+                                      seed=5))
+    path = tmp_path_factory.mktemp("model") / "small.npz"
+    model.save(path)
     return path
 
 
-def test_segmentation_removes_floor_and_wall(room_views):
-    from wbsa.estimation import segment_subject
+@pytest.mark.slow
+def test_model_file_round_trip_and_refuses_non_finite_numbers(small_model, tmp_path):
+    from wbsa.estimation.model import EstimatorModel
 
-    intr, alone, room = room_views
-    assert room.n_pixels > 3 * alone.n_pixels  # the room fills most of the frame
-    mask = segment_subject(room.depth_m, intr)
-    truth = alone.depth_m > 0
-    iou = (mask & truth).sum() / (mask | truth).sum()
-    assert iou > 0.97, iou
-
-
-def test_estimate_measures_the_visible_area_and_predicts_through_the_model(room_views, model_file):
-    from wbsa.analysis.model_file import WbsaModel
-    from wbsa.camera import vbsa_visible_m2
-    from wbsa.estimation import estimate_wbsa
-
-    intr, alone, room = room_views
-    model = WbsaModel.load(model_file)
-    est, surface = estimate_wbsa(room.depth_m, intr, model, 0.0, 0.0)
-    assert est.method == "grid" and est.vbsa_column == "vbsa_visible_m2"
-    assert est.vbsa_m2 == pytest.approx(vbsa_visible_m2(alone), rel=0.03)
-    assert surface.area_m2 == pytest.approx(est.vbsa_m2)
-    wbsa, lo, hi = model.predict(0.0, 0.0, est.vbsa_m2)
-    assert est.wbsa_m2 == pytest.approx(wbsa[0]) and est.wbsa_lo_m2 < est.wbsa_m2 < est.wbsa_hi_m2
-    with_stature, _ = estimate_wbsa(room.depth_m, intr, model, 0.0, 0.0, stature_m=1.8)
-    assert with_stature.wbsa_m2 != pytest.approx(est.wbsa_m2, rel=1e-9)
+    m = EstimatorModel.load(small_model)
+    feats = {k: np.array([v]) for k, v in dict(vbsa_m2=0.8, stature_m=1.7, silhouette_m2=0.6, width_m=0.7,
+                                               thickness_m=0.4, distance_m=3.0, pitch_m=0.008, n_pixels=9000.0).items()}
+    args = (feats, np.full((1, 40), 0.3), np.array([40.0]), np.array([5.0]), np.array([10.0]))
+    w, lo, hi = m.predict(*args)
+    assert lo[0] < w[0] < hi[0]
+    m.save(tmp_path / "again.npz")
+    assert EstimatorModel.load(tmp_path / "again.npz").predict(*args)[0][0] == w[0]
+    m.coef[0] = np.inf
+    m.save(tmp_path / "broken.npz")
+    with pytest.raises(WbsaError, match="non-finite"):
+        EstimatorModel.load(tmp_path / "broken.npz")
 
 
-def test_estimate_command_from_png(tmp_path, room_views, model_file, capsys):
+@pytest.mark.slow
+def test_estimate_finds_the_view_flags_and_writes_outputs(room_view, small_model, tmp_path, capsys):
     from wbsa.core import write_depth_png
+    from wbsa.estimation import SegmentSettings, estimate
 
-    intr, alone, room = room_views
+    room, camera, frame = room_view
+    est = estimate(frame.depth_m, "kinect-v2", small_model, segment=SegmentSettings(pick="center"))
+    assert est.wbsa_lo_m2 < est.wbsa_m2 < est.wbsa_hi_m2 and "several_people" in est.flags
+    assert est.view.elevation_deg == pytest.approx(12.0, abs=2.0) and 0 <= est.view.azimuth_deg <= 180
+    assert len(repr(est)) < 200 and est.mask.shape == frame.depth_m.shape
+    stated = estimate(frame.depth_m, "kinect-v2", small_model, segment=SegmentSettings(pick="center"),
+                      azimuth_deg=(est.view.azimuth_deg + 90.0) % 180.0, elevation_deg=12.0)
+    assert "view_disagrees" in stated.flags and stated.view_used[1] == 12.0
     png = tmp_path / "depth.png"
-    write_depth_png(png, room.depth_m)
-    rc = main(["estimate", str(png), "--model", str(model_file), "--camera", "kinect-v1", "--azimuth", "0",
-               "--elevation", "0", "--json", "--out-mesh", str(tmp_path / "seen.ply")])
-    assert rc == 0
-    out = json.loads(capsys.readouterr().out)
-    assert out["wbsa_lo_m2"] < out["wbsa_m2"] < out["wbsa_hi_m2"]
-    assert (tmp_path / "seen.ply").exists()
-    for argv, words in ((["--stature-m", "180"], "stature"), (["--elevation", "33"], "elevation"),
-                        (["--model", str(tmp_path / "none.json")], "does not exist")):
-        base = ["estimate", str(png), "--model", str(model_file)]
+    write_depth_png(png, frame.depth_m)
+    base = ["estimate", str(png), "--model", str(small_model), "--pick", "center"]
+    assert main(base + ["--json", "--mask-out", str(tmp_path / "mask.png")]) == 0
+    out = capsys.readouterr()
+    assert json.loads(out.out)["flags"]["camera_assumed"] and "warning: several_people" in out.err
+    assert (tmp_path / "mask.png").exists()
+    assert main(base + ["--camera", "kinect-v2", "--fhir", "--patient", "Patient/7"]) == 0
+    obs = json.loads(capsys.readouterr().out)
+    assert obs["code"]["coding"][0]["code"] == "8277-6" and obs["valueQuantity"]["code"] == "m2"
+    assert obs["status"] == "preliminary" and len(obs["component"]) == 2 and obs["subject"]["reference"] == "Patient/7"
+    for argv, words in ((["--camera", "kinect-v1"], "kinect-v1 is 640x480"), (["--depth-scale", "200"], "depth scale"),
+                        (["--model", str(tmp_path / "none.npz")], "does not exist")):
         rc = main(base + argv)
         err = capsys.readouterr().err.strip()
         assert rc == 2 and err.startswith("error:") and "\n" not in err, err
         assert words in err, err
+    with pytest.raises(SystemExit) as usage:
+        main(base + ["--pick", "middle"])
+    assert usage.value.code == 2 and "nearest, largest, center or x,y" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_a_wbsa_fit_model_is_used_with_its_mismatches_flagged(room_view, tmp_path, monkeypatch):
+    """A paper-style per-view model (Kinect v1, 4.3 m) on a Kinect v2 image at 3.2 m: estimated, flagged."""
+    from wbsa.analysis.fit_views import fit_all
+    from wbsa.analysis.settings import FitSettings
+    from helpers.synthetic import synthetic_population, synthetic_scan
+    from wbsa.estimation import SegmentSettings, estimate
+
+    monkeypatch.setenv("WBSA_CACHE_DIR", str(tmp_path / "empty-cache"))  # no default model to borrow a view from
+    pop = synthetic_population(200, seed=1)
+    out = fit_all(pop, synthetic_scan(pop, [(0.0, 0.0), (30.0, 0.0), (90.0, 0.0)], seed=1),
+                  FitSettings(models=("linear",), groups=("all",), k=5))
+    path = tmp_path / "model.json"
+    out.model.save(path)
+    room, camera, frame = room_view
+    with pytest.raises(WbsaError, match="needs the view"):
+        estimate(frame.depth_m, camera, path, segment=SegmentSettings(pick="center"))
+    est = estimate(frame.depth_m, camera, path, segment=SegmentSettings(pick="center"), azimuth_deg=15.0)
+    assert est.wbsa_lo_m2 < est.wbsa_m2 < est.wbsa_hi_m2
+    mismatch = est.flags["model_mismatch"]
+    assert "kinect-v1" in mismatch and "4.3 m" in mismatch and "nearest fitted view" in mismatch

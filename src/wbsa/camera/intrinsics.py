@@ -15,7 +15,8 @@ import numpy as np
 from wbsa.core.limits import check_image_size
 from wbsa.errors import WbsaError
 
-PresetName = Literal["kinect-v1", "kinect-v2", "tum"]
+PresetName = Literal["kinect-v1", "kinect-v2", "tum", "azure-kinect-nfov", "azure-kinect-wfov", "realsense-d435",
+                     "realsense-d455", "phone-lidar"]
 
 
 @dataclass(frozen=True)
@@ -186,11 +187,23 @@ PRESETS: dict[str, Intrinsics] = {
     "kinect-v2": Intrinsics(512, 424, 365.456, 365.456, 254.878, 205.395, name="kinect-v2",
                             min_range_m=0.5, max_range_m=4.5),
     "tum": Intrinsics(640, 480, 525.0, 525.0, 319.5, 239.5, name="tum", min_range_m=0.8, max_range_m=4.0),
+    # The presets below are typical values; docs/camera.md gives the source of each. Give your own camera's
+    # calibration (Open3D JSON) for accurate work: units differ from these by a few per cent.
+    "azure-kinect-nfov": Intrinsics(640, 576, 503.9, 504.0, 332.1, 325.9, name="azure-kinect-nfov",
+                                    min_range_m=0.5, max_range_m=3.86),
+    "azure-kinect-wfov": Intrinsics(512, 512, 252.0, 252.0, 261.8, 253.0, name="azure-kinect-wfov",
+                                    min_range_m=0.25, max_range_m=2.88),
+    "realsense-d435": Intrinsics(848, 480, 426.0, 426.0, 423.5, 239.5, name="realsense-d435",
+                                 min_range_m=0.3, max_range_m=3.0),
+    "realsense-d455": Intrinsics(848, 480, 415.0, 415.0, 423.5, 239.5, name="realsense-d455",
+                                 min_range_m=0.6, max_range_m=6.0),
+    "phone-lidar": Intrinsics(256, 192, 209.2, 209.2, 124.2, 96.4, name="phone-lidar",
+                              min_range_m=0.25, max_range_m=5.0),
 }
 
 
 def preset(name: PresetName) -> Intrinsics:
-    """The intrinsics of a named camera (``kinect-v1``, ``kinect-v2``, ``tum``)."""
+    """The intrinsics of a named camera (a key of :data:`PRESETS`, e.g. ``kinect-v2``, ``realsense-d435``)."""
     try:
         return PRESETS[name]
     except KeyError:

@@ -3,7 +3,7 @@
 ``mesh``         :class:`TriangleMesh` (from trimesh, Open3D, arrays or a file) and triangle areas
 ``mesh_io``      :func:`read_mesh`, :func:`write_mesh` (PLY/OBJ, metres)
 ``frame``        :class:`DepthFrame`: one depth view, the contract between camera, sensor and surface
-``depth_image``  16-bit depth PNGs as sensors store them (:func:`read_depth_png`, :func:`write_depth_png`)
+``depth_image``  depth images as sensors store them (:func:`read_depth`: PNG, .npy, TIFF, EXR; :func:`write_depth_png`)
 ``backproject``  depth image → points, normals and a :class:`DepthFrame` (:func:`frame_from_depth_image`)
 ``versions``     :func:`package_versions` recorded with results
 
@@ -18,7 +18,7 @@ from wbsa.lazy import lazy_exports
 
 if TYPE_CHECKING:  # pragma: no cover - for IDEs and type checkers
     from wbsa.core.backproject import backproject_depth, frame_from_depth_image, organised_normals
-    from wbsa.core.depth_image import read_depth_png, write_depth_png
+    from wbsa.core.depth_image import read_depth, read_depth_png, write_depth_png
     from wbsa.core.frame import DepthFrame
     from wbsa.core.mesh import TriangleMesh, triangle_areas_m2
     from wbsa.core.mesh_io import read_mesh, write_mesh
@@ -30,6 +30,7 @@ _EXPORTS = {
     "read_mesh": "wbsa.core.mesh_io",
     "write_mesh": "wbsa.core.mesh_io",
     "DepthFrame": "wbsa.core.frame",
+    "read_depth": "wbsa.core.depth_image",
     "read_depth_png": "wbsa.core.depth_image",
     "write_depth_png": "wbsa.core.depth_image",
     "backproject_depth": "wbsa.core.backproject",

@@ -101,3 +101,86 @@ def read_depth_png(path: str | os.PathLike, *, depth_scale: float = MM_PER_M) ->
     if units.min(initial=0) < 0 or units.max(initial=0) > _UINT16_MAX:
         raise WbsaError(f"{path} holds values outside the 16-bit range; it is not a depth PNG")
     return png_mm_to_depth(units.astype(np.uint16), depth_scale=depth_scale)
+
+
+#: Depth file types :func:`read_depth` reads.
+DEPTH_SUFFIXES = (".png", ".npy", ".tif", ".tiff", ".exr")
+
+
+def read_depth(path: str | os.PathLike, *, depth_scale: float | None = None) -> np.ndarray:
+    """Read a depth image of any supported type into metres (0 = no return).
+
+    ``.png``
+        16-bit single channel, integer units (``depth_scale`` per metre, default 1000 = millimetres).
+    ``.npy``
+        A 2-D array: floating point in metres (``depth_scale`` default 1), or integers in units
+        (default 1000 per metre).
+    ``.tif`` / ``.tiff``
+        32-bit float (metres, default scale 1) or 16-bit integer (units, default 1000 per metre), via Pillow.
+    ``.exr``
+        Single-channel float depth in metres, if the ``OpenEXR`` package is installed.
+
+    NaN, infinite, zero and negative values are "no return".
+
+    Raises
+    ------
+    WbsaError
+        A missing file, an unknown type, more than one channel, or an unreadable file.
+    """
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in DEPTH_SUFFIXES:
+        raise WbsaError(f"cannot read depth from {path.name}: use a {', '.join(DEPTH_SUFFIXES)} file")
+    if not path.is_file():
+        raise WbsaError(f"depth image {path} does not exist; check the path")
+    if depth_scale is not None and not (np.isfinite(depth_scale) and depth_scale > 0):
+        raise WbsaError(f"depth scale {depth_scale} must be a positive number of units per metre, e.g. 1000")
+    if suffix == ".png":
+        return read_depth_png(path, depth_scale=depth_scale or MM_PER_M)
+    if suffix == ".npy":
+        try:
+            arr = np.load(path, allow_pickle=False)
+        except (OSError, ValueError) as exc:
+            raise WbsaError(f"{path} is not a readable .npy array ({type(exc).__name__}); "
+                            "save it with numpy.save") from None
+    elif suffix == ".exr":
+        arr = _read_exr(path)
+    else:
+        arr = _read_tiff(path)
+    arr = np.squeeze(arr)
+    if arr.ndim != 2 or not (np.issubdtype(arr.dtype, np.floating) or np.issubdtype(arr.dtype, np.integer)):
+        raise WbsaError(f"{path} holds a {arr.dtype} array of shape {arr.shape}, not a single-channel depth image")
+    scale = depth_scale or (1.0 if np.issubdtype(arr.dtype, np.floating) else MM_PER_M)
+    depth = arr.astype(np.float64) / scale
+    return np.where(np.isfinite(depth) & (depth > 0), depth, 0.0).astype(np.float32)
+
+
+def _read_tiff(path: Path) -> np.ndarray:
+    from PIL import Image, UnidentifiedImageError
+
+    try:
+        with Image.open(path) as img:
+            if img.mode not in ("F", "I", "I;16", "I;16B", "I;16L"):
+                raise WbsaError(f"{path} is a {img.mode} TIFF, not single-channel depth; save 32-bit float metres "
+                                "or 16-bit millimetres")
+            return np.asarray(img)
+    except (UnidentifiedImageError, OSError) as exc:
+        raise WbsaError(f"{path} is not a readable TIFF ({type(exc).__name__}); save depth as 32-bit float "
+                        "metres or 16-bit millimetres") from None
+
+
+def _read_exr(path: Path) -> np.ndarray:
+    try:
+        import OpenEXR
+    except ImportError:
+        raise WbsaError(f"reading {path.name} needs the OpenEXR package (pip install openexr); or save the depth "
+                        "as .npy (float metres) or 32-bit float .tiff") from None
+    try:
+        with OpenEXR.File(str(path)) as f:
+            channels = f.channels()
+            if len(channels) != 1:
+                names = ", ".join(channels)
+                raise WbsaError(f"{path} has channels {names}; depth needs exactly one (e.g. Z or Y)")
+            return np.asarray(next(iter(channels.values())).pixels)
+    except (OSError, RuntimeError) as exc:
+        raise WbsaError(f"{path} is not a readable EXR ({type(exc).__name__})") from None

@@ -1,62 +1,119 @@
-"""``wbsa estimate``: WBSA of a real person from one depth image and a fitted model."""
+"""``wbsa estimate``: WBSA of a real person from one depth image."""
 
 from __future__ import annotations
 
 import argparse
 import json
+import sys
+
+
+def _pick(text: str):
+    """``nearest``, ``largest``, ``center`` or ``x,y`` (a pixel) for ``--pick``."""
+    if text in ("nearest", "largest", "center"):
+        return text
+    try:
+        x, y = (int(v) for v in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not nearest, largest, center or x,y") from None
+    return (x, y)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``estimate`` subcommand."""
-    p = sub.add_parser("estimate", help="estimate WBSA from one depth image with a fitted model",
-                       description="Segment the subject in a 16-bit depth PNG, reconstruct the visible surface, "
-                                   "measure VBSA and predict WBSA with a prediction interval.")
-    p.add_argument("depth", help="depth image: 16-bit PNG (millimetres unless --depth-scale), 0 = no return")
-    p.add_argument("--model", required=True, help="model.json from wbsa fit (or a wbsa run study)")
-    p.add_argument("--camera", default="kinect-v1", help="preset name or Open3D intrinsics JSON (default kinect-v1)")
-    p.add_argument("--azimuth", type=float, default=0.0, help="view azimuth in degrees (default 0 = front)")
-    p.add_argument("--elevation", type=float, default=0.0, help="view elevation in degrees (default 0)")
-    p.add_argument("--distance", type=float, default=None, help="model distance in metres, if it holds several")
-    p.add_argument("--stature-m", type=float, default=None, help="stature in metres (uses the stature model)")
-    p.add_argument("--group", default="all", help="model group (default all)")
-    p.add_argument("--kind", default="linear", help="model kind: linear, loglog, wls, quadratic (default linear)")
-    p.add_argument("--vbsa", default=None, help="VBSA column of the model, if it holds several")
-    p.add_argument("--level", type=float, default=0.95, help="prediction interval coverage (default 0.95)")
-    p.add_argument("--depth-scale", type=float, default=1000.0, help="PNG units per metre (default 1000)")
-    p.add_argument("--min-depth", type=float, default=0.4, help="nearest return kept, metres (default 0.4)")
-    p.add_argument("--max-depth", type=float, default=8.0, help="farthest return kept, metres (default 8)")
-    p.add_argument("--no-segment", action="store_true", help="keep every return (the image holds only the subject)")
-    p.add_argument("--out-mesh", default=None, help="write the reconstructed surface here (.ply/.obj)")
-    p.add_argument("--json", action="store_true", help="print JSON")
+    from wbsa.cli_types import number_in
+
+    p = sub.add_parser("estimate", help="estimate WBSA from one depth image of a standing person",
+                       description="Find the person in a depth image of a room, measure the visible surface and "
+                                   "stature, estimate the view, and predict WBSA with a calibrated interval. Every "
+                                   "warning is printed; exit 2 on input that cannot be measured.")
+    p.add_argument("depth", help="depth image: 16-bit PNG (mm), .npy (float metres), 32-bit float .tiff, .exr")
+    p.add_argument("--camera", default="auto",
+                   help="intrinsics preset (kinect-v1, kinect-v2, azure-kinect-nfov, azure-kinect-wfov, "
+                        "realsense-d435, realsense-d455, phone-lidar, tum) or an Open3D intrinsics JSON; "
+                        "auto (default): the preset of the image's size, flagged")
+    p.add_argument("--model", default=None, help="estimator model (.npz) or wbsa fit model (.json); default: the "
+                                                 "default model, built on first use and cached (~/.cache/wbsa)")
+    p.add_argument("--azimuth", type=number_in(-360, 360), default=None,
+                   help="stated azimuth in degrees (optional: it is estimated, and checked when given)")
+    p.add_argument("--elevation", type=number_in(-90, 90), default=None,
+                   help="stated elevation in degrees (optional: it is estimated, and checked when given)")
+    p.add_argument("--level", type=number_in(0, 1, low_open=True, high_open=True), default=0.95,
+                   help="prediction interval coverage (default 0.95)")
+    p.add_argument("--depth-scale", type=number_in(0, low_open=True), default=None,
+                   help="depth units per metre (default 1000 for integer files, 1 for float files)")
+    p.add_argument("--min-depth", type=number_in(0), default=0.3, help="nearest return kept, metres (default 0.3)")
+    p.add_argument("--max-depth", type=number_in(0, low_open=True), default=8.0,
+                   help="farthest return kept, metres (default 8)")
+    p.add_argument("--pick", type=_pick, default=None,
+                   help="with several people: nearest, largest, center or x,y (a pixel of the subject)")
+    p.add_argument("--no-segment", action="store_true", help="every return is the subject (no room in the image)")
+    p.add_argument("--mask-out", default=None, help="write the subject's mask here (8-bit PNG, 255 = subject)")
+    p.add_argument("--out-mesh", default=None, help="write the reconstructed visible surface here (.ply/.obj)")
+    p.add_argument("--json", action="store_true", help="print the estimate, view and flags as JSON")
+    p.add_argument("--fhir", action="store_true", help="print a FHIR R4 Observation (LOINC 8277-6) instead")
+    p.add_argument("--patient", default=None, help="FHIR subject reference, e.g. Patient/123 (with --fhir)")
     p.set_defaults(func=run_estimate)
+
+
+def auto_camera(depth_shape: tuple[int, int]):
+    """The one preset (TUM excluded) whose image size is ``depth_shape`` (h, w); WbsaError if none or several."""
+    from wbsa.camera.intrinsics import PRESETS
+    from wbsa.errors import WbsaError
+
+    h, w = depth_shape
+    found = [k for k, c in PRESETS.items() if (c.width, c.height) == (w, h) and k != "tum"]
+    if len(found) != 1:
+        have = ", ".join(found) if found else "none of the presets"
+        raise WbsaError(f"a {w}x{h} depth image fits {have}; give --camera PRESET or an intrinsics JSON")
+    return PRESETS[found[0]]
 
 
 def run_estimate(args: argparse.Namespace) -> int:
     """Handler of ``wbsa estimate``."""
-    from wbsa.analysis.model_file import WbsaModel
-    from wbsa.camera import resolve_camera
+    from wbsa.core.depth_image import read_depth
     from wbsa.errors import WbsaError
     from wbsa.estimation.segment import SegmentSettings
-    from wbsa.estimation.single_view import estimate_wbsa
-    from wbsa.core.depth_image import read_depth_png
+    from wbsa.estimation.single_view import estimate
 
-    if args.stature_m is not None and not 0.3 <= args.stature_m <= 2.75:
-        raise WbsaError(f"--stature-m {args.stature_m} is not a human stature in metres (0.3–2.75)")
-    intrinsics = resolve_camera(args.camera)
-    depth = read_depth_png(args.depth, depth_scale=args.depth_scale)
-    model = WbsaModel.load(args.model)
-    segment = None if args.no_segment else SegmentSettings(min_depth_m=args.min_depth, max_depth_m=args.max_depth)
-    est, surface = estimate_wbsa(depth, intrinsics, model, args.azimuth, args.elevation, stature_m=args.stature_m,
-                                 group=args.group, kind=args.kind, level=args.level, segment=segment,
-                                 vbsa_column=args.vbsa, distance_m=args.distance)
+    if args.patient and not args.fhir:
+        raise WbsaError("--patient goes with --fhir")
+    depth = read_depth(args.depth, depth_scale=args.depth_scale)
+    camera = auto_camera(depth.shape) if args.camera == "auto" else args.camera
+    segment = None if args.no_segment else SegmentSettings(min_depth_m=args.min_depth, max_depth_m=args.max_depth,
+                                                           pick=args.pick)
+    est = estimate(depth, camera, args.model, azimuth_deg=args.azimuth, elevation_deg=args.elevation,
+                   level=args.level, segment=segment)
+    if args.camera == "auto":
+        est.flags["camera_assumed"] = f"no --camera given; the {camera.name} preset fits the image size"
+    if args.mask_out:
+        _write_mask(args.mask_out, est.mask)
     if args.out_mesh:
         from wbsa.core.mesh_io import write_mesh
 
-        write_mesh(surface, args.out_mesh)
-    if args.json:
+        write_mesh(est.surface, args.out_mesh)
+    for name, text in est.flags.items():
+        sys.stderr.write(f"warning: {name}: {text}\n")
+    if args.fhir:
+        from wbsa.estimation.fhir import fhir_observation
+
+        print(json.dumps(fhir_observation(est, patient=args.patient), indent=2))
+    elif args.json:
         print(json.dumps(est.to_dict(), indent=2))
     else:
-        print(f"visible area (VBSA, {est.method}): {est.vbsa_m2:.4f} m²  from {est.n_pixels} pixels")
-        print(f"WBSA estimate: {est.wbsa_m2:.3f} m²  ({100 * est.level:.0f} % prediction interval "
-              f"{est.wbsa_lo_m2:.3f}–{est.wbsa_hi_m2:.3f} m²)  [{est.group}/{est.model}, {est.vbsa_column}]")
+        v = est.view
+        print(f"WBSA {est.wbsa_m2:.3f} m²  ({100 * est.level:.0f} % interval {est.wbsa_lo_m2:.3f}–{est.wbsa_hi_m2:.3f} m²)"
+              f"{'  [' + str(len(est.flags)) + ' warning(s)]' if est.flags else ''}")
+        print(f"view: azimuth {v.azimuth_deg:.0f}° ± {v.azimuth_sd_deg:.0f}° (mirror-equivalent), elevation "
+              f"{v.elevation_deg:.0f}° ± {v.elevation_sd_deg:.0f}°; subject {est.distance_m:.2f} m away, "
+              f"{est.stature_m:.2f} m tall, VBSA {est.vbsa_m2:.3f} m² from {est.n_pixels} pixels [{est.model}]")
     return 0
+
+
+def _write_mask(path: str, mask) -> None:
+    import numpy as np
+    from PIL import Image
+
+    from wbsa.io import atomic_path
+
+    with atomic_path(path) as tmp:
+        Image.fromarray(np.where(mask, 255, 0).astype(np.uint8)).save(tmp, format="PNG")

@@ -1,12 +1,33 @@
-"""Isolate the subject in a real depth image: range gate, large planes, largest region."""
+"""Find the subject in a depth image of a room: floor, walls behind, 3-D clusters, the person-sized one.
+
+1. Returns within the depth range are back-projected and thinned to one point per voxel.
+2. Room surfaces: the largest planes (RANSAC, inliers within the depth noise along the normal) that have
+   (almost) nothing behind them as seen from the camera: a floor or a wall has, a body's chest has not.
+   The floor is the room surface whose normal is closest to the image's up (within 50°); the others are
+   walls. Returns on or below the floor (within its noise) and on or behind a wall are background.
+3. What is left is clustered in 3-D: voxels closer than ``cluster_gap_m`` (or three pixel pitches at that
+   depth) are one object. Voxels in a band over the floor (10 cm, or twice the floor's noise) only join the
+   object they touch, so stray floor returns cannot chain objects together. Objects that touch in the image
+   with less than 0.8 m between them in depth (a body's near and far sides, an arm in front of the waist)
+   are one object if together they are still person-sized.
+4. A cluster is person-sized if it is 0.45–2.6 m tall (along the floor normal, or its long axis) and at
+   most 2.6 m wide; with several, ``pick`` chooses (``nearest``, ``largest``, ``center`` of the image, or an
+   ``(x, y)`` pixel), else a :class:`~wbsa.errors.WbsaError` lists them.
+"""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from wbsa.errors import WbsaError
+from wbsa.estimation.cloud import Plane, above_floor, ransac_plane
+from wbsa.estimation.clusters import MAX_FOOTPRINT_M, attach_low, footprint_m, merge_occluding
+
+PICKS = ("nearest", "largest", "center")
+#: Height over the floor below which returns are not used to link objects (only to extend them).
+LOW_BAND_M = 0.10
 
 
 @dataclass(frozen=True)
@@ -17,30 +38,133 @@ class SegmentSettings:
     ----------
     min_depth_m, max_depth_m : float
         Returns outside this z-range are background.
+    voxel_m : float
+        Voxel size of the thinned cloud used for planes and clusters.
     max_planes : int
-        Up to this many large planes (floor, wall) are removed by RANSAC.
-    plane_threshold_m : float
-        RANSAC inlier distance.
-    plane_min_extent_m : float
-        A plane is background only if its inliers span at least this much along two in-plane axes:
-        a floor or a wall is larger than any flat patch of a body (a torso is < 0.6 m wide).
+        Planes tried as room surfaces.
+    min_plane_fraction : float
+        A room surface holds at least this fraction of the thinned returns.
+    behind_fraction : float
+        A plane is a room surface if at most this fraction of the other returns lies behind it.
+    cluster_gap_m : float
+        Points closer than this (or three pixel pitches, if more) belong to one object.
+    min_person_height_m, max_person_height_m, max_person_width_m : float
+        What counts as a person-sized cluster.
+    pick : {'nearest', 'largest', 'center'} or (int, int) or None
+        Which person-sized cluster to take when there are several; None = refuse and list them.
+    seed : int
+        Seed of the RANSAC plane search (same seed, same mask).
     """
 
-    min_depth_m: float = 0.4
+    min_depth_m: float = 0.3
     max_depth_m: float = 8.0
-    max_planes: int = 2
-    plane_threshold_m: float = 0.02
-    plane_min_extent_m: float = 1.0
+    voxel_m: float = 0.03
+    max_planes: int = 5
+    min_plane_fraction: float = 0.04
+    behind_fraction: float = 0.01
+    cluster_gap_m: float = 0.07
+    min_person_height_m: float = 0.45
+    max_person_height_m: float = 2.6
+    max_person_width_m: float = 2.6
+    pick: str | tuple[int, int] | None = None
+    seed: int = 0
 
     def __post_init__(self) -> None:
         if not 0 <= self.min_depth_m < self.max_depth_m:
             raise WbsaError(f"depth range {self.min_depth_m}–{self.max_depth_m} m is empty; "
-                            "give --min-depth below --max-depth")
+                            "give min_depth_m below max_depth_m")
+        if not self.voxel_m > 0 or not self.cluster_gap_m > 0:
+            raise WbsaError("voxel_m and cluster_gap_m must be positive lengths in metres")
+        if self.pick is not None and not (self.pick in PICKS or _is_pixel(self.pick)):
+            raise WbsaError(f"pick {self.pick!r} is unknown; use {', '.join(PICKS)} or an (x, y) pixel")
 
 
-def segment_subject(depth_m: np.ndarray, intrinsics, settings: SegmentSettings = SegmentSettings(),
-                    seed: int = 0) -> np.ndarray:
-    """Mask of the subject's pixels in a depth image.
+def _is_pixel(pick: object) -> bool:
+    return isinstance(pick, tuple) and len(pick) == 2 and all(isinstance(v, (int, np.integer)) for v in pick)
+
+
+@dataclass(frozen=True)
+class Cluster:
+    """One object found in the image (a candidate subject)."""
+
+    label: int
+    n_pixels: int
+    pixel_xy: tuple[int, int]
+    distance_m: float
+    height_m: float
+    width_m: float
+    footprint_m: float = 0.0
+
+    def describe(self) -> str:
+        """``1.72 m tall at pixel (312, 240), 2.9 m away`` for messages."""
+        return (f"{self.height_m:.2f} m tall at pixel ({self.pixel_xy[0]}, {self.pixel_xy[1]}), "
+                f"{self.distance_m:.1f} m away")
+
+
+@dataclass(frozen=True)
+class Segmentation:
+    """The subject's pixels and what was learned about the room.
+
+    Attributes
+    ----------
+    mask : (h, w) bool
+        The subject's pixels (returns on the floor excluded).
+    floor : Plane or None
+        The floor (camera frame), if one was seen.
+    walls : tuple of Plane
+    subject : Cluster
+    others : tuple of Cluster
+        Other person-sized objects (when ``pick`` chose among several).
+    """
+
+    mask: np.ndarray
+    floor: Plane | None
+    walls: tuple[Plane, ...]
+    subject: Cluster
+    others: tuple[Cluster, ...] = field(default_factory=tuple)
+
+
+def _voxelise(points: np.ndarray, voxel_m: float) -> tuple[np.ndarray, np.ndarray]:
+    """Voxel centroids (v, 3) of (k, 3) points and the voxel of each point (k,)."""
+    keys = np.floor(points / voxel_m).astype(np.int64)
+    _, inverse, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
+    inverse = inverse.ravel()
+    sums = np.zeros((len(counts), 3))
+    np.add.at(sums, inverse, points)
+    return sums / counts[:, None], inverse
+
+
+def find_room(cloud: np.ndarray, settings: SegmentSettings) -> tuple[Plane | None, list[Plane]]:
+    """Floor and walls among the largest planes of a thinned (v, 3) cloud (see the module doc)."""
+    rng = np.random.default_rng(settings.seed)
+    free = np.ones(len(cloud), dtype=bool)
+    surfaces: list[Plane] = []
+    for _ in range(settings.max_planes):
+        idx = np.flatnonzero(free)
+        if len(idx) < max(50, settings.min_plane_fraction * len(cloud)):
+            break
+        found = ransac_plane(cloud[idx], rng)
+        if found is None:
+            break
+        plane, inliers = found
+        if inliers.sum() < settings.min_plane_fraction * len(cloud):
+            break
+        free[idx[inliers]] = False
+        h = plane.height(cloud)
+        behind = np.count_nonzero(h < -plane.tolerance(cloud) - 0.05)
+        if behind <= settings.behind_fraction * len(cloud):
+            surfaces.append(plane)
+    up = np.array([0.0, -1.0, 0.0])
+    floor = None
+    cands = [p for p in surfaces if p.normal @ up > np.cos(np.radians(50))]
+    if cands:
+        floor = max(cands, key=lambda p: p.normal @ up)
+    walls = [p for p in surfaces if p is not floor and (floor is None or abs(p.normal @ floor.normal) < 0.5)]
+    return floor, walls
+
+
+def segment_subject(depth_m: np.ndarray, intrinsics, settings: SegmentSettings = SegmentSettings()) -> Segmentation:
+    """Find the subject in a depth image (see the module doc).
 
     Parameters
     ----------
@@ -48,47 +172,145 @@ def segment_subject(depth_m: np.ndarray, intrinsics, settings: SegmentSettings =
         z-depth in metres, 0 = no return.
     intrinsics : wbsa.camera.Intrinsics
     settings : SegmentSettings
-    seed : int
-        Seed of the RANSAC plane search (the result is deterministic for a seed).
 
     Returns
     -------
-    (h, w) bool
-        The largest 8-connected region left after the range gate and plane removal.
+    Segmentation
+
+    Raises
+    ------
+    WbsaError
+        No returns in the depth range, no person-sized object, or several without a ``pick``.
     """
-    import open3d as o3d
-    from scipy import ndimage
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial import cKDTree
 
     from wbsa.core.backproject import backproject_depth
 
     depth = np.asarray(depth_m, dtype=np.float64)
-    mask = np.isfinite(depth) & (depth >= settings.min_depth_m) & (depth <= settings.max_depth_m) & (depth > 0)
-    if not mask.any():
-        return mask
-    points = backproject_depth(np.where(mask, depth, 0.0), intrinsics)
-    o3d.utility.random.seed(seed)
-    for _ in range(settings.max_planes):
-        idx = np.flatnonzero(mask.ravel())
-        if len(idx) < 100:
-            break
-        cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points.reshape(-1, 3)[idx].astype(np.float64)))
-        _, inliers = cloud.segment_plane(settings.plane_threshold_m, 3, 500)
-        inliers = np.asarray(inliers)
-        if len(inliers) < 100 or not _is_large(points.reshape(-1, 3)[idx[inliers]], settings.plane_min_extent_m):
-            break
-        flat = mask.ravel().copy()
-        flat[idx[inliers]] = False
-        mask = flat.reshape(mask.shape)
-    labels, n = ndimage.label(mask, structure=np.ones((3, 3), bool))
-    if n == 0:
-        return mask
-    sizes = np.bincount(labels.ravel())[1:]
-    return labels == (1 + int(np.argmax(sizes)))
+    h, w = depth.shape
+    ok = np.isfinite(depth) & (depth >= settings.min_depth_m) & (depth <= settings.max_depth_m)
+    if np.count_nonzero(ok) < 100:
+        raise WbsaError(f"the depth image has {np.count_nonzero(ok)} returns between {settings.min_depth_m:g} and "
+                        f"{settings.max_depth_m:g} m; check the depth scale (units per metre) and the depth range")
+    pix = np.flatnonzero(ok.ravel())
+    points = backproject_depth(np.where(ok, depth, 0.0), intrinsics).reshape(-1, 3)[pix].astype(np.float64)
+    cloud, voxel_of = _voxelise(points, settings.voxel_m)
+    floor, walls = find_room(cloud, settings)
+    keep = np.ones(len(cloud), dtype=bool) if floor is None else floor.height(cloud) > floor.tolerance(cloud)
+    for wall in walls:
+        keep &= wall.height(cloud) > wall.tolerance(cloud)
+    # objects are clustered above a band over the floor, where the floor's noisy returns cannot link them;
+    # returns in the band join the object they touch (feet), or nothing (stray floor returns)
+    core = keep.copy()
+    if floor is not None:
+        core &= floor.height(cloud) > np.maximum(LOW_BAND_M, 2.0 * floor.tolerance(cloud))
+    idx = np.flatnonzero(core)
+    if len(idx) == 0:
+        raise WbsaError("the depth image holds only floor and walls; no subject found")
+    pts = cloud[idx]
+    pitch = float(np.max(pts[:, 2])) / min(float(intrinsics.fx), float(intrinsics.fy))
+    gap = max(settings.cluster_gap_m, 3.0 * pitch)
+    tree = cKDTree(pts)
+    pairs = tree.query_pairs(gap, output_type="ndarray")
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(pts), len(pts)))
+    _, labels = connected_components(graph, directed=False)
+    voxel_label = np.full(len(cloud), -1)
+    voxel_label[idx] = labels
+    low = np.flatnonzero(keep & ~core)
+    if len(low):
+        voxel_label[low] = attach_low(cloud[low], tree, labels, gap)
+    pixel_label = voxel_label[voxel_of]
+    pixel_label[~keep[voxel_of]] = -1
+    up = floor.normal if floor is not None else np.array([0.0, -1.0, 0.0])
+    pixel_label = merge_occluding(pixel_label, pix, points, (h, w), up, settings.max_person_height_m,
+                                  settings.max_person_width_m)
+    clusters = _describe(pixel_label, pix, points, w, floor)
+    people = [c for c in clusters if settings.min_person_height_m <= c.height_m <= settings.max_person_height_m
+              and c.width_m <= settings.max_person_width_m and c.footprint_m <= MAX_FOOTPRINT_M]
+    if not people:
+        big = max(clusters, key=lambda c: c.n_pixels) if clusters else None
+        if big is not None and big.footprint_m > MAX_FOOTPRINT_M and big.height_m <= settings.max_person_height_m:
+            raise WbsaError(f"the largest object, {big.describe()}, is {big.footprint_m:.1f} m wide at the hips: "
+                            "people touching each other? capture the subject standing apart")
+        what = f"the largest object is {big.describe()}" if big else "no object is left after the floor and walls"
+        raise WbsaError(f"no person-sized object ({settings.min_person_height_m:g}–{settings.max_person_height_m:g} m "
+                        f"tall) in the depth image; {what}: check the depth scale (units per metre) and the camera")
+    chosen = _choose(people, settings.pick, (w, h), pixel_label, pix)
+    mask = np.zeros(h * w, dtype=bool)
+    mask[pix[pixel_label == chosen.label]] = True
+    mask = _grow_feet(mask.reshape(h, w), pix, points, pixel_label, floor, walls)
+    others = tuple(c for c in people if c.label != chosen.label)
+    return Segmentation(mask, floor, tuple(walls), chosen, others)
 
 
-def _is_large(points: np.ndarray, min_extent_m: float) -> bool:
-    """Whether planar ``points`` (k, 3) span ``min_extent_m`` along their two main axes."""
-    centred = points - points.mean(axis=0)
-    _, _, axes = np.linalg.svd(centred[:: max(1, len(centred) // 5000)], full_matrices=False)
-    extents = [np.ptp(centred @ axes[i]) for i in range(2)]
-    return min(extents) >= min_extent_m
+def _grow_feet(mask: np.ndarray, pix: np.ndarray, points: np.ndarray, pixel_label: np.ndarray,
+               floor: Plane | None, walls: list[Plane]) -> np.ndarray:
+    """Add the returns between the measures' floor cut and the floor's noise that touch the subject in the image.
+
+    The floor's own noise hides the lowest centimetres of the feet; the returns there that are above the
+    measures' cut (:func:`~wbsa.estimation.cloud.above_floor`) and 8-connected to the subject in the image are
+    the subject's (the floor's stray returns are too sparse to reach far).
+    """
+    from scipy import ndimage
+
+    if floor is None:
+        return mask
+    cand = above_floor(points, floor) & (pixel_label < 0)
+    for wall in walls:
+        cand &= wall.height(points) > wall.tolerance(points)
+    grow = np.zeros(mask.size, dtype=bool)
+    grow[pix[cand]] = True
+    both = mask | grow.reshape(mask.shape)
+    labels, _ = ndimage.label(both, structure=np.ones((3, 3), dtype=bool))
+    touching = np.unique(labels[mask])
+    return np.isin(labels, touching[touching > 0])
+
+
+def _describe(pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarray, width: int,
+              floor: Plane | None) -> list[Cluster]:
+    """Size, place and distance of every cluster with at least 50 pixels."""
+    labels, counts = np.unique(pixel_label[pixel_label >= 0], return_counts=True)
+    out = []
+    for lab, n in zip(labels, counts):
+        if n < 50:
+            continue
+        sel = pixel_label == lab
+        p = points[sel]
+        if floor is not None:
+            up = floor.normal
+        else:
+            q = p[:: max(1, len(p) // 2000)] - p.mean(axis=0)
+            up = np.linalg.svd(q, full_matrices=False)[2][0]
+        along = p @ up
+        height = float(np.quantile(along, 0.999) - np.quantile(along, 0.001))
+        flat = p - np.outer(along, up)
+        centre = np.median(flat, axis=0)
+        width_m = 2.0 * float(np.quantile(np.linalg.norm(flat - centre, axis=1), 0.995))
+        rows, cols = np.divmod(pix[sel], width)
+        out.append(Cluster(int(lab), int(n), (int(np.median(cols)), int(np.median(rows))),
+                           float(np.median(np.linalg.norm(p, axis=1))), height, width_m,
+                           footprint_m(p, up if up @ np.array([0.0, -1.0, 0.0]) >= 0 else -up)))
+    return out
+
+
+def _choose(people: list[Cluster], pick, size: tuple[int, int], pixel_label: np.ndarray, pix: np.ndarray) -> Cluster:
+    if len(people) == 1:
+        return people[0]
+    if pick is None:
+        listing = "; ".join(f"{i + 1}: {c.describe()}" for i, c in enumerate(sorted(people, key=lambda c: c.pixel_xy)))
+        raise WbsaError(f"{len(people)} person-sized objects in the depth image ({listing}); "
+                        "choose one with pick nearest, largest, center or x,y")
+    if pick == "nearest":
+        return min(people, key=lambda c: c.distance_m)
+    if pick == "largest":
+        return max(people, key=lambda c: c.n_pixels)
+    w, h = size
+    x, y = ((w - 1) / 2, (h - 1) / 2) if pick == "center" else pick
+    if pick != "center":
+        hit = pixel_label[pix == int(y) * w + int(x)]
+        for c in people:
+            if hit.size and c.label == hit[0]:
+                return c
+    return min(people, key=lambda c: (c.pixel_xy[0] - x) ** 2 + (c.pixel_xy[1] - y) ** 2)

@@ -1,110 +1,183 @@
-"""WBSA from one depth image: segment, reconstruct, measure VBSA, predict with a model file."""
+"""WBSA from one depth image: find the subject, measure it, estimate the view, predict with an interval.
+
+:func:`estimate` is the library entry point (``wbsa.estimate`` calls it). Every number it returns carries
+its flags (:data:`wbsa.estimation.checks.FLAGS`); what cannot be measured raises a one-line
+:class:`~wbsa.errors.WbsaError`.
+"""
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+import os
+from dataclasses import dataclass, field
+from typing import Literal
 
 import numpy as np
 
 from wbsa.errors import WbsaError
-from wbsa.estimation.segment import SegmentSettings, segment_subject
+from wbsa.estimation.segment import SegmentSettings
+from wbsa.estimation.view import ViewEstimate
+
+Method = Literal["regression"]
+METHODS: tuple[str, ...] = ("regression",)
 
 
 @dataclass(frozen=True)
 class Estimate:
-    """One single-view WBSA estimate (SI units)."""
+    """One single-view WBSA estimate (SI units, angles in degrees).
 
-    vbsa_m2: float
+    Attributes
+    ----------
+    wbsa_m2, wbsa_lo_m2, wbsa_hi_m2 : float
+        Estimate and prediction interval of the whole body surface area.
+    level : float
+        Coverage of the interval.
+    vbsa_m2, stature_m, distance_m : float
+        Visible surface area, height and distance of the subject measured on the point cloud.
+    n_pixels : int
+    view : ViewEstimate
+        The view estimated from the image.
+    view_used : (float, float)
+        Azimuth and elevation the prediction used (the stated ones where given).
+    flags : dict of str to str
+        Named warnings (see :data:`wbsa.estimation.checks.FLAGS`); empty when all checks passed.
+    method, model, camera : str
+    mask : (h, w) bool
+        The subject's pixels that were measured.
+    surface : wbsa.core.TriangleMesh
+        The reconstructed visible surface (camera frame, metres).
+    """
+
     wbsa_m2: float
     wbsa_lo_m2: float
     wbsa_hi_m2: float
     level: float
+    vbsa_m2: float
+    stature_m: float
+    distance_m: float
     n_pixels: int
+    view: ViewEstimate
+    view_used: tuple[float, float]
+    flags: dict[str, str]
     method: str
-    vbsa_column: str
-    group: str
     model: str
-    azimuth_deg: float
-    elevation_deg: float
-    stature_m: float | None
+    camera: str
+    mask: np.ndarray = field(repr=False, compare=False)
+    surface: object = field(repr=False, compare=False)
+
+    def __repr__(self) -> str:
+        flags = f", flags: {', '.join(self.flags)}" if self.flags else ""
+        return (f"Estimate(WBSA {self.wbsa_m2:.3f} m² [{self.wbsa_lo_m2:.3f}–{self.wbsa_hi_m2:.3f}, "
+                f"{100 * self.level:.0f} %], azimuth {self.view.azimuth_deg:.0f}±{self.view.azimuth_sd_deg:.0f}°, "
+                f"elevation {self.view.elevation_deg:.0f}°, {self.distance_m:.2f} m{flags})")
 
     def to_dict(self) -> dict:
-        """Plain dict for JSON output."""
-        return asdict(self)
+        """JSON-ready estimate, view and flags (without the mask and the surface)."""
+        out = {k: getattr(self, k) for k in ("wbsa_m2", "wbsa_lo_m2", "wbsa_hi_m2", "level", "vbsa_m2", "stature_m",
+                                             "distance_m", "n_pixels", "method", "model", "camera")}
+        out = {k: (round(v, 5) if isinstance(v, float) else v) for k, v in out.items()}
+        out["view"] = self.view.to_dict()
+        out["view_used"] = {"azimuth_deg": self.view_used[0], "elevation_deg": self.view_used[1]}
+        out["flags"] = dict(self.flags)
+        return out
+
+    def method_text(self) -> str:
+        """One sentence on how the number was obtained (FHIR ``Observation.method.text``)."""
+        return (f"wbsa {self.method}: one depth image ({self.camera}), visible body surface area "
+                f"{self.vbsa_m2:.3f} m2 and stature {self.stature_m:.2f} m measured on the point cloud, view "
+                f"azimuth {self.view_used[0]:.0f} deg / elevation {self.view_used[1]:.0f} deg, model {self.model}")
 
 
-def recon_method_for(vbsa_column: str) -> str:
-    """The reconstruction that measures a model's VBSA column from a depth image.
+def _depth_array(depth, depth_scale: float | None) -> np.ndarray:
+    if isinstance(depth, (str, os.PathLike)):
+        from wbsa.core.depth_image import read_depth
 
-    ``vbsa_recon_<method>_m2`` → that method; ``vbsa_visible_m2`` → ``grid`` (which reproduces the
-    visible area within 2 % on noise-free views, see docs/sensor_and_surface.md).
+        return read_depth(depth, depth_scale=depth_scale)
+    try:
+        arr = np.asarray(depth, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise WbsaError(f"depth must be a path or a 2-D array of metres, got {type(depth).__name__}") from None
+    if depth_scale is not None:
+        arr = arr / float(depth_scale)
+    return arr
+
+
+def estimate(depth, camera, model=None, method: Method = "regression", *, azimuth_deg: float | None = None,
+             elevation_deg: float | None = None, level: float = 0.95, depth_scale: float | None = None,
+             segment: SegmentSettings | None = SegmentSettings(), show_progress: bool | None = None) -> Estimate:
+    """Estimate WBSA from one depth image of a standing person.
+
+    Parameters
+    ----------
+    depth : (h, w) float array (metres, 0 = no return) or path
+        A path is read with :func:`wbsa.core.read_depth` (16-bit PNG, .npy, .tiff, .exr).
+    camera : str, path or wbsa.camera.Intrinsics
+        A preset name (``kinect-v2``, ``realsense-d435``, ...) or an Open3D intrinsics JSON.
+    model : EstimatorModel, path or None
+        None: the default model, built on first use and cached (:func:`wbsa.estimation.cache.default_model`).
+        A path: an estimator model file (``.npz``) or a ``wbsa fit`` model file (``.json``).
+    method : {'regression'}
+        The estimation route (a model-based route that fits a whole body will be added).
+    azimuth_deg, elevation_deg : float, optional
+        A stated view; it is used for the prediction and checked against the estimated one.
+    level : float
+        Coverage of the prediction interval, in (0, 1).
+    depth_scale : float, optional
+        Units per metre of the depth values (files: see :func:`wbsa.core.read_depth`; arrays: default 1).
+    segment : SegmentSettings or None
+        How to find the subject in a room; None: every return is the subject.
+
+    Returns
+    -------
+    Estimate
 
     Raises
     ------
     WbsaError
-        For ``vbsa_hit_m2``, which depends on the mesh behind the image and cannot be measured.
+        Unreadable input, an image that is not the camera's size, no or several people without a pick,
+        a height that is not human (wrong depth scale), a broken model, an unknown method.
     """
-    if vbsa_column == "vbsa_visible_m2":
-        return "grid"
-    if vbsa_column.startswith("vbsa_recon_") and vbsa_column.endswith("_m2"):
-        return vbsa_column[len("vbsa_recon_"):-len("_m2")].replace("_", "-")
-    raise WbsaError(f"a model fitted on {vbsa_column} cannot be applied to a depth image; "
-                    "refit with --vbsa vbsa_visible_m2 or vbsa_recon_m2:grid")
+    from wbsa.camera.intrinsics import resolve_camera
+    from wbsa.estimation import checks
+    from wbsa.estimation.measure import measure_subject
+    from wbsa.estimation.predict import load_any_model, predict_wbsa
+    from wbsa.estimation.segment import segment_subject
 
-
-def estimate_wbsa(depth_m: np.ndarray, intrinsics, model, azimuth_deg: float, elevation_deg: float, *,
-                  stature_m: float | None = None, group: str = "all", kind: str = "linear", level: float = 0.95,
-                  segment: SegmentSettings | None = SegmentSettings(), vbsa_column: str | None = None,
-                  distance_m: float | None = None, seed: int = 0) -> tuple[Estimate, object]:
-    """Estimate WBSA from one depth image.
-
-    Parameters
-    ----------
-    depth_m : (h, w) float
-        z-depth in metres (0 = no return), e.g. from :func:`wbsa.core.read_depth_png`.
-    intrinsics : wbsa.camera.Intrinsics
-        The sensor's intrinsics; the image size must match.
-    model : wbsa.analysis.model_file.WbsaModel
-        A model file from ``wbsa fit`` (its camera should match the sensor).
-    azimuth_deg, elevation_deg : float
-        The view, in the paper's convention (0, 0 = camera in front at body height).
-    stature_m : float, optional
-        Given, the model with stature as extra predictor is used.
-    segment : SegmentSettings or None
-        None: every return belongs to the subject (e.g. a rendered view).
-
-    Returns
-    -------
-    Estimate, TriangleMesh
-        The estimate and the reconstructed visible surface (camera frame, metres).
-    """
-    from wbsa.core.backproject import frame_from_depth_image
-    from wbsa.surface import reconstruct
-
-    column = vbsa_column or _single_vbsa_column(model)
-    method = recon_method_for(column)
-    depth = np.asarray(depth_m, dtype=np.float64)
-    mask = segment_subject(depth, intrinsics, segment, seed) if segment is not None else depth > 0
-    n_pixels = int(mask.sum())
-    if n_pixels == 0:
-        raise WbsaError("no subject found in the depth image; check --min-depth/--max-depth and the camera")
-    frame = frame_from_depth_image(np.where(mask, depth, 0.0), intrinsics)
-    surface = reconstruct(frame, method)
-    vbsa = surface.area_m2
-    wbsa, lo, hi = model.predict(azimuth_deg, elevation_deg, vbsa, stature_m, group, model=kind, level=level,
-                                 vbsa_column=column, distance_m=distance_m)
-    est = Estimate(vbsa_m2=vbsa, wbsa_m2=float(wbsa[0]), wbsa_lo_m2=float(lo[0]), wbsa_hi_m2=float(hi[0]),
-                   level=level, n_pixels=n_pixels, method=method, vbsa_column=column, group=group, model=kind,
-                   azimuth_deg=float(azimuth_deg), elevation_deg=float(elevation_deg), stature_m=stature_m)
-    return est, surface
-
-
-def _single_vbsa_column(model) -> str:
-    columns = sorted({e["vbsa_column"] for e in model.entries})
-    usable = [c for c in columns if c != "vbsa_hit_m2"]
-    if len(usable) == 1:
-        return usable[0]
-    if not usable:
-        raise WbsaError("the model holds only vbsa_hit_m2 fits, which a depth image cannot measure; "
-                        "refit with --vbsa vbsa_visible_m2")
-    raise WbsaError(f"the model holds several VBSA columns ({', '.join(usable)}); choose one with --vbsa")
+    if method not in METHODS:
+        raise WbsaError(f"estimation method {method!r} is unknown; available: {', '.join(METHODS)}")
+    if not 0 < level < 1:
+        raise WbsaError(f"interval level {level} must lie in (0, 1), e.g. 0.95")
+    for name, value in (("azimuth_deg", azimuth_deg), ("elevation_deg", elevation_deg)):
+        if value is not None and not np.isfinite(value):
+            raise WbsaError(f"{name} must be a finite number of degrees, got {value!r}")
+    if elevation_deg is not None and not -90 <= elevation_deg <= 90:
+        raise WbsaError(f"elevation_deg {elevation_deg:g} must lie in [-90, 90]")
+    intrinsics = resolve_camera(camera)
+    depth_m = _depth_array(depth, depth_scale)
+    checks.check_image_size(depth_m, intrinsics)
+    mdl = load_any_model(model, show_progress=show_progress)
+    flags: dict[str, str] = {}
+    if segment is None:
+        mask, floor = np.isfinite(depth_m) & (depth_m > 0), None
+        if not mask.any():
+            raise WbsaError("the depth image has no returns; check the depth scale and the file")
+    else:
+        seg = segment_subject(depth_m, intrinsics, segment)
+        mask, floor = seg.mask, seg.floor
+        if seg.others:
+            flags["several_people"] = (f"picked {seg.subject.describe()} ({segment.pick}); others: "
+                                       + "; ".join(c.describe() for c in seg.others))
+    m = measure_subject(depth_m, mask, intrinsics, floor)
+    checks.check_height(m.stature_m)
+    if m.touches_border:
+        flags["cut_off"] = "subject pixels on the image border; step back or re-aim the camera"
+    if floor is None:
+        flags["no_floor"] = checks.FLAGS["no_floor"]
+    flags.update(checks.sensor_range_flags(m.distance_m, intrinsics))
+    prediction = predict_wbsa(mdl, m, intrinsics, azimuth_deg, elevation_deg, level)
+    view = prediction.view
+    flags.update(checks.view_flags((azimuth_deg, elevation_deg), view))
+    flags.update(prediction.flags)
+    return Estimate(wbsa_m2=prediction.wbsa_m2, wbsa_lo_m2=prediction.lo_m2, wbsa_hi_m2=prediction.hi_m2, level=level,
+                    vbsa_m2=m.vbsa_m2, stature_m=m.stature_m, distance_m=m.distance_m, n_pixels=m.n_pixels,
+                    view=view, view_used=prediction.view_used, flags=flags, method=method, model=prediction.model_name,
+                    camera=intrinsics.name, mask=m.mask, surface=m.surface)

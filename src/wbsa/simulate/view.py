@@ -73,7 +73,8 @@ def simulate_view(scene: MeshScene, camera: Intrinsics, view: View, **options: A
 def simulate_views(scene: MeshScene, camera: Intrinsics, views: Sequence[View], *, backend: str = "open3d",
                    sensor: SensorSettings | None = None, seed: int = 0, subject_id: int = 0,
                    reconstruct: tuple[str, ...] = (), reconstruction: ReconstructionSettings | None = None,
-                   keep_frame: bool = False, keep_surfaces: bool = False) -> list[SimulatedView]:
+                   keep_frame: bool = False, keep_surfaces: bool = False,
+                   target: np.ndarray | None = None) -> list[SimulatedView]:
     """Render views of one body (all in one go with a compiled back end), sense and reconstruct each.
 
     Parameters
@@ -96,6 +97,9 @@ def simulate_views(scene: MeshScene, camera: Intrinsics, views: Sequence[View], 
         How to reconstruct (default settings when None).
     keep_frame, keep_surfaces : bool
         Return the frames and the reconstructed surfaces (a scan keeps only the numbers).
+    target : (3,) float, optional
+        The point the camera aims at; default the scene's bounding-box centre (give the subject's centre
+        when the scene also holds a room).
 
     Returns
     -------
@@ -107,7 +111,8 @@ def simulate_views(scene: MeshScene, camera: Intrinsics, views: Sequence[View], 
 
     check_seed(seed, "the sensor seed")
     need_frame = keep_frame or sensor is not None or bool(reconstruct)
-    measured = measure_views(scene, camera, views, scene.center, backend=backend, return_frames=need_frame)
+    target = scene.center if target is None else np.asarray(target, dtype=np.float64)
+    measured = measure_views(scene, camera, views, target, backend=backend, return_frames=need_frame)
     out = []
     for view, (row, frame) in zip(views, measured):
         if sensor is not None:

@@ -1,0 +1,157 @@
+"""Judge `wbsa estimate` on held-out room captures (issue 11): segmentation, view, WBSA error, coverage, time.
+
+New subjects (random, ages uniform 3–80 years, and survey-matched NHANES people not drawn for training),
+random posture, a room (floor, a wall 0.5–1.5 m behind, a second person beside the subject in 30 % of
+images), a random camera preset, distance 1.5–4.5 m within the camera's range and lengthened until the
+subject fits, camera height 0.8–2.0 m, azimuth uniform over the circle, sensor noise, quantisation and
+holes on; the estimator is not told the view. Seeded: the same arguments print the same table.
+
+    python benchmarks/bench_estimate.py --subjects 300 --workers 2 [--out results.csv]
+
+The model is the default one (built and cached first if missing, which is not timed), or --model.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+import pandas as pd
+
+TARGETS = {"kept": 0.98, "included": 0.01, "seg_share": 0.99, "az_median": 10.0, "az_p95": 30.0, "mape_all": 2.5,
+           "mape_fb": 2.0, "bias": 0.5, "coverage": (0.93, 0.97), "seconds": 5.0}
+
+
+def population(n: int, survey_share: float, seed: int) -> pd.DataFrame:
+    """Held-out subjects: random and survey-matched, excluding the people the default model was trained on."""
+    import warnings
+
+    from wbsa.bodies.random_population import RandomPopulationSettings, sample_random_parameters
+    from wbsa.bodies.survey import build_survey_population
+    from wbsa.bodies.survey_data import load_survey, select_people
+    from wbsa.bodies.table import measure_population
+    from wbsa.estimation.train import TrainSettings
+
+    n_survey = int(round(n * survey_share))
+    params = sample_random_parameters(RandomPopulationSettings(n=n - n_survey, seed=seed, age_years=(3, 80),
+                                                               age_sampling="years", weight=(0.0, 1.0)))
+    parts = [measure_population(params, show_progress=False).assign(population="random")]
+    if n_survey:
+        train = TrainSettings()
+        trained_ids = set(select_people(load_survey(None).people, train.n_survey, train.seed + 1)["survey_id"])
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            survey = build_survey_population(n_survey + 10, seed=seed + 1, show_progress=False)
+        survey = survey[~survey["survey_id"].isin(trained_ids)].head(n_survey)
+        parts.append(survey.assign(population="survey"))
+    pop = pd.concat(parts, ignore_index=True)
+    pop["subject_id"] = np.arange(len(pop))
+    return pop
+
+
+def formulae(df: pd.DataFrame) -> pd.DataFrame:
+    """Du Bois, Mosteller and Haycock from the true height and mass, errors against the true WBSA (%)."""
+    from wbsa.formulae.compute import bsa
+
+    rows = []
+    for key in ("dubois", "mosteller", "haycock"):
+        pred = np.asarray(bsa(key, df["stature_m"].to_numpy() * 100, df["mass_kg"].to_numpy(), check=False))
+        err = 100 * (pred / df["wbsa_m2"].to_numpy() - 1)
+        rows.append({"method": f"{key} (true height, mass)", "n": len(df), "mape_pct": np.mean(np.abs(err)),
+                     "bias_pct": np.mean(err)})
+    return pd.DataFrame(rows)
+
+
+def summarise(g: pd.DataFrame) -> pd.Series:
+    err = 100 * (g["est_wbsa_m2"] / g["wbsa_m2"] - 1)
+    inside = (g["est_lo_m2"] <= g["wbsa_m2"]) & (g["wbsa_m2"] <= g["est_hi_m2"])
+    return pd.Series({"n": len(g), "mape_pct": np.mean(np.abs(err)), "bias_pct": np.mean(err),
+                      "coverage": inside.mean(), "az_median_deg": g["azimuth_error_deg"].median(),
+                      "az_p95_deg": g["azimuth_error_deg"].quantile(0.95), "flagged": (g["flags"] != "").mean()})
+
+
+def verdict(ok: bool) -> str:
+    return "met" if ok else "MISSED"
+
+
+def report(res: pd.DataFrame, wall_s: float) -> None:
+    ok = res[res["error"] == ""].copy()
+    failed = res[res["error"] != ""]
+    print(f"\n{len(res)} held-out images, {len(ok)} estimated, {len(failed)} refused with an error "
+          f"({wall_s:.0f} s wall)")
+    for reason, count in failed["error"].str.slice(0, 70).value_counts().items():
+        print(f"  refused {count}x: {reason}...")
+    err = 100 * (ok["est_wbsa_m2"] / ok["wbsa_m2"] - 1)
+    psi = np.abs((ok["azimuth_deg"] + 180) % 360 - 180)
+    fb = (psi <= 30) | (psi >= 150)
+    inside = (ok["est_lo_m2"] <= ok["wbsa_m2"]) & (ok["wbsa_m2"] <= ok["est_hi_m2"])
+    seg_ok = (ok["seg_kept"] >= TARGETS["kept"]) & (ok["seg_included"] <= TARGETS["included"])
+    rows = [
+        ("subject pixels kept ≥ 98 % and non-subject ≤ 1 %, share of images", f"{seg_ok.mean():.3f}",
+         "≥ 0.99", seg_ok.mean() >= TARGETS["seg_share"]),
+        ("  kept: median / 1st percentile", f"{ok['seg_kept'].median():.4f} / {ok['seg_kept'].quantile(0.01):.4f}",
+         "", None),
+        ("  non-subject included: median / 99th percentile",
+         f"{ok['seg_included'].median():.4f} / {ok['seg_included'].quantile(0.99):.4f}", "", None),
+        ("azimuth error (mirror-equivalent): median / 95th pct, deg",
+         f"{ok['azimuth_error_deg'].median():.1f} / {ok['azimuth_error_deg'].quantile(0.95):.1f}", "≤ 10 / ≤ 30",
+         ok["azimuth_error_deg"].median() <= TARGETS["az_median"]
+         and ok["azimuth_error_deg"].quantile(0.95) <= TARGETS["az_p95"]),
+        ("elevation error: median |err|, deg", f"{np.median(np.abs(ok['est_elevation_deg'] - ok['elevation_deg'])):.1f}",
+         "", None),
+        ("WBSA MAPE, all views, %", f"{np.mean(np.abs(err)):.2f}", "≤ 2.5", np.mean(np.abs(err)) <= TARGETS["mape_all"]),
+        ("WBSA MAPE, within 30° of front or back, %", f"{np.mean(np.abs(err[fb])):.2f} (n={int(fb.sum())})", "≤ 2.0",
+         np.mean(np.abs(err[fb])) <= TARGETS["mape_fb"]),
+        ("WBSA bias, %", f"{np.mean(err):+.2f}", "±0.5", abs(np.mean(err)) <= TARGETS["bias"]),
+        ("95 % interval coverage", f"{inside.mean():.3f}", "0.93–0.97",
+         TARGETS["coverage"][0] <= inside.mean() <= TARGETS["coverage"][1]),
+        ("time per image (estimate only, 1 core of 2 busy): median / max, s",
+         f"{ok['seconds'].median():.2f} / {ok['seconds'].max():.2f}", "≤ 5", ok["seconds"].max() <= TARGETS["seconds"]),
+    ]
+    print("\n| measure | value | target | |\n|---|---|---|---|")
+    for name, value, target, met in rows:
+        print(f"| {name} | {value} | {target} | {'' if met is None else verdict(met)} |")
+    ok["distance band"] = pd.cut(ok["distance_m"], [1.5, 2.5, 3.5, 4.5], include_lowest=True).astype(str)
+    ok["age group"] = np.where(ok["age_years"] < 18, "child (<18 y)", "adult")
+    pd.set_option("display.width", 160)
+    for by in ("posture", "camera", "distance band", "population", "age group", "second_person"):
+        print(f"\nby {by}:")
+        print(ok.groupby(by).apply(summarise, include_groups=False).round(3).to_string())
+    print("\nagainst the height/weight formulae on the same subjects (formulae given the TRUE height and mass):")
+    ours = pd.DataFrame([{"method": "wbsa estimate (one depth image)", "n": len(ok), "mape_pct": np.mean(np.abs(err)),
+                          "bias_pct": np.mean(err)}])
+    print(pd.concat([ours, formulae(ok)], ignore_index=True).round(3).to_string(index=False))
+    flags = ok["flags"].str.split(",").explode()
+    print("\nflags raised:", flags[flags != ""].value_counts().to_dict())
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--subjects", type=int, default=300, help="held-out images, one per subject (default 300)")
+    ap.add_argument("--survey-share", type=float, default=0.4, help="share of survey-matched subjects (default 0.4)")
+    ap.add_argument("--seed", type=int, default=1000, help="seed of the subjects and captures (training uses 0, 1)")
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--model", default=None, help="estimator model (.npz); default: the cached default model")
+    ap.add_argument("--out", default=None, help="write the per-image results here (.csv)")
+    args = ap.parse_args()
+
+    from wbsa.estimation.cache import default_model, default_model_path
+    from wbsa.estimation.testset import RoomTestSettings, run_room_tests
+
+    model_path = args.model
+    if model_path is None:
+        default_model()  # builds it on first use (not timed)
+        model_path = str(default_model_path())
+    t0 = time.perf_counter()
+    pop = population(args.subjects, args.survey_share, args.seed)
+    res = run_room_tests(pop, RoomTestSettings(seed=args.seed), model_path, workers=args.workers)
+    if args.out:
+        res.to_csv(args.out, index=False)
+    print(f"model {model_path}; {len(pop)} subjects ({(pop['population'] == 'survey').sum()} survey-matched), "
+          f"seed {args.seed}")
+    report(res, time.perf_counter() - t0)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,144 @@
+"""Random capture conditions for training and testing the estimator: camera, distance, height, view, sensor.
+
+A :class:`Capture` is what one photograph of a standing person depends on besides the person: which camera
+(an intrinsics preset with its sensor model), where it stands (distance to the subject's centre and height
+above the floor, hence the elevation) and from which side (azimuth, uniform over the full circle).
+:func:`sample_capture` draws one so that the subject fits the frame and lies within the camera's range.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from wbsa.errors import WbsaError
+
+#: Cameras of the default training world (presets of :data:`wbsa.camera.intrinsics.PRESETS`).
+CAMERAS: tuple[str, ...] = ("kinect-v1", "kinect-v2", "azure-kinect-nfov", "realsense-d435", "realsense-d455",
+                            "phone-lidar")
+#: Disparity quantisation (baseline m, step px) of the structured-light and stereo cameras; None = time of
+#: flight (no disparity). Kinect v1: facts.md; RealSense: datasheet baselines, about 1/12 px subpixel.
+_DISPARITY = {"kinect-v1": (0.075, 1 / 8), "tum": (0.075, 1 / 8), "realsense-d435": (0.050, 1 / 12),
+              "realsense-d455": (0.095, 1 / 12)}
+
+
+@dataclass(frozen=True)
+class CaptureSettings:
+    """The range of capture conditions.
+
+    Attributes
+    ----------
+    cameras : tuple of str
+        Intrinsics presets, drawn uniformly.
+    distance_m : (float, float)
+        Camera to subject's centre, drawn uniformly, then narrowed to the camera's range and lengthened
+        until the subject fits the frame.
+    camera_height_m : (float, float)
+        Height of the camera above the floor.
+    noise : bool
+        Sensor noise (Nguyen et al. 2012), disparity quantisation where the camera has one, grazing dropout.
+    max_holes_fraction, max_pixel_dropout : float
+        Triangle holes and pixel dropout, each drawn uniformly up to this.
+    """
+
+    cameras: tuple[str, ...] = CAMERAS
+    distance_m: tuple[float, float] = (1.5, 4.5)
+    camera_height_m: tuple[float, float] = (0.8, 2.0)
+    noise: bool = True
+    max_holes_fraction: float = 0.03
+    max_pixel_dropout: float = 0.02
+
+    def __post_init__(self) -> None:
+        from wbsa.camera.intrinsics import PRESETS
+
+        unknown = [c for c in self.cameras if c not in PRESETS]
+        if unknown or not self.cameras:
+            raise WbsaError(f"cameras {unknown or '()'} are not presets; use some of {', '.join(PRESETS)}")
+        lo, hi = self.distance_m
+        if not 0.3 <= lo <= hi:
+            raise WbsaError(f"distance_m {self.distance_m} must be (low, high) metres with 0.3 <= low <= high")
+        lo, hi = self.camera_height_m
+        if not 0.0 <= lo <= hi:
+            raise WbsaError(f"camera_height_m {self.camera_height_m} must be (low, high) metres with 0 <= low <= high")
+
+
+@dataclass(frozen=True)
+class Capture:
+    """One drawn capture: the camera, the view (aimed at the subject's centre) and the sensor."""
+
+    camera: object
+    view: object
+    sensor: object
+    camera_height_m: float
+    fits: bool
+
+
+def sensor_for(camera: str, rng: np.random.Generator, settings: CaptureSettings):
+    """The :class:`~wbsa.sensor.SensorSettings` of a camera preset with random holes and dropout."""
+    from wbsa.sensor.settings import SensorSettings
+
+    if not settings.noise:
+        return SensorSettings()
+    baseline, step = _DISPARITY.get(camera, (None, None))
+    return SensorSettings(noise="nguyen2012", quantise=baseline is not None,
+                       baseline_m=baseline or 0.075, disparity_step_px=step or 0.125,
+                       holes_fraction=float(rng.uniform(0, settings.max_holes_fraction)),
+                       pixel_dropout=float(rng.uniform(0, settings.max_pixel_dropout)), range_limits=True)
+
+
+def fits_frame(vertices: np.ndarray, camera, view, target: np.ndarray, margin_px: float = 3.0) -> bool:
+    """Whether every vertex projects inside the image, ``margin_px`` from its border."""
+    from wbsa.camera.extrinsics import pose_from_view
+
+    pose = pose_from_view(view, target)
+    p = pose.apply(np.asarray(vertices, dtype=np.float64))
+    if np.any(p[:, 2] <= 0):
+        return False
+    u = camera.fx * p[:, 0] / p[:, 2] + camera.skew * p[:, 1] / p[:, 2] + camera.cx
+    v = camera.fy * p[:, 1] / p[:, 2] + camera.cy
+    return bool(u.min() >= margin_px and v.min() >= margin_px and u.max() <= camera.width - 1 - margin_px
+                and v.max() <= camera.height - 1 - margin_px)
+
+
+def sample_capture(vertices: np.ndarray, rng: np.random.Generator, settings: CaptureSettings = CaptureSettings(),
+                   azimuth_deg: float | None = None) -> Capture:
+    """Draw a capture of a body standing on z = 0.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float
+        The (posed) body.
+    rng : numpy.random.Generator
+    settings : CaptureSettings
+    azimuth_deg : float, optional
+        Fixed azimuth (default: uniform over the circle).
+
+    Returns
+    -------
+    Capture
+        ``fits`` False if the subject could not be framed within the camera's range (it is then cut off).
+    """
+    from wbsa.camera.intrinsics import PRESETS
+    from wbsa.camera.views import View
+
+    name = settings.cameras[int(rng.integers(len(settings.cameras)))]
+    camera = PRESETS[name]
+    sensor = sensor_for(name, rng, settings)
+    v = np.asarray(vertices, dtype=np.float64)
+    target = 0.5 * (v.min(axis=0) + v.max(axis=0))
+    az = float(rng.uniform(0.0, 360.0)) if azimuth_deg is None else float(azimuth_deg)
+    height = float(rng.uniform(*settings.camera_height_m))
+    lo = max(settings.distance_m[0], camera.min_range_m + 0.5)
+    hi = min(settings.distance_m[1], camera.max_range_m - 0.4)
+    distance = float(rng.uniform(lo, max(lo, hi)))
+    fits = False
+    for _ in range(20):
+        el = math.degrees(math.asin(max(-0.95, min(0.95, (height - target[2]) / distance))))
+        view = View(az, el, distance)
+        fits = fits_frame(v, camera, view, target)
+        if fits or distance >= hi:
+            break
+        distance = min(hi, distance * 1.08)
+    return Capture(camera, view, sensor, height, fits)

@@ -1,0 +1,94 @@
+"""Input checks of a depth-image estimate: one-line errors for what cannot be measured, named flags for the rest.
+
+Errors (:class:`~wbsa.errors.WbsaError`, the CLI exits 2): an image whose size is not the camera's, a
+subject whose height from the point cloud is not a human height (wrong depth scale or units), a model with
+non-finite numbers. Flags (a name and a sentence, in ``Estimate.flags``; ``warning:`` lines on the terminal)
+for an estimate that is given but may be off: see :data:`FLAGS`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from wbsa.errors import WbsaError
+
+#: Every flag an estimate can carry, with what it means.
+FLAGS: dict[str, str] = {
+    "cut_off": "the subject touches the image border and may be cut off",
+    "no_floor": "no floor was found; the elevation comes from the body's long axis",
+    "several_people": "more than one person-sized object; one was picked",
+    "out_of_sensor_range": "the subject is closer or farther than the camera's working range",
+    "out_of_training_range": "a measure lies outside the range the model was trained on",
+    "view_disagrees": "the stated view differs from the estimated one by more than 30°",
+    "uncertain_view": "the camera may be in front of or behind the subject (azimuth uncertain)",
+    "model_mismatch": "the model was fitted for another camera, distance or view",
+    "camera_assumed": "no camera was given; the preset of the image's size was assumed",
+}
+#: Heights from the point cloud outside this range (m) mean a wrong depth scale or units.
+HUMAN_HEIGHT_M = (0.5, 2.5)
+#: A stated view further than this (degrees) from the estimated one is flagged.
+VIEW_TOLERANCE_DEG = 30.0
+
+
+def check_image_size(depth: np.ndarray, camera) -> None:
+    """Raise if the depth image is not 2-D or not the camera's size."""
+    if np.ndim(depth) != 2:
+        raise WbsaError(f"a depth image must be 2-D (h, w), got shape {np.shape(depth)}; give a single-channel image")
+    h, w = np.shape(depth)
+    if (w, h) != (camera.width, camera.height):
+        raise WbsaError(f"the depth image is {w}x{h} but camera {camera.name} is {camera.width}x{camera.height}; "
+                        "give the camera that took it (--camera PRESET or an intrinsics JSON)")
+
+
+def check_height(stature_m: float) -> None:
+    """Raise if a height measured on the point cloud cannot be a person's."""
+    lo, hi = HUMAN_HEIGHT_M
+    if not (math.isfinite(stature_m) and lo <= stature_m <= hi):
+        raise WbsaError(f"the subject measures {stature_m:.2f} m tall in the point cloud, outside {lo:g}–{hi:g} m; "
+                        "the depth scale (units per metre) or the camera intrinsics are probably wrong")
+
+
+def check_finite_model(arrays: dict, source: str) -> None:
+    """Raise if any number of a model is NaN or infinite."""
+    for name, arr in arrays.items():
+        a = np.asarray(arr)
+        if a.dtype.kind in "fc" and not np.all(np.isfinite(a)):
+            raise WbsaError(f"model {source} holds non-finite numbers in {name}; rebuild or refit the model")
+
+
+def range_flags(values: dict[str, float], ranges: dict[str, tuple[float, float]]) -> dict[str, str]:
+    """``{"out_of_training_range": ...}`` naming every value outside its training range, else ``{}``."""
+    out = []
+    for name, value in values.items():
+        if name in ranges:
+            lo, hi = ranges[name]
+            if not lo <= value <= hi:
+                out.append(f"{name} {value:.3g} (trained {lo:.3g}–{hi:.3g})")
+    return {"out_of_training_range": "; ".join(out)} if out else {}
+
+
+def sensor_range_flags(distance_m: float, camera) -> dict[str, str]:
+    """``{"out_of_sensor_range": ...}`` if the subject's distance is outside the camera's working range."""
+    lo, hi = float(camera.min_range_m), float(camera.max_range_m)
+    if lo <= distance_m <= hi:
+        return {}
+    return {"out_of_sensor_range": f"subject at {distance_m:.2f} m, camera {camera.name} works {lo:g}–{hi:g} m"}
+
+
+def view_flags(stated: tuple[float | None, float | None], estimated, tolerance_deg: float = VIEW_TOLERANCE_DEG
+               ) -> dict[str, str]:
+    """``{"view_disagrees": ...}`` if a stated azimuth or elevation is more than ``tolerance_deg`` off."""
+    from wbsa.estimation.view import azimuth_error_deg
+
+    az, el = stated
+    parts = []
+    if az is not None and math.isfinite(estimated.azimuth_deg):
+        err = float(azimuth_error_deg(az, estimated.azimuth_deg))
+        if err > tolerance_deg:
+            parts.append(f"azimuth stated {az:g}°, estimated {estimated.azimuth_deg:.0f}° ± {estimated.azimuth_sd_deg:.0f}°"
+                         " (mirror-equivalent)")
+    if el is not None and abs(el - estimated.elevation_deg) > tolerance_deg:
+        parts.append(f"elevation stated {el:g}°, estimated {estimated.elevation_deg:.0f}°")
+    return {"view_disagrees": "; ".join(parts)} if parts else {}

@@ -1,0 +1,143 @@
+"""3-D clusters of a depth image: low returns attached to the objects they touch, occluding parts merged."""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: Parts that touch in the image are merged when a fifth of their contact has a depth step under this (m)
+MERGE_DEPTH_GAP_M = 0.8
+#: ... and they share at least this many neighbouring pixel pairs.
+MERGE_MIN_CONTACTS = 5
+#: A person's legs and hips (10–40 % of its height) span at most this horizontally (m); two people more.
+MAX_FOOTPRINT_M = 0.9
+
+
+def footprint_m(points: np.ndarray, up: np.ndarray) -> float:
+    """Horizontal extent (m, bounding-box diagonal) of the points between 10 % and 40 % of the object's height."""
+    along = points @ up
+    lo, top = np.quantile(along, 0.002), np.quantile(along, 0.998)
+    band = points[(along >= lo + 0.1 * (top - lo)) & (along <= lo + 0.4 * (top - lo))]
+    if len(band) < 3:
+        return 0.0
+    flat = band - np.outer(band @ up, up)
+    e1 = np.array([1.0, 0.0, 0.0]) - up[0] * up
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(up, e1)
+    q = np.stack([flat @ e1, flat @ e2], axis=1)
+    ext = np.quantile(q, 0.99, axis=0) - np.quantile(q, 0.01, axis=0)
+    return float(np.hypot(*ext))
+
+
+def attach_low(low: np.ndarray, tree, labels: np.ndarray, gap: float) -> np.ndarray:
+    """Label of the object each low voxel's group touches (−1: none).
+
+    Low voxels are grouped among themselves (closer than ``gap``); a group joins the object that most of
+    its members touching an object touch.
+    """
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial import cKDTree
+
+    pairs = cKDTree(low).query_pairs(gap, output_type="ndarray")
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(low), len(low)))
+    _, group = connected_components(graph, directed=False)
+    dist, near = tree.query(low, distance_upper_bound=gap)
+    touch = np.isfinite(dist)
+    out = np.full(len(low), -1)
+    if not touch.any():
+        return out
+    pairs_gl = np.stack([group[touch], labels[near[touch]]], axis=1)
+    uniq, counts = np.unique(pairs_gl, axis=0, return_counts=True)
+    order = np.lexsort((-counts, uniq[:, 0]))  # per group, the most touched object first
+    uniq = uniq[order]
+    first = np.r_[True, uniq[1:, 0] != uniq[:-1, 0]]
+    best = dict(zip(uniq[first, 0].tolist(), uniq[first, 1].tolist()))
+    return np.array([best.get(g, -1) for g in group.tolist()])
+
+
+def merge_occluding(pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarray, shape: tuple[int, int],
+                    up: np.ndarray, max_height_m: float, max_width_m: float) -> np.ndarray:
+    """Merge clusters that touch in the image across a small depth step, while the union stays person-sized.
+
+    Seen from the side, a body's far leg and arm are hidden where they join it, so they form clusters of
+    their own; they touch the near side in the image with a depth step of a body's width (or of an arm
+reaching towards the camera, which can hide the waist). Pairs are merged
+    by decreasing contact length when a fifth of the contact steps less than 0.8 m in depth and the union
+    is person-sized: not too tall or wide, and its legs and hips span at most 0.9 m (two people more).
+
+    Parameters
+    ----------
+    pixel_label : (k,) int
+        Cluster of each return (−1: none); ``pix`` (k,) its flat pixel index, ``points`` (k, 3) its point.
+    shape : (int, int)
+        Image size (h, w).
+    up : (3,) float
+        The vertical (floor normal) in the camera frame.
+    max_height_m, max_width_m : float
+        Largest person.
+
+    Returns
+    -------
+    (k,) int
+        Labels after merging (merged clusters take the label of the larger part).
+    """
+    h, w = shape
+    img = np.full(h * w, -1, dtype=np.int64)
+    img[pix] = pixel_label
+    rng = np.zeros(h * w)
+    rng[pix] = np.linalg.norm(points, axis=1)
+    img, rng = img.reshape(h, w), rng.reshape(h, w)
+    la, lb, gap = [], [], []
+    for a, b, ra, rb in ((img[:, :-1], img[:, 1:], rng[:, :-1], rng[:, 1:]), (img[:-1], img[1:], rng[:-1], rng[1:])):
+        sel = (a >= 0) & (b >= 0) & (a != b)
+        la.append(np.minimum(a[sel], b[sel]))
+        lb.append(np.maximum(a[sel], b[sel]))
+        gap.append(np.abs(ra[sel] - rb[sel]))
+    la, lb, gap = np.concatenate(la), np.concatenate(lb), np.concatenate(gap)
+    if la.size == 0:
+        return pixel_label
+    pairs, inverse, counts = np.unique(np.stack([la, lb], 1), axis=0, return_inverse=True, return_counts=True)
+    inverse = inverse.ravel()
+    order = np.argsort(inverse, kind="stable")
+    splits = np.split(gap[order], np.cumsum(counts)[:-1])
+    near_gap = np.array([np.quantile(g, 0.2) for g in splits])
+    # extents of every cluster along up and two horizontal axes
+    e1 = np.array([1.0, 0.0, 0.0]) - up[0] * up
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(up, e1)
+    proj = points @ np.stack([up, e1, e2], axis=1)
+    labels = np.unique(pixel_label[pixel_label >= 0])
+    lo = {int(c): proj[pixel_label == c].min(axis=0) for c in labels}
+    hi = {int(c): proj[pixel_label == c].max(axis=0) for c in labels}
+    members = {int(c): [np.flatnonzero(pixel_label == c)] for c in labels}
+    size = {c: len(m[0]) for c, m in members.items()}
+    parent = {int(c): int(c) for c in labels}
+
+    def root(c: int) -> int:
+        while parent[c] != c:
+            parent[c] = parent[parent[c]]
+            c = parent[c]
+        return c
+
+    for i in np.argsort(-counts, kind="stable"):
+        if counts[i] < MERGE_MIN_CONTACTS or near_gap[i] > MERGE_DEPTH_GAP_M:
+            continue
+        a, b = root(int(pairs[i, 0])), root(int(pairs[i, 1]))
+        if a == b:
+            continue
+        new_lo, new_hi = np.minimum(lo[a], lo[b]), np.maximum(hi[a], hi[b])
+        ext = new_hi - new_lo
+        if ext[0] > max_height_m or np.hypot(ext[1], ext[2]) > max_width_m:
+            continue
+        union = np.concatenate(members[a] + members[b])
+        if footprint_m(points[union], up) > MAX_FOOTPRINT_M:
+            continue
+        keep, gone = (a, b) if size[a] >= size[b] else (b, a)
+        parent[gone] = keep
+        lo[keep], hi[keep], size[keep] = new_lo, new_hi, size[a] + size[b]
+        members[keep] = [union]
+    lut = {c: root(c) for c in parent}
+    out = pixel_label.copy()
+    ok = out >= 0
+    out[ok] = np.array([lut[int(c)] for c in out[ok]])
+    return out

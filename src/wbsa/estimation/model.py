@@ -1,0 +1,185 @@
+"""The estimator's model file: view model, WBSA regression continuous in view and distance, calibrated interval.
+
+WBSA is predicted on the log scale from what :func:`~wbsa.estimation.measure.measure_subject` measures and
+the view: a ridge regression of log WBSA on log VBSA, log stature (paper eq. 8), log silhouette area,
+width and thickness, each times a view basis (1, cos ψ, cos 2ψ, cos 3ψ, sin φ), plus distance and pixel
+pitch; boosted trees then correct its residual from the same measures, the body's band widths and
+thicknesses and the view's uncertainty. The interval is split-conformal: residuals divided by a fitted
+spread s(x) on held-out calibration renders (never used in fitting) give the quantile of any level.
+
+File layout: one ``.npz`` of numbers (no pickle) with ``meta_json`` (format ``wbsa-estimator``, version 1,
+training settings, feature ranges, held-out metrics).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from wbsa.errors import WbsaError
+from wbsa.estimation.trees import TreeEnsemble
+from wbsa.estimation.view import ViewModel
+
+FORMAT = "wbsa-estimator"
+VERSION = 1
+#: Measures whose training range is recorded and checked (flag ``out_of_training_range``).
+RANGE_KEYS = ("vbsa_m2", "stature_m", "distance_m", "elevation_deg")
+_BASE = ("vbsa_m2", "stature_m", "silhouette_m2", "width_m", "thickness_m")
+
+
+def design(features: dict[str, np.ndarray], psi_deg: np.ndarray, elevation_deg: np.ndarray) -> np.ndarray:
+    """Linear design matrix (n, 31): log measures × view basis, view basis, log distance, pitch/stature."""
+    r = np.radians(np.asarray(psi_deg, dtype=np.float64))
+    s_el = np.sin(np.radians(np.asarray(elevation_deg, dtype=np.float64)))
+    view = [np.ones_like(r), np.cos(r), np.cos(2 * r), np.cos(3 * r), s_el]
+    cols = [np.log(np.asarray(features[k], dtype=np.float64)) * v for k in _BASE for v in view]
+    cols += view[1:]
+    cols += [np.log(features["distance_m"]), np.asarray(features["pitch_m"]) / np.asarray(features["stature_m"])]
+    return np.column_stack(cols)
+
+
+def tree_features(features: dict[str, np.ndarray], shape: np.ndarray, psi_deg: np.ndarray, psi_sd_deg: np.ndarray,
+                  elevation_deg: np.ndarray) -> np.ndarray:
+    """Features of the residual trees (n, 49): log measures, view, its spread, distance, bands / stature."""
+    st = np.asarray(features["stature_m"], dtype=np.float64)
+    cols = [np.log(np.asarray(features[k], dtype=np.float64)) for k in _BASE]
+    cols += [np.asarray(psi_deg, dtype=float), np.asarray(psi_sd_deg, dtype=float), np.asarray(elevation_deg, float),
+             np.asarray(features["distance_m"], float)]
+    return np.column_stack(cols + [np.asarray(shape, dtype=np.float64) / st[:, None]])
+
+
+def spread_design(psi_deg: np.ndarray, psi_sd_deg: np.ndarray, features: dict[str, np.ndarray]) -> np.ndarray:
+    """Design of the log residual spread (n, 5): 1, cos 2ψ, view spread, log pitch, log pixel count."""
+    r = np.radians(np.asarray(psi_deg, dtype=np.float64))
+    return np.column_stack([np.ones_like(r), np.cos(2 * r), np.asarray(psi_sd_deg, float) / 30.0,
+                            np.log(features["pitch_m"]), np.log(features["n_pixels"])])
+
+
+@dataclass
+class EstimatorModel:
+    """View model, WBSA regression and calibrated interval (see the module doc).
+
+    Attributes
+    ----------
+    view : ViewModel
+    mean, scale : (p,) float64
+        Standardisation of :func:`design` columns.
+    coef : (p,) float64
+    intercept : float
+    residual : TreeEnsemble or None
+        Correction of the ridge prediction (log scale).
+    spread_coef : (5,) float64
+        log s(x) = :func:`spread_design` · spread_coef, clipped to ``spread_range``.
+    spread_range : (2,) float64
+        Range of log s(x) over the training renders (no extrapolation beyond it).
+    scores : (k,) float64
+        Sorted calibration scores |log residual| / s(x).
+    meta : dict
+        Format, settings, training ranges, metrics.
+    """
+
+    view: ViewModel
+    mean: np.ndarray
+    scale: np.ndarray
+    coef: np.ndarray
+    intercept: float
+    residual: TreeEnsemble | None
+    spread_coef: np.ndarray
+    spread_range: np.ndarray
+    scores: np.ndarray
+    meta: dict = field(default_factory=dict)
+
+    @property
+    def name(self) -> str:
+        """Short identifier (the file name, or ``default``)."""
+        return str(self.meta.get("name", "estimator"))
+
+    @property
+    def ranges(self) -> dict[str, tuple[float, float]]:
+        """Training range of each of :data:`RANGE_KEYS`."""
+        return {k: tuple(v) for k, v in self.meta.get("ranges", {}).items()}
+
+    def log_wbsa(self, features: dict[str, np.ndarray], shape: np.ndarray, psi_deg, psi_sd_deg,
+                 elevation_deg) -> np.ndarray:
+        """Predicted log WBSA (n,)."""
+        X = (design(features, psi_deg, elevation_deg) - self.mean) / self.scale
+        out = X @ self.coef + self.intercept
+        if self.residual is not None:
+            out = out + self.residual.predict_raw(tree_features(features, shape, psi_deg, psi_sd_deg, elevation_deg))
+        return out
+
+    def quantile(self, level: float) -> float:
+        """Calibrated multiplier of s(x) for a two-sided interval of ``level`` (split conformal)."""
+        n = len(self.scores)
+        k = int(np.ceil((n + 1) * level))
+        if k > n:
+            raise WbsaError(f"the model was calibrated on {n} renders, too few for a {100 * level:g} % interval; "
+                            f"use a lower level")
+        return float(self.scores[k - 1])
+
+    def predict(self, features: dict[str, np.ndarray], shape: np.ndarray, psi_deg, psi_sd_deg, elevation_deg,
+                level: float = 0.95) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """WBSA (n,) and the interval bounds (n,), m²."""
+        mu = self.log_wbsa(features, shape, psi_deg, psi_sd_deg, elevation_deg)
+        half = self.quantile(level) * self.spread(features, psi_deg, psi_sd_deg)
+        return np.exp(mu), np.exp(mu - half), np.exp(mu + half)
+
+    def spread(self, features: dict[str, np.ndarray], psi_deg, psi_sd_deg) -> np.ndarray:
+        """(n,) fitted residual spread s(x) on the log scale."""
+        z = spread_design(psi_deg, psi_sd_deg, features) @ self.spread_coef
+        return np.exp(np.clip(z, self.spread_range[0], self.spread_range[1]))
+
+    # ------------------------------------------------------------------ file
+    def save(self, path: str | os.PathLike) -> Path:
+        """Write the model as one ``.npz`` of numbers, atomically."""
+        from wbsa.io import atomic_path
+
+        arrays = {**self.view.to_arrays(), "mean": self.mean, "scale": self.scale, "coef": self.coef,
+                  "intercept": np.array([self.intercept]), "spread_coef": self.spread_coef,
+                  "spread_range": self.spread_range, "scores": self.scores}
+        if self.residual is not None:
+            arrays.update(self.residual.to_arrays("residual_"))
+        meta = {"format": FORMAT, "version": VERSION, **self.meta}
+        arrays["meta_json"] = np.array(json.dumps(meta, default=_json_default))
+        path = Path(path)
+        with atomic_path(path, keep_suffix=True) as tmp:
+            with open(tmp, "wb") as fh:
+                np.savez_compressed(fh, **arrays)
+        return path
+
+    @classmethod
+    def load(cls, path: str | os.PathLike) -> "EstimatorModel":
+        """Read a model written by :meth:`save` (numbers only; no code is loaded)."""
+        from wbsa.estimation.checks import check_finite_model
+
+        path = Path(path)
+        if not path.is_file():
+            raise WbsaError(f"model file {path} does not exist; omit it to use the default model")
+        try:
+            with np.load(path, allow_pickle=False) as z:
+                arrays = {k: z[k] for k in z.files}
+            meta = json.loads(str(arrays.pop("meta_json")))
+        except (OSError, ValueError, KeyError, json.JSONDecodeError) as exc:
+            raise WbsaError(f"{path} is not a wbsa estimator model ({type(exc).__name__}); rebuild it") from None
+        if meta.get("format") != FORMAT or meta.get("version") != VERSION:
+            raise WbsaError(f"{path} is not a {FORMAT} version {VERSION} file; rebuild it with this wbsa")
+        check_finite_model(arrays, str(path))
+        residual = TreeEnsemble.from_arrays(arrays, "residual_") if "residual_roots" in arrays else None
+        meta.setdefault("name", path.name)
+        return cls(ViewModel.from_arrays(arrays), arrays["mean"], arrays["scale"], arrays["coef"],
+                   float(arrays["intercept"][0]), residual, arrays["spread_coef"], arrays["spread_range"],
+                   np.sort(arrays["scores"]), meta)
+
+
+def _json_default(o: object) -> object:
+    if isinstance(o, np.generic):
+        return o.item()
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    if isinstance(o, (tuple, set)):
+        return list(o)
+    return str(o)

@@ -1,0 +1,185 @@
+"""Virtual captures of posed bodies, measured by the estimator's own code: the training and test material.
+
+:func:`render_samples` takes a population table (phenotypes and true WBSA), poses each body with a
+:data:`~wbsa.estimation.posing.PoseBody` callable (swap in another posture model without touching
+anything else), draws captures (:func:`~wbsa.estimation.capture.sample_capture`), renders each with
+:func:`wbsa.simulate.simulate_view` (sensor and grid reconstruction on) and measures the sensed frame with
+:func:`~wbsa.estimation.measure.measure_subject`, given the render's floor. Sample ``i`` draws from its own
+stream ``SeedSequence([seed, i])``: the same seed gives the same rows whatever the chunking or workers.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from wbsa.estimation.capture import CaptureSettings, sample_capture
+from wbsa.estimation.cloud import Plane
+
+#: Truth columns copied from the population table into every sample row.
+TRUTH_COLUMNS = ("subject_id", "sex", "age_years", "stature_m", "mass_kg", "wbsa_m2")
+
+
+@dataclass(frozen=True)
+class RenderSettings:
+    """How samples are drawn from a population.
+
+    Attributes
+    ----------
+    views_per_subject : int
+        Captures per body (each with its own posture, camera and view).
+    capture : CaptureSettings
+    postures : tuple of str or None
+        Named postures of :data:`wbsa.estimation.posing.POSTURES` (None = all, with jitter).
+    floor_error_m, floor_tilt_deg : float
+        Standard deviation of the error put on the render's floor before the floor cut, as a detected
+        floor would have.
+    seed : int
+    """
+
+    views_per_subject: int = 4
+    capture: CaptureSettings = field(default_factory=CaptureSettings)
+    postures: tuple[str, ...] | None = None
+    floor_error_m: float = 0.003
+    floor_tilt_deg: float = 0.1
+    seed: int = 0
+
+
+@dataclass(frozen=True)
+class Samples:
+    """Rendered and measured samples.
+
+    Attributes
+    ----------
+    table : pandas.DataFrame
+        One row per capture: :data:`TRUTH_COLUMNS`, ``posture, camera, azimuth_deg, elevation_deg,
+        distance_m, camera_height_m, fits``, the render's ``vbsa_visible_m2`` and ``vbsa_recon_grid_m2``,
+        and the measures (``m_`` + :meth:`SubjectMeasures.features`, ``m_touches_border``; ``m_ok`` False
+        where the render had almost no returns).
+    descriptors : (n, d) float32
+        View descriptor then shape bands of each sample (:class:`SubjectMeasures` ``descriptor``, ``shape``).
+    """
+
+    table: pd.DataFrame
+    descriptors: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.table)
+
+    @staticmethod
+    def concat(parts: list["Samples"]) -> "Samples":
+        """One :class:`Samples` from several, in order."""
+        return Samples(pd.concat([p.table for p in parts], ignore_index=True),
+                       np.concatenate([p.descriptors for p in parts]))
+
+
+def render_floor(pose, rng: np.random.Generator, error_m: float, tilt_deg: float) -> Plane:
+    """The floor z = 0 of a render in its camera frame, with a small random error (as if detected)."""
+    n = pose.R @ np.array([0.0, 0.0, 1.0])
+    d = float(n @ pose.T)
+    tilt = rng.normal(0.0, np.radians(tilt_deg), size=3)
+    n = n + np.cross(tilt, n)
+    return Plane(n / np.linalg.norm(n), d + float(rng.normal(0.0, error_m)))
+
+
+def render_chunk(population: pd.DataFrame, first_sample: int, settings: RenderSettings,
+                 posture_names: tuple[str, ...] | None = None) -> Samples:
+    """Render and measure ``settings.views_per_subject`` captures of every body of ``population``.
+
+    Sample numbers start at ``first_sample`` (its seeds are ``SeedSequence([seed, sample])``).
+    """
+    from wbsa.bodies.body_model import BodyModel
+    from wbsa.camera.extrinsics import pose_from_view
+    from wbsa.camera.scene import MeshScene
+    from wbsa.estimation.measure import measure_subject
+    from wbsa.estimation.posing import Poser
+    from wbsa.parallel import keep_large_allocations, single_threaded_math
+    from wbsa.simulate import simulate_view
+
+    keep_large_allocations()
+    rows, descriptors = [], []
+    with single_threaded_math():
+        model = BodyModel()
+        poser = Poser(model, settings.postures if posture_names is None else posture_names)
+        bodies = model.rest_bodies(population)
+        sample = first_sample
+        for b in range(len(population)):
+            truth = population.iloc[b]
+            for _ in range(settings.views_per_subject):
+                rng = np.random.default_rng(np.random.SeedSequence([settings.seed, sample]))
+                pose_rng, capture_rng, floor_rng = rng.spawn(3)
+                vertices, posture = poser(bodies.vertices[b], bodies.bone_heads[b], pose_rng)
+                mesh = model.skin_mesh(vertices)
+                scene = MeshScene(mesh, nthreads=1)
+                cap = sample_capture(vertices, capture_rng, settings.capture)
+                sim = simulate_view(scene, cap.camera, cap.view, sensor=cap.sensor, seed=settings.seed,
+                                    subject_id=sample, reconstruct=("grid",), keep_frame=True)
+                pose = pose_from_view(cap.view, scene.center)
+                floor = render_floor(pose, floor_rng, settings.floor_error_m, settings.floor_tilt_deg)
+                row = {c: truth[c] for c in TRUTH_COLUMNS if c in truth.index}
+                row.update(sample=sample, posture=posture, camera=cap.camera.name, azimuth_deg=cap.view.azimuth_deg,
+                           elevation_deg=cap.view.elevation_deg, distance_m=cap.view.distance_m,
+                           camera_height_m=cap.camera_height_m, fits=cap.fits,
+                           holes_fraction=cap.sensor.holes_fraction, pixel_dropout=cap.sensor.pixel_dropout,
+                           vbsa_visible_m2=sim.row["vbsa_visible_m2"], vbsa_recon_grid_m2=sim.row["vbsa_recon_grid_m2"])
+                depth = sim.frame.depth_m
+                if np.count_nonzero(depth) < 200:
+                    row.update(m_ok=False)
+                    rows.append(row)
+                    descriptors.append(None)
+                    sample += 1
+                    continue
+                m = measure_subject(depth, depth > 0, cap.camera, floor)
+                row.update({f"m_{k}": v for k, v in m.features().items()})
+                row.update(m_ok=True, m_touches_border=m.touches_border)
+                rows.append(row)
+                descriptors.append(np.concatenate([m.descriptor, m.shape]))
+                sample += 1
+    width = next((len(d) for d in descriptors if d is not None), 0)
+    desc = np.stack([d if d is not None else np.full(width, np.nan, np.float32) for d in descriptors]) \
+        if descriptors else np.zeros((0, width), np.float32)
+    return Samples(pd.DataFrame(rows), desc)
+
+
+def render_samples(population: pd.DataFrame, settings: RenderSettings = RenderSettings(), *, workers: int = 1,
+                   chunk_subjects: int = 25, show_progress: bool | None = None) -> Samples:
+    """Render and measure captures of every body of a population table (see the module doc).
+
+    Parameters
+    ----------
+    population : pandas.DataFrame
+        Phenotype columns and the truth (:data:`TRUTH_COLUMNS`), e.g. from
+        :func:`wbsa.bodies.table.measure_population`.
+    settings : RenderSettings
+    workers : int
+        Local worker processes (dask); the rows do not depend on it.
+    chunk_subjects : int
+        Bodies per task.
+
+    Returns
+    -------
+    Samples
+        Rows in sample order.
+    """
+    from wbsa.progress import progress
+
+    v = settings.views_per_subject
+    starts = list(range(0, len(population), chunk_subjects))
+    args = [(population.iloc[s:s + chunk_subjects].reset_index(drop=True), s * v, settings) for s in starts]
+    parts: dict[int, Samples] = {}
+    bar = progress(total=len(population) * v, desc="renders", unit="view", enabled=show_progress)
+    if workers > 1 and len(args) > 1:
+        from wbsa.parallel import dask_client, map_unordered
+
+        with dask_client(min(workers, len(args))) as client:
+            for i, part in map_unordered(client, render_chunk, args, tag="estimator-renders"):
+                parts[i] = part
+                bar.update(len(part))
+    else:
+        for i, a in enumerate(args):
+            parts[i] = render_chunk(*a)
+            bar.update(len(parts[i]))
+    bar.close()
+    return Samples.concat([parts[i] for i in range(len(args))])

@@ -1,0 +1,127 @@
+"""Synthetic rooms for testing the estimator: a body, a floor, a wall behind it, maybe a second person.
+
+:func:`compose_room` puts a body mesh on a floor with a wall behind it (as seen from a camera at a given
+azimuth) and optionally other people beside it, as one :class:`~wbsa.core.TriangleMesh` whose first
+``n_subject_faces`` triangles are the subject's, so every rendered pixel knows whether it is the subject
+(its triangle ID). Render it with :func:`wbsa.simulate.simulate_view` aimed at the subject's centre.
+The floor and walls are tiled into small squares so that the sensor's triangle holes stay small.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from wbsa.core.mesh import TriangleMesh
+from wbsa.errors import WbsaError
+
+
+@dataclass(frozen=True)
+class RoomScene:
+    """A composed scene.
+
+    Attributes
+    ----------
+    mesh : TriangleMesh
+        Subject first, then the other people, the floor and the walls.
+    n_subject_faces : int
+        Triangles ``0 .. n_subject_faces - 1`` are the subject's.
+    subject_center : (3,) float64
+        The subject's bounding-box centre (the camera's target).
+    """
+
+    mesh: TriangleMesh
+    n_subject_faces: int
+    subject_center: np.ndarray
+
+    def is_subject(self, triangle_id: np.ndarray) -> np.ndarray:
+        """Bool array: which triangle IDs (−1 = no return) belong to the subject."""
+        t = np.asarray(triangle_id)
+        return (t >= 0) & (t < self.n_subject_faces)
+
+
+def tiled_rectangle(origin: np.ndarray, edge_u: np.ndarray, edge_v: np.ndarray, tile_m: float = 0.25) -> TriangleMesh:
+    """A rectangle ``origin + s·edge_u + t·edge_v`` (s, t in [0, 1]) tiled into squares of about ``tile_m``.
+
+    Its triangles are counter-clockwise seen from the side ``edge_u × edge_v`` points to.
+    """
+    origin, eu, ev = (np.asarray(a, dtype=np.float64) for a in (origin, edge_u, edge_v))
+    nu = max(1, int(np.ceil(np.linalg.norm(eu) / tile_m)))
+    nv = max(1, int(np.ceil(np.linalg.norm(ev) / tile_m)))
+    s, t = np.meshgrid(np.linspace(0, 1, nu + 1), np.linspace(0, 1, nv + 1), indexing="ij")
+    verts = origin + s.reshape(-1, 1) * eu + t.reshape(-1, 1) * ev
+    idx = np.arange((nu + 1) * (nv + 1)).reshape(nu + 1, nv + 1)
+    a, b, c, d = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()
+    faces = np.concatenate([np.stack([a, b, c], 1), np.stack([a, c, d], 1)]).astype(np.int32)
+    return TriangleMesh(verts, faces)
+
+
+def merge_meshes(*meshes: TriangleMesh) -> TriangleMesh:
+    """One mesh holding all ``meshes`` in order (faces re-indexed)."""
+    verts, faces, offset = [], [], 0
+    for m in meshes:
+        verts.append(np.asarray(m.vertices, dtype=np.float64))
+        faces.append(np.asarray(m.faces, dtype=np.int64) + offset)
+        offset += len(m.vertices)
+    return TriangleMesh(np.concatenate(verts), np.concatenate(faces).astype(np.int32))
+
+
+def turned(mesh: TriangleMesh, yaw_deg: float, offset_m: np.ndarray) -> TriangleMesh:
+    """``mesh`` turned by ``yaw_deg`` about the vertical through its centre, then moved by ``offset_m`` (3,)."""
+    c, s = np.cos(np.radians(yaw_deg)), np.sin(np.radians(yaw_deg))
+    rz = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    centre = mesh.bbox_center * np.array([1.0, 1.0, 0.0])
+    v = (np.asarray(mesh.vertices) - centre) @ rz.T + centre + np.asarray(offset_m, dtype=np.float64)
+    return TriangleMesh(v, mesh.faces)
+
+
+def compose_room(subject: TriangleMesh, camera_azimuth_deg: float, *, wall_behind_m: float | None = 1.0,
+                 others: tuple[tuple[TriangleMesh, float], ...] = (), floor: bool = True,
+                 room_half_width_m: float = 3.0, wall_height_m: float = 2.6, camera_distance_m: float = 5.0) -> RoomScene:
+    """The subject standing on a floor, a wall behind it as seen from the camera, other people beside it.
+
+    Parameters
+    ----------
+    subject : TriangleMesh
+        Standing on z = 0 (anny's frame: facing −Y).
+    camera_azimuth_deg : float
+        Where the camera will be (paper convention); the wall is placed on the far side.
+    wall_behind_m : float or None
+        Gap between the subject's back-most point (as seen from the camera) and the wall; None = no wall.
+    others : tuple of (TriangleMesh, float)
+        Other people and their sideways offset (m, along the image's right) from the subject's centre;
+        each stands at the subject's distance from the wall.
+    floor : bool
+        Add the floor (z = 0).
+    room_half_width_m, wall_height_m, camera_distance_m : float
+        Size of the floor and wall (the floor reaches ``camera_distance_m`` + 1 m in front of the subject).
+
+    Returns
+    -------
+    RoomScene
+    """
+    if wall_behind_m is not None and not wall_behind_m > 0:
+        raise WbsaError(f"wall_behind_m must be positive, got {wall_behind_m}")
+    th = np.radians(camera_azimuth_deg)
+    to_camera = np.array([np.sin(th), -np.cos(th), 0.0])  # horizontal, from the subject towards the camera
+    right = np.array([np.cos(th), np.sin(th), 0.0])        # the image's right (the camera's x axis)
+    centre = subject.bbox_center
+    depth = (np.asarray(subject.vertices) - centre) @ to_camera
+    back = float(depth.min())                                 # the subject's far side, along to_camera
+    parts = [subject]
+    for mesh, side_m in others:
+        parts.append(turned(mesh, 0.0, centre * np.array([1.0, 1.0, 0.0]) - mesh.bbox_center * np.array([1, 1, 0])
+                            + side_m * right))
+    base = centre * np.array([1.0, 1.0, 0.0])
+    far = (back - (wall_behind_m if wall_behind_m is not None else 1.0)) * to_camera
+    if floor:
+        near = (camera_distance_m + 1.0) * to_camera
+        # counter-clockwise from above: edge_u × edge_v = +Z
+        corner = base + far - room_half_width_m * right
+        parts.append(tiled_rectangle(corner, near - far, 2 * room_half_width_m * right))
+    if wall_behind_m is not None:
+        corner = base + far - room_half_width_m * right
+        # facing the camera: edge_u × edge_v = to_camera
+        parts.append(tiled_rectangle(corner, 2 * room_half_width_m * right, np.array([0.0, 0.0, wall_height_m])))
+    return RoomScene(merge_meshes(*parts), int(len(subject.faces)), centre)

@@ -1,0 +1,142 @@
+"""Held-out room captures for judging the estimator (``benchmarks/bench_estimate.py``).
+
+Each subject is posed, stood in a room (floor, a wall 0.5–1.5 m behind, sometimes a second person at the
+side), captured with a random camera, distance, camera height and azimuth, read through the sensor, stored
+as a millimetre depth image would be, and handed to :func:`wbsa.estimation.estimate` without its view.
+The row records the truth, the estimate, its flags and the segmentation against the render's own labels.
+Image ``i`` draws from ``SeedSequence([seed, i])``: rows do not depend on chunking or workers.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from wbsa.estimation.capture import CaptureSettings, sample_capture
+
+
+@dataclass(frozen=True)
+class RoomTestSettings:
+    """Conditions of the held-out captures.
+
+    Attributes
+    ----------
+    capture : CaptureSettings
+    wall_behind_m : (float, float)
+        Gap between the subject and the wall behind, uniform.
+    second_person : float
+        Probability of a second person beside the subject.
+    side_m : (float, float)
+        Sideways offset of the second person (centre to centre), uniform, either side.
+    pick : str
+        How the estimator chooses among several people (the operator aims the camera at the subject).
+    seed : int
+    """
+
+    capture: CaptureSettings = field(default_factory=CaptureSettings)
+    wall_behind_m: tuple[float, float] = (0.5, 1.5)
+    second_person: float = 0.3
+    side_m: tuple[float, float] = (0.9, 1.6)
+    pick: str = "center"
+    seed: int = 1000
+
+
+def room_capture_chunk(population: pd.DataFrame, others: pd.DataFrame, first: int, settings: RoomTestSettings,
+                       model_path: str | None) -> pd.DataFrame:
+    """Capture and estimate every subject of ``population`` (``others``: the same number of possible second people).
+
+    Returns one row per subject: truth, capture, segmentation (``seg_kept``, ``seg_included``), the estimate
+    (``est_*``, ``flags``; ``error`` when it raised) and the estimate's wall time.
+    """
+    from wbsa.bodies.body_model import BodyModel
+    from wbsa.camera.scene import MeshScene
+    from wbsa.errors import WbsaError
+    from wbsa.estimation.posing import Poser
+    from wbsa.estimation.predict import load_any_model
+    from wbsa.estimation.room import compose_room
+    from wbsa.estimation.segment import SegmentSettings
+    from wbsa.estimation.single_view import estimate
+    from wbsa.estimation.view import fold_azimuth
+    from wbsa.parallel import keep_large_allocations, single_threaded_math
+    from wbsa.simulate import simulate_view
+
+    keep_large_allocations()
+    rows = []
+    with single_threaded_math():
+        body_model = BodyModel()
+        poser = Poser(body_model)
+        model = load_any_model(model_path)
+        bodies = body_model.rest_bodies(population)
+        extra = body_model.rest_bodies(others)
+        for b in range(len(population)):
+            index = first + b
+            rng = np.random.default_rng(np.random.SeedSequence([settings.seed, index]))
+            pose_rng, other_rng, capture_rng, room_rng = rng.spawn(4)
+            vertices, posture = poser(bodies.vertices[b], bodies.bone_heads[b], pose_rng)
+            subject = body_model.skin_mesh(vertices)
+            cap = sample_capture(vertices, capture_rng, settings.capture)
+            people = ()
+            if room_rng.random() < settings.second_person:
+                v2, _ = poser(extra.vertices[b], extra.bone_heads[b], other_rng)
+                side = room_rng.uniform(*settings.side_m) * room_rng.choice([-1.0, 1.0])
+                people = ((body_model.skin_mesh(v2), float(side)),)
+            room = compose_room(subject, cap.view.azimuth_deg, wall_behind_m=float(room_rng.uniform(*settings.wall_behind_m)),
+                                others=people)
+            sim = simulate_view(MeshScene(room.mesh, nthreads=1), cap.camera, cap.view, sensor=cap.sensor,
+                                seed=settings.seed, subject_id=index, keep_frame=True, target=room.subject_center)
+            depth = np.round(sim.frame.depth_m.astype(np.float64) * 1000.0) / 1000.0  # a millimetre depth image
+            truth = room.is_subject(sim.frame.triangle_id) & (depth > 0)
+            t = population.iloc[b]
+            row = {k: t[k] for k in ("subject_id", "population", "sex", "age_years", "stature_m", "mass_kg", "wbsa_m2")
+                   if k in t.index}
+            row.update(image=index, posture=posture, camera=cap.camera.name, azimuth_deg=cap.view.azimuth_deg,
+                       elevation_deg=cap.view.elevation_deg, distance_m=cap.view.distance_m,
+                       camera_height_m=cap.camera_height_m, fits=cap.fits, second_person=bool(people),
+                       subject_pixels=int(truth.sum()))
+            t0 = time.perf_counter()
+            try:
+                est = estimate(depth, cap.camera, model, segment=SegmentSettings(pick=settings.pick))
+            except WbsaError as exc:
+                row.update(error=str(exc), seconds=time.perf_counter() - t0)
+                rows.append(row)
+                continue
+            seconds = time.perf_counter() - t0
+            mask = est.mask
+            row.update(error="", seconds=seconds, est_wbsa_m2=est.wbsa_m2, est_lo_m2=est.wbsa_lo_m2,
+                       est_hi_m2=est.wbsa_hi_m2, est_azimuth_deg=est.view.azimuth_deg,
+                       est_azimuth_sd_deg=est.view.azimuth_sd_deg, est_elevation_deg=est.view.elevation_deg,
+                       est_stature_m=est.stature_m, est_vbsa_m2=est.vbsa_m2, flags=",".join(est.flags),
+                       seg_kept=float((mask & truth).sum() / max(truth.sum(), 1)),
+                       seg_included=float((mask & ~truth).sum() / max(mask.sum(), 1)),
+                       azimuth_error_deg=float(abs(est.view.azimuth_deg - fold_azimuth(cap.view.azimuth_deg))))
+            rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def run_room_tests(population: pd.DataFrame, settings: RoomTestSettings, model_path: str | None, *, workers: int = 1,
+                   chunk: int = 10, show_progress: bool | None = None) -> pd.DataFrame:
+    """:func:`room_capture_chunk` over a whole population (the second people are the population shifted by one)."""
+    from wbsa.progress import progress
+
+    others = population.iloc[np.roll(np.arange(len(population)), 1)].reset_index(drop=True)
+    starts = list(range(0, len(population), chunk))
+    args = [(population.iloc[s:s + chunk].reset_index(drop=True), others.iloc[s:s + chunk].reset_index(drop=True),
+             s, settings, model_path) for s in starts]
+    parts: dict[int, pd.DataFrame] = {}
+    bar = progress(total=len(population), desc="test captures", unit="image", enabled=show_progress)
+    if workers > 1 and len(args) > 1:
+        from wbsa.parallel import dask_client, map_unordered
+
+        with dask_client(min(workers, len(args))) as client:
+            for i, part in map_unordered(client, room_capture_chunk, args, tag="estimator-test"):
+                parts[i] = part
+                bar.update(len(part))
+    else:
+        for i, a in enumerate(args):
+            parts[i] = room_capture_chunk(*a)
+            bar.update(len(parts[i]))
+    bar.close()
+    return pd.concat([parts[i] for i in range(len(args))], ignore_index=True)

@@ -1,0 +1,232 @@
+"""Train an estimator model on virtual captures: fit on some subjects, calibrate the interval on others.
+
+1. A population: random bodies (ages uniform in years) and survey-matched bodies (NHANES people).
+2. Subjects are split: ``1 − calibration_fraction`` fit the models, the rest only calibrate the interval.
+3. Every subject is rendered from ``views_per_subject`` random captures in random postures
+   (:func:`~wbsa.estimation.renders.render_samples`) and measured by the estimator's own code.
+4. The view model is fitted; the WBSA model is fitted on *out-of-fold* view estimates, so it learns with
+   the view errors it will meet; its spread model on its own out-of-fold residuals.
+5. The calibration subjects go through the finished models; their scores set the interval.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field, replace
+
+import numpy as np
+import pandas as pd
+
+from wbsa.errors import WbsaError
+from wbsa.estimation.capture import CaptureSettings
+from wbsa.estimation.model import RANGE_KEYS, EstimatorModel, design, spread_design, tree_features
+from wbsa.estimation.renders import RenderSettings, Samples, render_samples
+from wbsa.estimation.view import ViewModel, fold_azimuth
+
+#: Columns of :meth:`SubjectMeasures.features` the model reads (``m_`` prefixed in sample tables).
+FEATURES = ("vbsa_m2", "stature_m", "silhouette_m2", "width_m", "thickness_m", "distance_m", "elevation_deg",
+            "elevation_axis_deg", "pitch_m", "n_pixels")
+_VIEW_DIMS = 160  # view descriptor length; the shape bands follow it in Samples.descriptors
+
+
+@dataclass(frozen=True)
+class TrainSettings:
+    """What the default model is trained on (see the module doc).
+
+    Attributes
+    ----------
+    n_random, n_survey : int
+        Random and survey-matched subjects.
+    views_per_subject : int
+    calibration_fraction : float
+        Share of subjects kept for the interval's calibration (never fitted on).
+    age_years : (float, float)
+        Ages of the random subjects, uniform in years.
+    capture : CaptureSettings
+    postures : tuple of str or None
+    folds : int
+        Folds of the out-of-fold view estimates and residuals.
+    seed : int
+    """
+
+    n_random: int = 330
+    n_survey: int = 120
+    views_per_subject: int = 4
+    calibration_fraction: float = 0.25
+    age_years: tuple[float, float] = (3.0, 80.0)
+    capture: CaptureSettings = field(default_factory=CaptureSettings)
+    postures: tuple[str, ...] | None = None
+    folds: int = 3
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        if self.n_random < 0 or self.n_survey < 0 or self.n_random + self.n_survey < 8:
+            raise WbsaError("n_random + n_survey must be at least 8 subjects")
+        if not 0.05 <= self.calibration_fraction <= 0.5:
+            raise WbsaError(f"calibration_fraction {self.calibration_fraction} must lie in [0.05, 0.5]")
+        if self.views_per_subject < 1 or self.folds < 2:
+            raise WbsaError("views_per_subject must be >= 1 and folds >= 2")
+
+
+def training_population(settings: TrainSettings, show_progress: bool | None = None) -> pd.DataFrame:
+    """Random and survey-matched subjects with their true WBSA (``population`` column: random or survey)."""
+    from wbsa.bodies.random_population import RandomPopulationSettings, sample_random_parameters
+    from wbsa.bodies.table import measure_population
+
+    parts = []
+    if settings.n_random:
+        params = sample_random_parameters(RandomPopulationSettings(n=settings.n_random, seed=settings.seed,
+                                                                   age_years=settings.age_years, age_sampling="years"))
+        parts.append(measure_population(params, show_progress=show_progress).assign(population="random"))
+    if settings.n_survey:
+        import warnings
+
+        from wbsa.bodies.survey import build_survey_population
+
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # unmatched people are still people; their truth is their body
+            parts.append(build_survey_population(settings.n_survey, seed=settings.seed + 1,
+                                                 show_progress=show_progress).assign(population="survey"))
+    pop = pd.concat(parts, ignore_index=True)
+    pop["subject_id"] = np.arange(len(pop))
+    return pop
+
+
+def _columns(table: pd.DataFrame) -> dict[str, np.ndarray]:
+    return {k: table[f"m_{k}"].to_numpy(dtype=np.float64) for k in FEATURES}
+
+
+def _folds(table: pd.DataFrame, folds: int, seed: int) -> np.ndarray:
+    """(n,) fold of every sample, whole subjects per fold."""
+    subjects = table["subject_id"].to_numpy()
+    perm = np.random.default_rng(seed).permutation(np.unique(subjects))
+    fold_of = dict(zip(perm.tolist(), (np.arange(len(perm)) % folds).tolist()))
+    return np.array([fold_of[s] for s in subjects.tolist()])
+
+
+def _oof_view(samples: Samples, folds: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """Out-of-fold ψ̂ and its spread for every sample (folds by subject)."""
+    k = _folds(samples.table, folds, seed)
+    psi, sd = np.zeros(len(k)), np.zeros(len(k))
+    az = samples.table["azimuth_deg"].to_numpy()
+    for f in range(folds):
+        model = ViewModel.fit(samples.descriptors[k != f, :_VIEW_DIMS], az[k != f], seed=seed)
+        psi[k == f], sd[k == f], _ = model.predict(samples.descriptors[k == f, :_VIEW_DIMS])
+    return psi, sd
+
+
+def fit_wbsa(table: pd.DataFrame, shape: np.ndarray, psi: np.ndarray, psi_sd: np.ndarray, *, seed: int = 0,
+             alpha: float = 1e-3) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, object]:
+    """Ridge on :func:`design` and residual trees; returns (mean, scale, coef, intercept, trees)."""
+    from sklearn.ensemble import HistGradientBoostingRegressor
+    from sklearn.linear_model import Ridge
+
+    from wbsa.estimation.trees import TreeEnsemble
+
+    feats = _columns(table)
+    el = feats["elevation_deg"]
+    y = np.log(table["wbsa_m2"].to_numpy(dtype=np.float64))
+    X = design(feats, psi, el)
+    mean, scale = X.mean(axis=0), X.std(axis=0)
+    scale[scale == 0] = 1.0
+    ridge = Ridge(alpha=alpha).fit((X - mean) / scale, y)
+    resid = y - ridge.predict((X - mean) / scale)
+    trees = HistGradientBoostingRegressor(max_iter=200, learning_rate=0.05, max_leaf_nodes=15, min_samples_leaf=20,
+                                          l2_regularization=1.0, random_state=seed, early_stopping=False)
+    trees.fit(tree_features(feats, shape, psi, psi_sd, el), resid)
+    return mean, scale, ridge.coef_.astype(np.float64), float(ridge.intercept_), TreeEnsemble.from_sklearn(trees)
+
+
+def train_model(settings: TrainSettings = TrainSettings(), *, workers: int = 1, show_progress: bool | None = None,
+                samples: tuple[Samples, Samples] | None = None) -> EstimatorModel:
+    """Train an estimator model (see the module doc).
+
+    Parameters
+    ----------
+    settings : TrainSettings
+    workers : int
+        Local worker processes for the renders (the model does not depend on it).
+    samples : (Samples, Samples), optional
+        Already rendered (fit, calibration) samples; skips steps 1–3.
+
+    Returns
+    -------
+    EstimatorModel
+        ``meta`` holds the settings, the training ranges and held-out calibration metrics.
+    """
+    if samples is None:
+        pop = training_population(settings, show_progress)
+        rng = np.random.default_rng(settings.seed)
+        calib = rng.random(len(pop)) < settings.calibration_fraction
+        render = RenderSettings(views_per_subject=settings.views_per_subject, capture=settings.capture,
+                                postures=settings.postures, seed=settings.seed)
+        fit_s = render_samples(pop[~calib].reset_index(drop=True), render, workers=workers,
+                               show_progress=show_progress)
+        cal_s = render_samples(pop[calib].reset_index(drop=True), replace(render, seed=settings.seed + 7919),
+                               workers=workers, show_progress=show_progress)
+    else:
+        fit_s, cal_s = samples
+    fit_s, cal_s = (_usable(s) for s in (fit_s, cal_s))
+    if len(fit_s) < 20 or len(cal_s) < 20:
+        raise WbsaError(f"too few usable renders to train ({len(fit_s)} fit, {len(cal_s)} calibration); "
+                        "use more subjects")
+    fit_t = fit_s.table
+    psi_oof, sd_oof = _oof_view(fit_s, settings.folds, settings.seed)
+    true_psi = fold_azimuth(fit_t["azimuth_deg"].to_numpy())
+    axis_sd = float(np.sqrt(np.mean((np.minimum(psi_oof, 180 - psi_oof) - np.minimum(true_psi, 180 - true_psi)) ** 2)))
+    el_sd = {"floor": _rms(fit_t["m_elevation_deg"] - fit_t["elevation_deg"]),
+             "axis": _rms(fit_t["m_elevation_axis_deg"] - fit_t["elevation_deg"])}
+    view = ViewModel.fit(fit_s.descriptors[:, :_VIEW_DIMS], fit_t["azimuth_deg"].to_numpy(), seed=settings.seed,
+                         axis_sd_deg=axis_sd, elevation_sd_deg=el_sd)
+    shape = fit_s.descriptors[:, _VIEW_DIMS:]
+    mean, scale, coef, intercept, trees = fit_wbsa(fit_t, shape, psi_oof, sd_oof, seed=settings.seed)
+    spread = _fit_spread(fit_s, psi_oof, sd_oof, settings)
+    z = spread_design(psi_oof, sd_oof, _columns(fit_t)) @ spread
+    model = EstimatorModel(view, mean, scale, coef, intercept, trees, spread, np.array([z.min(), z.max()]),
+                           np.zeros(1), {})
+    # calibration: held-out subjects through the finished models
+    cal_t = cal_s.table
+    psi_c, sd_c, _ = view.predict(cal_s.descriptors[:, :_VIEW_DIMS])
+    feats_c = _columns(cal_t)
+    mu = model.log_wbsa(feats_c, cal_s.descriptors[:, _VIEW_DIMS:], psi_c, sd_c, feats_c["elevation_deg"])
+    resid = np.log(cal_t["wbsa_m2"].to_numpy()) - mu
+    model.scores = np.sort(np.abs(resid) / model.spread(feats_c, psi_c, sd_c))
+    err = 100 * (np.exp(-resid) - 1)
+    az_err = np.abs(psi_c - fold_azimuth(cal_t["azimuth_deg"].to_numpy()))
+    feats_f = _columns(fit_t)
+    model.meta = {
+        "name": "estimator", "settings": asdict(settings),
+        "ranges": {k: [float(np.min(feats_f[k])), float(np.max(feats_f[k]))] for k in RANGE_KEYS},
+        "n_fit": len(fit_s), "n_calibration": len(cal_s),
+        "calibration": {"wbsa_mape_pct": float(np.mean(np.abs(err))), "wbsa_bias_pct": float(np.mean(err)),
+                        "azimuth_error_median_deg": float(np.median(az_err)),
+                        "azimuth_error_p95_deg": float(np.percentile(az_err, 95))},
+    }
+    return model
+
+
+def _usable(s: Samples) -> Samples:
+    ok = s.table["m_ok"].to_numpy(dtype=bool)
+    return Samples(s.table[ok].reset_index(drop=True), s.descriptors[ok])
+
+
+def _rms(x) -> float:
+    return float(np.sqrt(np.mean(np.square(np.asarray(x, dtype=np.float64)))))
+
+
+def _fit_spread(samples: Samples, psi: np.ndarray, psi_sd: np.ndarray, settings: TrainSettings) -> np.ndarray:
+    """Coefficients of log s(x) from out-of-fold absolute log residuals of the WBSA model."""
+    t = samples.table
+    k = _folds(t, settings.folds, settings.seed + 1)
+    shape = samples.descriptors[:, _VIEW_DIMS:]
+    resid = np.zeros(len(t))
+    for f in range(settings.folds):
+        tr, te = k != f, k == f
+        mean, scale, coef, icpt, trees = fit_wbsa(t[tr], shape[tr], psi[tr], psi_sd[tr], seed=settings.seed)
+        m = EstimatorModel(None, mean, scale, coef, icpt, trees, np.zeros(5), np.zeros(2), np.zeros(1))  # type: ignore[arg-type]
+        feats = _columns(t[te])
+        resid[te] = np.log(t["wbsa_m2"].to_numpy()[te]) - m.log_wbsa(feats, shape[te], psi[te], psi_sd[te],
+                                                                      feats["elevation_deg"])
+    Z = spread_design(psi, psi_sd, _columns(t))
+    target = np.log(np.maximum(np.abs(resid), 1e-4))
+    coef, *_ = np.linalg.lstsq(Z, target, rcond=None)
+    return coef

@@ -1,0 +1,96 @@
+"""Gradient-boosted trees as plain arrays: fitted with scikit-learn, stored without pickle, evaluated in numpy.
+
+A :class:`TreeEnsemble` holds every tree of a fitted ``HistGradientBoostingRegressor`` (or a binary
+``HistGradientBoostingClassifier``) as concatenated node arrays, so a model file is numbers only (safe to
+load from anywhere) and prediction needs no scikit-learn.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+_FIELDS = ("feature", "threshold", "left", "right", "leaf", "missing_left", "value")
+
+
+@dataclass(frozen=True)
+class TreeEnsemble:
+    """Trees of a gradient-boosting model.
+
+    Attributes
+    ----------
+    feature : (m,) int64
+        Split feature of each node (all trees concatenated).
+    threshold : (m,) float64
+        Go left where ``x[feature] <= threshold``.
+    left, right : (m,) int64
+        Children, as indices into the concatenated arrays.
+    leaf : (m,) bool
+    missing_left : (m,) bool
+        Where NaN goes.
+    value : (m,) float64
+        Leaf values (summed over trees).
+    roots : (t,) int64
+        Root node of each tree.
+    baseline : float
+        Raw prediction before the trees.
+    """
+
+    feature: np.ndarray
+    threshold: np.ndarray
+    left: np.ndarray
+    right: np.ndarray
+    leaf: np.ndarray
+    missing_left: np.ndarray
+    value: np.ndarray
+    roots: np.ndarray
+    baseline: float
+
+    @classmethod
+    def from_sklearn(cls, model) -> "TreeEnsemble":
+        """From a fitted ``HistGradientBoostingRegressor`` or binary ``HistGradientBoostingClassifier``."""
+        parts, roots, offset = [], [], 0
+        for iteration in model._predictors:
+            if len(iteration) != 1:
+                raise ValueError("only single-output boosting models can be stored")
+            nodes = iteration[0].nodes
+            if np.any(nodes["is_categorical"]):
+                raise ValueError("categorical splits are not supported")
+            parts.append((nodes["feature_idx"].astype(np.int64), nodes["num_threshold"].astype(np.float64),
+                          nodes["left"].astype(np.int64) + offset, nodes["right"].astype(np.int64) + offset,
+                          nodes["is_leaf"].astype(bool), nodes["missing_go_to_left"].astype(bool),
+                          nodes["value"].astype(np.float64)))
+            roots.append(offset)
+            offset += len(nodes)
+        arrays = [np.concatenate([p[i] for p in parts]) for i in range(7)]
+        return cls(*arrays, roots=np.asarray(roots, dtype=np.int64),
+                   baseline=float(np.ravel(model._baseline_prediction)[0]))
+
+    def predict_raw(self, X: np.ndarray) -> np.ndarray:
+        """(n,) float64 raw prediction (a regressor's value; a classifier's log-odds) of (n, d) features."""
+        X = np.asarray(X, dtype=np.float64)
+        n = X.shape[0]
+        node = np.broadcast_to(self.roots, (n, len(self.roots))).copy()
+        rows = np.arange(n)[:, None]
+        for _ in range(64):
+            leaf = self.leaf[node]
+            if leaf.all():
+                break
+            x = X[rows, self.feature[node]]
+            go_left = np.where(np.isnan(x), self.missing_left[node], x <= self.threshold[node])
+            node = np.where(leaf, node, np.where(go_left, self.left[node], self.right[node]))
+        return self.baseline + self.value[node].sum(axis=1)
+
+    def to_arrays(self, prefix: str) -> dict[str, np.ndarray]:
+        """The ensemble as named arrays (for ``numpy.savez``)."""
+        out = {f"{prefix}{f}": getattr(self, f) for f in _FIELDS}
+        out[f"{prefix}roots"] = self.roots
+        out[f"{prefix}baseline"] = np.array([self.baseline])
+        return out
+
+    @classmethod
+    def from_arrays(cls, arrays, prefix: str) -> "TreeEnsemble":
+        """Inverse of :meth:`to_arrays`."""
+        return cls(*(np.asarray(arrays[f"{prefix}{f}"]) for f in _FIELDS), roots=np.asarray(arrays[f"{prefix}roots"]),
+                   baseline=float(np.asarray(arrays[f"{prefix}baseline"])[0]))

@@ -1,0 +1,117 @@
+"""The view from the image: elevation from the floor (or the body's axis), azimuth learned from renders.
+
+The elevation is geometry: the angle of the camera above the horizontal through the subject's centre, the
+horizontal being the floor (:func:`wbsa.estimation.measure.measure_subject`; the body's long axis when no
+floor is seen). The azimuth is learned: bodies are left/right symmetric, so θ and −θ are one view and the
+estimator returns ψ = |θ| in [0, 180]. Two boosted-tree models read the view descriptor (depth and width
+profiles over height, unchanged by a mirror image): one the angle from the front–back axis,
+ψ' = min(ψ, 180 − ψ) in [0, 90], the other the probability that the camera is in front (ψ < 90).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from wbsa.estimation.trees import TreeEnsemble
+
+#: Elevation uncertainty (standard deviation, degrees) with and without a floor; measured on training
+#: renders when a model is fitted and stored with it, these are only the defaults.
+ELEVATION_SD_DEG = {"floor": 1.5, "axis": 3.0}
+
+
+def fold_azimuth(azimuth_deg) -> np.ndarray:
+    """Mirror-equivalent azimuth ψ = |θ| in [0, 180] (θ and −θ are the same view of a symmetric body)."""
+    return np.abs((np.asarray(azimuth_deg, dtype=np.float64) + 180.0) % 360.0 - 180.0)
+
+
+def azimuth_error_deg(estimate_deg, truth_deg) -> np.ndarray:
+    """Mirror-equivalent azimuth error |ψ̂ − ψ| in degrees (0–180)."""
+    return np.abs(fold_azimuth(estimate_deg) - fold_azimuth(truth_deg))
+
+
+@dataclass(frozen=True)
+class ViewEstimate:
+    """Estimated view, paper convention, with standard deviations (degrees)."""
+
+    azimuth_deg: float
+    azimuth_sd_deg: float
+    elevation_deg: float
+    elevation_sd_deg: float
+    p_front: float
+
+    def to_dict(self) -> dict:
+        """JSON-ready fields."""
+        return {k: round(float(getattr(self, k)), 3) for k in ("azimuth_deg", "azimuth_sd_deg", "elevation_deg",
+                                                                "elevation_sd_deg", "p_front")}
+
+
+@dataclass(frozen=True)
+class ViewModel:
+    """Azimuth from a view descriptor.
+
+    Attributes
+    ----------
+    axis : TreeEnsemble
+        ψ' (degrees from the front–back axis, 0–90).
+    front : TreeEnsemble
+        Log-odds that the camera is in front of the subject.
+    axis_sd_deg : float
+        Standard deviation of ψ' on held-out renders.
+    elevation_sd_deg : dict
+        ``{"floor": ..., "axis": ...}`` measured on the training renders.
+    """
+
+    axis: TreeEnsemble
+    front: TreeEnsemble
+    axis_sd_deg: float
+    elevation_sd_deg: dict
+
+    @classmethod
+    def fit(cls, descriptors: np.ndarray, azimuth_deg: np.ndarray, *, seed: int = 0, max_iter: int = 150,
+            axis_sd_deg: float | None = None, elevation_sd_deg: dict | None = None) -> "ViewModel":
+        """Fit on renders' view descriptors (n, d) and true azimuths (n,).
+
+        ``axis_sd_deg`` should come from held-out renders; None takes the (optimistic) training spread.
+        """
+        from sklearn.ensemble import HistGradientBoostingClassifier, HistGradientBoostingRegressor
+
+        psi = fold_azimuth(azimuth_deg)
+        axis_deg = np.minimum(psi, 180.0 - psi)
+        common = dict(max_iter=max_iter, learning_rate=0.1, max_leaf_nodes=31, random_state=seed,
+                      early_stopping=False)
+        axis = HistGradientBoostingRegressor(**common).fit(descriptors, axis_deg)
+        front = HistGradientBoostingClassifier(**common).fit(descriptors, psi < 90.0)
+        if axis_sd_deg is None:
+            axis_sd_deg = float(np.sqrt(np.mean((axis.predict(descriptors) - axis_deg) ** 2)))
+        return cls(TreeEnsemble.from_sklearn(axis), TreeEnsemble.from_sklearn(front), float(axis_sd_deg),
+                   dict(elevation_sd_deg or ELEVATION_SD_DEG))
+
+    def predict(self, descriptors: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """ψ̂ (n,), its standard deviation (n,) and P(front) (n,) of view descriptors (n, d).
+
+        The standard deviation is that of the two-point mixture (ψ' with probability P, 180 − ψ' with
+        1 − P) widened by the spread of ψ'.
+        """
+        X = np.atleast_2d(np.asarray(descriptors, dtype=np.float64))
+        axis_deg = np.clip(self.axis.predict_raw(X), 0.0, 90.0)
+        p = 1.0 / (1.0 + np.exp(-self.front.predict_raw(X)))
+        psi = np.where(p >= 0.5, axis_deg, 180.0 - axis_deg)
+        flip = np.minimum(p, 1.0 - p)
+        sd = np.sqrt(self.axis_sd_deg**2 + flip * (1.0 - flip) * (180.0 - 2.0 * axis_deg) ** 2)
+        return psi, sd, p
+
+    def to_arrays(self) -> dict[str, np.ndarray]:
+        """Named arrays for a model file."""
+        out = {**self.axis.to_arrays("view_axis_"), **self.front.to_arrays("view_front_")}
+        out["view_axis_sd_deg"] = np.array([self.axis_sd_deg])
+        out["view_elevation_sd_deg"] = np.array([self.elevation_sd_deg["floor"], self.elevation_sd_deg["axis"]])
+        return out
+
+    @classmethod
+    def from_arrays(cls, arrays) -> "ViewModel":
+        """Inverse of :meth:`to_arrays`."""
+        el = np.asarray(arrays["view_elevation_sd_deg"], dtype=float)
+        return cls(TreeEnsemble.from_arrays(arrays, "view_axis_"), TreeEnsemble.from_arrays(arrays, "view_front_"),
+                   float(np.asarray(arrays["view_axis_sd_deg"])[0]), {"floor": float(el[0]), "axis": float(el[1])})

@@ -98,7 +98,7 @@ def bench(name: str, mesh, intrinsics, repeat: int, threads: int, backends: tupl
         "render(roi=True) -> DepthFrame": best_pass(lambda v: render(scene, k, poses[v]), views, repeat),
         "render(roi=False) -> DepthFrame": best_pass(lambda v: render(scene, k, poses[v], roi=False), views, repeat),
     }
-    from wbsa.camera.measure import measure_views
+    from wbsa.camera.backends import measure_views
 
     for backend in backends:  # all views in one call (the scan's unit: one body)
         measure_views(scene, k, views[:2], return_frames=False, backend=backend)  # compile / load kernels
@@ -162,7 +162,7 @@ def accuracy(name: str, mesh, intrinsics) -> None:
 def coarse_accuracy(intrinsics, n_samples: int = 1_000_000) -> None:
     """Coarse scenes (two triangles per box face) against the Monte Carlo answer, every check view."""
     from wbsa.camera import View
-    from wbsa.camera.measure import measure_views
+    from wbsa.camera.backends import measure_views
     from helpers.reference import (AXIS_VIEWS, EDGE_ON_VIEWS, OBLIQUE_VIEWS, coarse_scenes,
                                        monte_carlo_visible_area_m2, scene_mesh)
 

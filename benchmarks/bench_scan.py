@@ -115,7 +115,7 @@ def main() -> None:
     from wbsa.camera.backends import check_backend
     from wbsa.camera.backends.warp_backend import warp_module
     from wbsa.camera.intrinsics import resolve_camera
-    from wbsa.camera.measure import measure_views
+    from wbsa.camera.backends import measure_views
     from wbsa.camera.raycast import MeshScene
     from wbsa.camera.views import parse_views
     from wbsa.parallel import dask_client, default_workers
@@ -299,7 +299,7 @@ def _warm_worker(backends: tuple[str, ...]) -> None:
     import numpy as np
 
     from wbsa.camera import MeshScene, View, preset
-    from wbsa.camera.measure import measure_views
+    from wbsa.camera.backends import measure_views
     from helpers.shapes import icosphere
     from wbsa.scan.worker import body_model
 

@@ -10,7 +10,7 @@ pytest.importorskip("warp")
 
 from wbsa.camera import Intrinsics, MeshScene, View, measure_view, paper_views, pose_from_view, preset  # noqa: E402
 from wbsa.camera.backends import check_backend, get_backend, resolve_backend  # noqa: E402
-from wbsa.camera.measure import measure_views  # noqa: E402
+from wbsa.camera.backends import measure_views  # noqa: E402
 from helpers.reference import coarse_scenes, monte_carlo_visible_area_m2, scene_mesh  # noqa: E402
 from helpers.shapes import body_like, icosphere  # noqa: E402
 from wbsa.errors import WbsaError  # noqa: E402

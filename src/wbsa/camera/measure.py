@@ -66,32 +66,3 @@ def measure_view(scene: MeshScene, intrinsics: Intrinsics, view: View, target: n
         frame = hits.to_frame({"azimuth_deg": view.azimuth_deg, "elevation_deg": view.elevation_deg,
                                "distance_m": view.distance_m, "target_m": [float(x) for x in target]})
     return row, frame
-
-
-def measure_views(scene: MeshScene, intrinsics: Intrinsics, views, target: np.ndarray | None = None, *,
-                  backend: str = "open3d", return_frames: bool = True, grazing_cos: float = GRAZING_COS,
-                  grazing_split_px: float | None = GRAZING_SPLIT_PX) -> list[tuple[dict, DepthFrame | None]]:
-    """Measure several views of one scene with a ray-casting back end (:mod:`wbsa.camera.backends`).
-
-    Parameters
-    ----------
-    scene : MeshScene
-    intrinsics : Intrinsics
-    views : sequence of View
-    target : (3,) float, optional
-        Point the camera aims at; default the mesh's bounding-box centre.
-    backend : {'open3d', 'warp', 'auto'}
-        ``open3d`` is :func:`measure_view` view by view (the reference); ``warp`` measures the views in a
-        few compiled passes on a GPU or the CPU, with the same rows within float32 rounding.
-    return_frames, grazing_cos, grazing_split_px
-        As :func:`measure_view`.
-
-    Returns
-    -------
-    list of (row, frame)
-        One per view, in order, as :func:`measure_view` returns them.
-    """
-    from wbsa.camera.backends import get_backend
-
-    return get_backend(backend).measure_views(scene, intrinsics, list(views), target, return_frames=return_frames,
-                                              grazing_cos=grazing_cos, grazing_split_px=grazing_split_px)

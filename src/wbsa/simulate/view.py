@@ -106,7 +106,7 @@ def simulate_views(scene: MeshScene, camera: Intrinsics, views: Sequence[View], 
     list of SimulatedView
         One per view, in order.
     """
-    from wbsa.camera.measure import measure_views
+    from wbsa.camera.backends import measure_views
     from wbsa.core.limits import check_seed
 
     check_seed(seed, "the sensor seed")

@@ -19,6 +19,7 @@ from __future__ import annotations
 from functools import lru_cache
 from typing import TYPE_CHECKING, Protocol
 
+from wbsa.camera.area import GRAZING_COS, GRAZING_SPLIT_PX
 from wbsa.errors import WbsaError
 from wbsa.typing import RAYCAST_BACKENDS, RaycastBackend
 
@@ -89,4 +90,32 @@ def get_backend(name: str = DEFAULT_BACKEND) -> Backend:
 
 
 __all__ = ["BACKENDS", "Backend", "BackendName", "DEFAULT_BACKEND", "check_backend", "cuda_available",
-           "get_backend", "resolve_backend"]
+           "get_backend", "measure_views", "resolve_backend"]
+
+
+def measure_views(scene: MeshScene, intrinsics: Intrinsics, views, target: np.ndarray | None = None, *,
+                  backend: str = DEFAULT_BACKEND, return_frames: bool = True,
+                  grazing_cos: float = GRAZING_COS,
+                  grazing_split_px: float | None = GRAZING_SPLIT_PX) -> list[tuple[dict, DepthFrame | None]]:
+    """Measure several views of one scene with a ray-casting back end (:mod:`wbsa.camera.backends`).
+
+    Parameters
+    ----------
+    scene : MeshScene
+    intrinsics : Intrinsics
+    views : sequence of View
+    target : (3,) float, optional
+        Point the camera aims at; default the mesh's bounding-box centre.
+    backend : {'open3d', 'warp', 'auto'}
+        ``open3d`` is :func:`wbsa.camera.measure_view` view by view (the reference); ``warp`` measures the views in a
+        few compiled passes on a GPU or the CPU, with the same rows within float32 rounding.
+    return_frames, grazing_cos, grazing_split_px
+        As :func:`wbsa.camera.measure_view`.
+
+    Returns
+    -------
+    list of (row, frame)
+        One per view, in order, as :func:`measure_view` returns them.
+    """
+    return get_backend(backend).measure_views(scene, intrinsics, list(views), target, return_frames=return_frames,
+                                              grazing_cos=grazing_cos, grazing_split_px=grazing_split_px)

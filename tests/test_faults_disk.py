@@ -118,6 +118,7 @@ def commands(i: Path, out: Path) -> dict[str, list[str]]:
         "report": ["report", str(i / "fit"), "--population", str(i / "spop.parquet"), "--scan",
                    str(i / "sscan.parquet"), "--out", str(out / "r.html")],
         "estimate": ["estimate", str(i / "view" / "depth.png"), "--model", str(i / "fit" / "model.json"),
+                     "--camera", "kinect-v1", "--azimuth", "0", "--elevation", "0", "--no-segment",
                      "--out-mesh", str(out / "m.ply")],
         "run": ["run", "--config", str(i / "study.toml"), "--out", str(out / "study")],
     }

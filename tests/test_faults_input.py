@@ -134,8 +134,8 @@ def test_model_files_with_nonsense_numbers_are_refused_on_load(tables, tmp_path,
         WbsaModel.load(path)
     assert fragment in str(info.value) and "\n" not in str(info.value)
     png = tmp_path / "depth.png"
-    _png_16bit(png, 64, 48, 2500)
-    code, _, err = run_cli("estimate", png, "--model", path, "--no-segment")
+    _png_16bit(png, 640, 480, 2500)
+    code, _, err = run_cli("estimate", png, "--model", path, "--camera", "kinect-v1", "--azimuth", "0", "--no-segment")
     assert_one_line_error(code, err, fragment)
 
 

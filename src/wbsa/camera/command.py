@@ -132,7 +132,7 @@ def run_view(args: argparse.Namespace) -> int:
     from wbsa.population.export import write_mesh
     from wbsa.surface import reconstruct, recon_column
     from wbsa.camera.intrinsics import Intrinsics
-    from wbsa.camera.measure import measure_views
+    from wbsa.camera.measure import iter_measure_views
     from wbsa.camera.scene import MeshScene
     from wbsa.camera.target import load_target
     from wbsa.io import write_json, write_table
@@ -153,8 +153,8 @@ def run_view(args: argparse.Namespace) -> int:
     out = Path(args.out) if args.out else None
     rows = []
     need_frame = out is not None or not sensor.is_ideal or bool(methods)
-    measured = measure_views(scene, intrinsics, views, backend=getattr(args, "backend", "open3d"),
-                             return_frames=need_frame)
+    measured = iter_measure_views(scene, intrinsics, views, backend=getattr(args, "backend", "open3d"),
+                                  return_frames=need_frame)
     for view, (row, frame) in zip(views, measured):
         row = {"mesh": source, "mesh_area_m2": float(scene.triangle_areas_m2.sum()), **row}
         if not sensor.is_ideal:

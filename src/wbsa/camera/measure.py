@@ -95,3 +95,22 @@ def measure_views(scene: MeshScene, intrinsics: Intrinsics, views, target: np.nd
 
     return get_backend(backend).measure_views(scene, intrinsics, list(views), target, return_frames=return_frames,
                                               grazing_cos=grazing_cos, grazing_split_px=grazing_split_px)
+
+
+#: Views per :func:`measure_views` call in :func:`iter_measure_views` when frames are kept (a 640 × 480
+#: frame takes about 11 MB).
+FRAMES_PER_CALL = 8
+
+
+def iter_measure_views(scene: MeshScene, intrinsics: Intrinsics, views, target: np.ndarray | None = None, *,
+                       backend: str = "open3d", return_frames: bool = True):
+    """:func:`measure_views`, one ``(row, frame)`` at a time, in view order.
+
+    Without frames all views go to the back end in one call; with frames, ``FRAMES_PER_CALL`` views per
+    call, so that a long view list does not hold all its frames at once.
+    """
+    views = list(views)
+    step = FRAMES_PER_CALL if return_frames else max(1, len(views))
+    for start in range(0, len(views), step):
+        yield from measure_views(scene, intrinsics, views[start:start + step], target, backend=backend,
+                                 return_frames=return_frames)

@@ -12,7 +12,7 @@ import hashlib
 import json
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 
@@ -65,7 +65,7 @@ class ScanSettings:
     reconstruction: ReconstructionSettings | None = None
     seed: int = 0
     chunk_size: int = DEFAULT_CHUNK_SIZE
-    backend: str = "open3d"
+    backend: Literal["auto", "open3d", "warp"] = "open3d"
 
     def __post_init__(self) -> None:
         from wbsa.camera.backends import resolve_backend

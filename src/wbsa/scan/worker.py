@@ -114,7 +114,7 @@ def scan_subject(mesh, subject_id: int, settings: ScanSettings, *, nthreads: int
         a sensor, else from the ideal frame).
     """
     from wbsa.camera import MeshScene
-    from wbsa.camera.measure import measure_views
+    from wbsa.camera.measure import iter_measure_views
 
     scene = MeshScene(mesh, nthreads=nthreads)
     sensor, methods = settings.sensor, settings.reconstruct
@@ -125,8 +125,8 @@ def scan_subject(mesh, subject_id: int, settings: ScanSettings, *, nthreads: int
         from wbsa.surface import recon_column, vbsa_recon_m2
 
     rows = []
-    measured = measure_views(scene, settings.camera, settings.views, scene.center, backend=settings.backend,
-                             return_frames=need_frame)
+    measured = iter_measure_views(scene, settings.camera, settings.views, scene.center, backend=settings.backend,
+                                  return_frames=need_frame)
     for view, (row, frame) in zip(settings.views, measured):
         row = {"subject_id": subject_id, **row}
         if sensor is not None:

@@ -79,9 +79,13 @@ def get_backend(name: str = DEFAULT_BACKEND) -> Backend:
     """The (process-wide) back end object of ``name`` (``auto`` resolved first)."""
     name = resolve_backend(name)
     if name == "warp":
-        from wbsa.camera.backends.warp_backend import WarpBackend
+        try:
+            from wbsa.camera.backends.warp_backend import WarpBackend
 
-        return WarpBackend()
+            return WarpBackend()
+        except ImportError as exc:
+            raise WbsaError(f"the warp backend needs NVIDIA Warp ({exc}); pip install warp-lang, "
+                            "or use backend open3d") from None
     from wbsa.camera.backends.open3d_backend import Open3DBackend
 
     return Open3DBackend()

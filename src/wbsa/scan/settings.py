@@ -165,7 +165,7 @@ class ScanJob:
     sensor: SensorSettings | None = None
     reconstruction: ReconstructionSettings | None = None
     seed: int = 0
-    backend: str = "open3d"
+    backend: RaycastBackend = "open3d"
 
     def __post_init__(self) -> None:
         from wbsa.camera.backends import resolve_backend

@@ -106,13 +106,13 @@ def simulate_views(scene: MeshScene, camera: Intrinsics, views: Sequence[View], 
     list of SimulatedView
         One per view, in order.
     """
-    from wbsa.camera.backends import measure_views
+    from wbsa.camera.backends import iter_measure_views
     from wbsa.core.limits import check_seed
 
     check_seed(seed, "the sensor seed")
     need_frame = keep_frame or sensor is not None or bool(reconstruct)
     target = scene.center if target is None else np.asarray(target, dtype=np.float64)
-    measured = measure_views(scene, camera, views, target, backend=backend, return_frames=need_frame)
+    measured = iter_measure_views(scene, camera, views, target, backend=backend, return_frames=need_frame)
     out = []
     for view, (row, frame) in zip(views, measured):
         if sensor is not None:

@@ -81,16 +81,20 @@ def get_backend(name: str = DEFAULT_BACKEND) -> Backend:
     """The (process-wide) back end object of ``name`` (``auto`` resolved first)."""
     name = resolve_backend(name)
     if name == "warp":
-        from wbsa.camera.backends.warp_backend import WarpBackend
+        try:
+            from wbsa.camera.backends.warp_backend import WarpBackend
 
-        return WarpBackend()
+            return WarpBackend()
+        except ImportError as exc:
+            raise WbsaError(f"the warp backend needs NVIDIA Warp ({exc}); pip install warp-lang, "
+                            "or use backend open3d") from None
     from wbsa.camera.backends.open3d_backend import Open3DBackend
 
     return Open3DBackend()
 
 
 __all__ = ["BACKENDS", "Backend", "BackendName", "DEFAULT_BACKEND", "check_backend", "cuda_available",
-           "get_backend", "measure_views", "resolve_backend"]
+           "get_backend", "iter_measure_views", "measure_views", "resolve_backend"]
 
 
 def measure_views(scene: MeshScene, intrinsics: Intrinsics, views, target: np.ndarray | None = None, *,
@@ -119,3 +123,22 @@ def measure_views(scene: MeshScene, intrinsics: Intrinsics, views, target: np.nd
     """
     return get_backend(backend).measure_views(scene, intrinsics, list(views), target, return_frames=return_frames,
                                               grazing_cos=grazing_cos, grazing_split_px=grazing_split_px)
+
+
+#: Views per :func:`measure_views` call in :func:`iter_measure_views` when frames are kept (a 640 × 480
+#: frame takes about 11 MB).
+FRAMES_PER_CALL = 8
+
+
+def iter_measure_views(scene: MeshScene, intrinsics: Intrinsics, views, target: np.ndarray | None = None, *,
+                       backend: str = DEFAULT_BACKEND, return_frames: bool = True):
+    """:func:`measure_views`, one ``(row, frame)`` at a time, in view order.
+
+    Without frames all views go to the back end in one call; with frames, ``FRAMES_PER_CALL`` views per
+    call, so that a long view list does not hold all its frames at once.
+    """
+    views = list(views)
+    step = FRAMES_PER_CALL if return_frames else max(1, len(views))
+    for start in range(0, len(views), step):
+        yield from measure_views(scene, intrinsics, views[start:start + step], target, backend=backend,
+                                 return_frames=return_frames)

@@ -112,20 +112,31 @@ N_VIEW_TERMS = 19
 
 
 @wp.func
-def facing(vt: wp.array2d(dtype=wp.float32), b: int, soa: wp.array2d(dtype=wp.float32), tri: int):
-    """(h, d) = (n · (C − c), max(|C − c|², 1e-30)) of a triangle, float32, operation for operation as
-    :func:`wbsa.camera.area.triangle_view_terms` (``soa``: the scene's per-triangle float32 columns); its
-    cos θ is h / √d (:func:`is_grazing`)."""
+def facing_height(vt: wp.array2d(dtype=wp.float32), b: int, soa: wp.array2d(dtype=wp.float32), tri: int):
+    """h = n · (C − c) of a triangle, float32, operation for operation as
+    :func:`wbsa.camera.area.triangle_view_terms` (``soa``: the scene's per-triangle float32 columns)."""
     h = vt[b, 0] * soa[0, tri]
     h = h + vt[b, 1] * soa[1, tri]
     h = h + vt[b, 2] * soa[2, tri]
-    h = h - soa[6, tri]
+    return h - soa[6, tri]
+
+
+@wp.func
+def facing_dist2(vt: wp.array2d(dtype=wp.float32), b: int, soa: wp.array2d(dtype=wp.float32), tri: int):
+    """d = max(|C − c|², 1e-30) of a triangle, float32, as :func:`wbsa.camera.area.triangle_view_terms`;
+    the triangle's cos θ is h / √d (:func:`below_grazing`)."""
     d = vt[b, 3] * soa[3, tri]
     d = d + vt[b, 4] * soa[4, tri]
     d = d + vt[b, 5] * soa[5, tri]
     d = d + soa[7, tri]
     d = d + vt[b, 6]
-    return h, wp.max(d, wp.float32(1.0e-30))
+    return wp.max(d, wp.float32(1.0e-30))
+
+
+@wp.func
+def facing(vt: wp.array2d(dtype=wp.float32), b: int, soa: wp.array2d(dtype=wp.float32), tri: int):
+    """(h, d) of a triangle (:func:`facing_height`, :func:`facing_dist2`)."""
+    return facing_height(vt, b, soa, tri), facing_dist2(vt, b, soa, tri)
 
 
 @wp.func
@@ -221,9 +232,10 @@ def raster_triangles(faces: wp.array(dtype=wp.vec3i), xyz: wp.array2d(dtype=wp.v
     enters through a hole, so back faces outside every hole's cap box (``boxes``) are not rasterized.
     """
     b, tri = wp.tid()
-    height, dist2 = facing(vt, b, soa, tri)
+    height = facing_height(vt, b, soa, tri)
     s = int(0)
-    if is_grazing(cam, height, dist2):
+    # (in a one-sided scene a back face is never grazing: its distance need not be computed)
+    if (cam.one_sided == 0 or height > wp.float32(0.0)) and is_grazing(cam, height, facing_dist2(vt, b, soa, tri)):
         s = 1
         if cam.split_px >= f64(0.0):  # as wbsa.camera.grazing.split_counts
             u, v, zc = project32(vt, b, wp.vec3(soa[3, tri], soa[4, tri], soa[5, tri]))

@@ -50,6 +50,9 @@ bench: $(STAMP)
 	$(VENV)/bin/python benchmarks/bench_reconstruction.py
 	$(VENV)/bin/python benchmarks/bench_fit.py 20000 65
 	$(VENV)/bin/python benchmarks/bench_survey_match.py --n 500 --seed 0
+	$(VENV)/bin/python benchmarks/bench_population_realism.py --n 300 --survey-n 100
+	$(VENV)/bin/python benchmarks/bench_paper_scale.py
+	$(VENV)/bin/python benchmarks/bench_estimate.py --subjects 300 --workers 2
 
 clean:
 	rm -rf $(VENV) build src/*.egg-info

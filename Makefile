@@ -41,6 +41,7 @@ bench: $(STAMP)
 	$(VENV)/bin/python benchmarks/bench_reconstruction.py
 	$(VENV)/bin/python benchmarks/bench_fit.py 20000 65
 	$(VENV)/bin/python benchmarks/bench_survey_match.py --n 500 --seed 0
+	$(VENV)/bin/python benchmarks/bench_paper_scale.py --subjects 60,240
 
 clean:
 	rm -rf $(VENV) build src/*.egg-info

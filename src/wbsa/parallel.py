@@ -104,6 +104,29 @@ def map_unordered(client: Any, fn: Callable[..., Any], args: Sequence[tuple], ta
         client.cancel(futures)
 
 
+
+def map_chunks(fn: Callable[..., Any], args: Sequence[tuple], *, workers: int, tag: str,
+               on_result: Callable[[Any], None] | None = None) -> list[Any]:
+    """``[fn(*a) for a in args]``, on a local dask cluster when ``workers`` > 1 and there are several chunks.
+
+    Results come back in ``args`` order whatever order the workers finish in; ``on_result`` (e.g. a progress
+    bar's update) is called with each result as it arrives.
+    """
+    results: dict[int, Any] = {}
+    if workers > 1 and len(args) > 1:
+        with dask_client(min(workers, len(args))) as client:
+            for i, result in map_unordered(client, fn, args, tag=tag):
+                results[i] = result
+                if on_result is not None:
+                    on_result(result)
+    else:
+        for i, a in enumerate(args):
+            results[i] = fn(*a)
+            if on_result is not None:
+                on_result(results[i])
+    return [results[i] for i in range(len(args))]
+
+
 _MALLOC_TUNED = False
 
 

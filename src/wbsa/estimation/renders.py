@@ -168,18 +168,12 @@ def render_samples(population: pd.DataFrame, settings: RenderSettings = RenderSe
     v = settings.views_per_subject
     starts = list(range(0, len(population), chunk_subjects))
     args = [(population.iloc[s:s + chunk_subjects].reset_index(drop=True), s * v, settings) for s in starts]
-    parts: dict[int, Samples] = {}
-    bar = progress(total=len(population) * v, desc="renders", unit="view", enabled=show_progress)
-    if workers > 1 and len(args) > 1:
-        from wbsa.parallel import dask_client, map_unordered
+    from wbsa.parallel import map_chunks
 
-        with dask_client(min(workers, len(args))) as client:
-            for i, part in map_unordered(client, render_chunk, args, tag="estimator-renders"):
-                parts[i] = part
-                bar.update(len(part))
-    else:
-        for i, a in enumerate(args):
-            parts[i] = render_chunk(*a)
-            bar.update(len(parts[i]))
-    bar.close()
-    return Samples.concat([parts[i] for i in range(len(args))])
+    bar = progress(total=len(population) * v, desc="renders", unit="view", enabled=show_progress)
+    try:
+        parts = map_chunks(render_chunk, args, workers=workers, tag="estimator-renders",
+                           on_result=lambda part: bar.update(len(part)))
+    finally:
+        bar.close()
+    return Samples.concat(parts)

@@ -125,18 +125,12 @@ def run_room_tests(population: pd.DataFrame, settings: RoomTestSettings, model_p
     starts = list(range(0, len(population), chunk))
     args = [(population.iloc[s:s + chunk].reset_index(drop=True), others.iloc[s:s + chunk].reset_index(drop=True),
              s, settings, model_path) for s in starts]
-    parts: dict[int, pd.DataFrame] = {}
-    bar = progress(total=len(population), desc="test captures", unit="image", enabled=show_progress)
-    if workers > 1 and len(args) > 1:
-        from wbsa.parallel import dask_client, map_unordered
+    from wbsa.parallel import map_chunks
 
-        with dask_client(min(workers, len(args))) as client:
-            for i, part in map_unordered(client, room_capture_chunk, args, tag="estimator-test"):
-                parts[i] = part
-                bar.update(len(part))
-    else:
-        for i, a in enumerate(args):
-            parts[i] = room_capture_chunk(*a)
-            bar.update(len(parts[i]))
-    bar.close()
-    return pd.concat([parts[i] for i in range(len(args))], ignore_index=True)
+    bar = progress(total=len(population), desc="test captures", unit="image", enabled=show_progress)
+    try:
+        parts = map_chunks(room_capture_chunk, args, workers=workers, tag="estimator-test",
+                           on_result=lambda part: bar.update(len(part)))
+    finally:
+        bar.close()
+    return pd.concat(parts, ignore_index=True)

@@ -106,7 +106,7 @@ class Intrinsics:
             raise WbsaError(f"resolution scale must be positive, got {factor!r}")
         w, h = round(self.width * factor), round(self.height * factor)
         if w < 1 or h < 1:
-            raise WbsaError(f"resolution scale {factor:g} leaves no pixels; use a larger --scale")
+            raise WbsaError(f"resolution scale {factor:g} leaves no pixels; use a larger scale")
         return replace(
             self, width=w, height=h, fx=self.fx * factor, fy=self.fy * factor,
             cx=(self.cx + 0.5) * factor - 0.5, cy=(self.cy + 0.5) * factor - 0.5, skew=self.skew * factor,

@@ -72,7 +72,7 @@ class View:
         except (TypeError, ValueError):
             raise WbsaError(f"camera distance must be a number of metres, got {self.distance_m!r}") from None
         if not (math.isfinite(d) and d > 0):
-            raise WbsaError(f"camera distance must be positive and finite, got {d:g} m; use e.g. --distance 4.3")
+            raise WbsaError(f"camera distance must be positive and finite, got {d:g} m; e.g. 4.3")
         object.__setattr__(self, "distance_m", d)
 
     @property
@@ -170,7 +170,7 @@ def parse_views(spec: str | None = None, *, azimuths: str | Sequence[float] | No
         For an unknown view name, a bad number, or a named grid combined with angle lists.
     """
     if spec is not None and (azimuths is not None or elevations is not None):
-        raise WbsaError("give either --views NAME or --azimuths/--elevations lists, not both")
+        raise WbsaError("give either a named view set or azimuth/elevation lists, not both")
     if spec is None:
         az = parse_angles(azimuths if azimuths is not None else "0", "azimuths")
         el = parse_angles(elevations if elevations is not None else "0", "elevations")
@@ -195,7 +195,7 @@ def parse_views(spec: str | None = None, *, azimuths: str | Sequence[float] | No
                 raise WbsaError(f"grid:STEP needs a number of degrees, got {match.group(2)!r}") from None
             views = grid_views(step, distance_m)
         else:
-            raise WbsaError(f"unknown view set {spec!r}; use one of {', '.join(VIEW_SPECS)} or --azimuths/--elevations")
+            raise WbsaError(f"unknown view set {spec!r}; use one of {', '.join(VIEW_SPECS)} or azimuth/elevation lists")
     seen: set[tuple[float, float]] = set()
     unique = []
     for v in views:

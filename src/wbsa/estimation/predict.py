@@ -74,8 +74,8 @@ def _view(model, measures, stated_azimuth: float | None) -> ViewEstimate:
     view_model = model.view if isinstance(model, EstimatorModel) else _cached_view_model()
     if view_model is None:
         if stated_azimuth is None:
-            raise WbsaError("a wbsa fit model needs the view: give --azimuth (and --elevation), or build the default "
-                            "model once (wbsa estimate without --model) so the azimuth can be estimated")
+            raise WbsaError("a wbsa fit model needs the view: give azimuth_deg (and elevation_deg), or build the default "
+                            "model once (estimate without a model) so the azimuth can be estimated")
         psi, sd, p = float("nan"), float("nan"), float("nan")
     else:
         psi, sd, p = (float(v[0]) for v in view_model.predict(measures.descriptor[None]))

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from wbsa.errors import WbsaError
+from wbsa.errors import WbsaError, check_field
 from wbsa.estimation.cloud import Plane, above_floor, ransac_plane
 from wbsa.estimation.clusters import MAX_FOOTPRINT_M, attach_low, footprint_m, merge_occluding
 
@@ -70,13 +70,14 @@ class SegmentSettings:
     seed: int = 0
 
     def __post_init__(self) -> None:
-        if not 0 <= self.min_depth_m < self.max_depth_m:
-            raise WbsaError(f"depth range {self.min_depth_m}–{self.max_depth_m} m is empty; "
-                            "give min_depth_m below max_depth_m")
-        if not self.voxel_m > 0 or not self.cluster_gap_m > 0:
-            raise WbsaError("voxel_m and cluster_gap_m must be positive lengths in metres")
-        if self.pick is not None and not (self.pick in PICKS or _is_pixel(self.pick)):
-            raise WbsaError(f"pick {self.pick!r} is unknown; use {', '.join(PICKS)} or an (x, y) pixel")
+        check_field(0 <= self.min_depth_m < self.max_depth_m, "min_depth_m",
+                    f"must be 0 or more and below max_depth_m (the depth range {self.min_depth_m}–"
+                    f"{self.max_depth_m} m is empty)")
+        check_field(self.voxel_m > 0, "voxel_m", f"must be a positive length in metres, got {self.voxel_m}")
+        check_field(self.cluster_gap_m > 0, "cluster_gap_m",
+                    f"must be a positive length in metres, got {self.cluster_gap_m}")
+        check_field(self.pick is None or self.pick in PICKS or _is_pixel(self.pick), "pick",
+                    f"must be one of {', '.join(PICKS)} or an (x, y) pixel, got {self.pick!r}")
 
 
 def _is_pixel(pick: object) -> bool:

@@ -50,8 +50,13 @@ def test_segmentation_keeps_a_wide_armed_tall_body_and_drops_the_room(room_view)
     seg = segment_subject(frame.depth_m, camera, SegmentSettings(pick="center"))
     kept = (seg.mask & truth).sum() / truth.sum()
     extra = (seg.mask & ~truth).sum() / seg.mask.sum()
-    assert kept > 0.97 and extra < 0.01, (kept, extra)
+    assert kept > 0.99 and extra < 0.01, (kept, extra)
     assert seg.floor is not None and len(seg.walls) >= 1
+    # the soles, within the floor's depth noise: a height threshold alone kept 59-64 % of them (seeds 4-6)
+    from wbsa.core.backproject import backproject_depth
+
+    soles = truth & (seg.floor.height(backproject_depth(frame.depth_m, camera)) < 0.05)
+    assert soles.sum() > 150 and (seg.mask & soles).sum() / soles.sum() > 0.7
     assert 1.8 < seg.subject.height_m < 2.0 and len(seg.others) == 1
 
 

@@ -28,6 +28,8 @@ from wbsa.estimation.clusters import MAX_FOOTPRINT_M, attach_low, footprint_m, m
 PICKS = ("nearest", "largest", "center")
 #: Height over the floor below which returns are not used to link objects (only to extend them).
 LOW_BAND_M = 0.10
+#: Subject returns this close to the floor mark the image columns where the soles are looked for.
+FEET_BAND_M = 0.12
 
 
 @dataclass(frozen=True)
@@ -248,25 +250,85 @@ def segment_subject(depth_m: np.ndarray, intrinsics, settings: SegmentSettings =
 
 def _grow_feet(mask: np.ndarray, pix: np.ndarray, points: np.ndarray, pixel_label: np.ndarray,
                floor: Plane | None, walls: list[Plane]) -> np.ndarray:
-    """Add the returns between the measures' floor cut and the floor's noise that touch the subject in the image.
+    """Add the lowest returns of the feet, hidden in the floor's noise, that touch the subject in the image.
 
-    The floor's own noise hides the lowest centimetres of the feet; the returns there that are above the
-    measures' cut (:func:`~wbsa.estimation.cloud.above_floor`) and 8-connected to the subject in the image are
-    the subject's (the floor's stray returns are too sparse to reach far).
+    The floor cut of the clustering (2.5 σ of the depth noise) hides the lowest centimetres of the feet.
+    Returns not in any object are added when 8-connected to the subject in the image and
+
+    * elsewhere: above the measures' floor cut (:func:`~wbsa.estimation.cloud.above_floor`) and the floor's
+      own noise; the floor's stray returns are too sparse to reach far;
+    * under the feet instead: down each foot's image column to where the floor takes over (:func:`_sole_pixels`).
+
+    The measures (:func:`~wbsa.estimation.measure.measure_subject`) cut the floor strip again, as in
+    training, so this changes the subject's mask, not the VBSA.
     """
     from scipy import ndimage
 
     if floor is None:
         return mask
-    cand = above_floor(points, floor) & (pixel_label < 0)
+    free = pixel_label < 0
     for wall in walls:
-        cand &= wall.height(points) > wall.tolerance(points)
+        free &= wall.height(points) > wall.tolerance(points)
+    under_feet, sole = _sole_pixels(mask, pix, points, floor)
+    # elsewhere, above the measures' cut and the floor's own measured noise (noisier cameras than the envelope)
+    clear = above_floor(points, floor) & (floor.height(points) > floor.tolerance(points))
+    cand = free & np.where(under_feet, sole & (floor.height(points) > 0.0), clear)
     grow = np.zeros(mask.size, dtype=bool)
     grow[pix[cand]] = True
     both = mask | grow.reshape(mask.shape)
     labels, _ = ndimage.label(both, structure=np.ones((3, 3), dtype=bool))
     touching = np.unique(labels[mask])
-    return np.isin(labels, touching[touching > 0])
+    out = np.isin(labels, touching[touching > 0])
+    return out
+
+
+def _sole_pixels(mask: np.ndarray, pix: np.ndarray, points: np.ndarray,
+                 floor: Plane) -> tuple[np.ndarray, np.ndarray]:
+    """(k,) bool returns under the feet, and (k,) bool those of them that are the soles'.
+
+    A foot column is an image column whose lowest subject return lies within :data:`FEET_BAND_M` of the
+    floor; the foot's range there is the median range of its three lowest subject returns. Going down the
+    column, the returns first continue the foot (range near the foot's) and then show the floor in front of
+    it (range near where the ray meets the floor). The row where one gives way to the other is where the
+    two models, scored over the whole column, fit best (a change point): one noisy return cannot move it
+    far, as a threshold on each return's height would.
+    """
+    _, w = mask.shape
+    rng = np.linalg.norm(points, axis=1)
+    height = floor.height(points)
+    rows, cols = np.divmod(pix, w)
+    none = np.zeros(len(pix), dtype=bool)
+    subject = np.flatnonzero(mask.ravel()[pix])
+    if len(subject) == 0:
+        return none, none
+    ray_down = -(points @ floor.normal) / np.maximum(rng, 1e-9)  # cosine between the ray and the floor's normal
+    t_floor = np.where(ray_down > 1e-6, -floor.offset / np.maximum(ray_down, 1e-6), np.inf)
+    sigma = Plane.unit_noise(points) * floor.noise_scale
+    by_col = np.lexsort((rows, cols))  # every return, by column then row
+    col_start = np.searchsorted(cols[by_col], np.arange(w + 1))
+    subject = subject[np.lexsort((-rows[subject], cols[subject]))]  # by column, lowest in the image first
+    starts = np.flatnonzero(np.r_[True, cols[subject][1:] != cols[subject][:-1]])
+    under, sole = none.copy(), none.copy()
+    for s0 in starts:
+        k = subject[s0]
+        if height[k] >= FEET_BAND_M:
+            continue
+        c = cols[k]
+        foot_range = float(np.median(rng[subject[s0:s0 + 3][cols[subject[s0:s0 + 3]] == c]]))
+        col = by_col[col_start[c]:col_start[c + 1]]
+        below = col[(rows[col] > rows[k]) & (height[col] < FEET_BAND_M)
+                    & (t_floor[col] > foot_range - 3.0 * sigma[col])]
+        if len(below) == 0:
+            continue
+        cap = (3.0 * sigma[below]) ** 2
+        foot_cost = np.minimum((rng[below] - foot_range) ** 2, cap)
+        floor_cost = np.minimum((rng[below] - t_floor[below]) ** 2, cap)
+        # cost of the split after j returns: the first j are the foot's, the rest the floor's
+        total = np.r_[0.0, np.cumsum(foot_cost)] + np.r_[np.cumsum(floor_cost[::-1])[::-1], 0.0]
+        j = int(np.argmin(total))
+        under[below] = True
+        sole[below[:j]] = True
+    return under, sole
 
 
 def _describe(pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarray, width: int,

@@ -42,7 +42,11 @@ class Estimate:
         Named warnings (see :data:`wbsa.estimation.checks.FLAGS`); empty when all checks passed.
     method, model, camera : str
     mask : (h, w) bool
-        The subject's pixels that were measured.
+        The subject's pixels (the segmentation: returns on the floor and walls excluded, the feet down to
+        the floor included).
+    measured_mask : (h, w) bool
+        The pixels measured: ``mask`` less the strip of the feet within the depth noise of the floor,
+        which the measures cut in training too (the VBSA is that of these pixels).
     surface : wbsa.core.TriangleMesh
         The reconstructed visible surface (camera frame, metres).
     """
@@ -63,6 +67,7 @@ class Estimate:
     camera: str
     mask: np.ndarray = field(repr=False, compare=False)
     surface: object = field(repr=False, compare=False)
+    measured_mask: np.ndarray = field(repr=False, compare=False, default=None)
 
     def __repr__(self) -> str:
         flags = f", flags: {', '.join(self.flags)}" if self.flags else ""
@@ -180,4 +185,5 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     return Estimate(wbsa_m2=prediction.wbsa_m2, wbsa_lo_m2=prediction.lo_m2, wbsa_hi_m2=prediction.hi_m2, level=level,
                     vbsa_m2=m.vbsa_m2, stature_m=m.stature_m, distance_m=m.distance_m, n_pixels=m.n_pixels,
                     view=view, view_used=prediction.view_used, flags=flags, method=method, model=prediction.model_name,
-                    camera=intrinsics.name, mask=m.mask, surface=m.surface)
+                    camera=intrinsics.name, mask=mask & np.isfinite(depth_m) & (depth_m > 0), surface=m.surface,
+                    measured_mask=m.mask)

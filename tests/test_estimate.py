@@ -12,16 +12,22 @@ from wbsa.cli import main
 from wbsa.errors import WbsaError
 
 
+def _posed(body_model, rest, name: str, scale: float = 1.0) -> np.ndarray:
+    """Vertices of ``rest`` (scaled) in posture ``name`` at its nominal angles, settled as populations are."""
+    from wbsa.bodies.posing import JOINT_MOTIONS, SIDES, Rig
+    from wbsa.bodies.posture import POSTURES, settle_posture
+
+    angles = np.array([POSTURES[name].nominal(m) for _ in SIDES for m in JOINT_MOTIONS])
+    return settle_posture(rest.vertices[0] * scale, rest.bone_heads[0] * scale, angles, Rig.from_model(body_model))[1]
+
+
 @pytest.fixture(scope="module")
 def bodies(body_model):
-    """A tall man with arms wider than the A-pose and a woman, as posed meshes."""
-    from wbsa.estimation.posing import POSTURES, Poser
-
-    poser = Poser(body_model)
+    """A tall man with arms wider than the A-pose and a woman with arms down, as posed meshes."""
     man = body_model.rest_bodies(reference_adult(0.0))
     woman = body_model.rest_bodies(reference_adult(1.0))
-    wide = poser.pose(man.vertices[0] * 1.05, man.bone_heads[0] * 1.05, POSTURES["arms-wide"])  # ~1.9 m tall
-    down = poser.pose(woman.vertices[0], woman.bone_heads[0], POSTURES["arms-down"])
+    wide = _posed(body_model, man, "arms-wide", scale=1.05)  # ~1.9 m tall
+    down = _posed(body_model, woman, "arms-down")
     return body_model.skin_mesh(wide), body_model.skin_mesh(down)
 
 
@@ -118,18 +124,23 @@ def test_floor_gives_stature_and_elevation(bodies):
     assert m.n_pixels < sim.frame.n_pixels  # the soles' strip on the floor is cut, as in training
 
 
-def test_posing_moves_the_arms_and_keeps_the_rest_pose(body_model):
-    from wbsa.estimation.posing import POSTURES, Poser, Posture
+def test_random_posture_is_seeded_and_draws_the_named_postures(body_model):
+    from wbsa.bodies.posture import RandomPosture
 
     rest = body_model.rest_bodies(reference_adult(0.0))
-    poser = Poser(body_model)
     v0, heads = rest.vertices[0], rest.bone_heads[0]
-    assert np.allclose(poser.pose(v0, heads, Posture("still")), v0, atol=1e-9)
-    down = poser.pose(v0, heads, POSTURES["arms-down"])
+    pose = RandomPosture(body_model, ("arms-down", "a-pose"))
+    drawn = [pose(v0, heads, np.random.default_rng(s)) for s in range(6)]
+    again = pose(v0, heads, np.random.default_rng(0))
+    assert np.array_equal(drawn[0][0], again[0]) and drawn[0][1] == again[1]
+    assert {name for _, name in drawn} == {"arms-down", "a-pose"}
+    v, name = next(d for d in drawn if d[1] == "arms-down")
     wrist = body_model.bone_index("wrist.L")
     near = np.linalg.norm(v0 - heads[wrist], axis=1) < 0.03
-    assert down[near, 0].mean() < v0[near, 0].mean() - 0.1  # the left hand comes in towards the body
-    assert down[near, 2].mean() < v0[near, 2].mean()
+    assert v[near, 0].mean() < v0[near, 0].mean() - 0.1  # the left hand comes in towards the body
+    assert v[:, 2].min() == pytest.approx(0.0, abs=1e-9)
+    with pytest.raises(WbsaError, match="unknown"):
+        RandomPosture(body_model, ("cartwheel",))
 
 
 def test_read_depth_formats(tmp_path):

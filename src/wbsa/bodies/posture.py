@@ -46,7 +46,7 @@ passing through it), and legs that sink into each other are spread the same way.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import get_args
+from typing import Callable, get_args
 
 import numpy as np
 import pandas as pd
@@ -170,15 +170,56 @@ def draw_postures(subject_ids, settings: PostureSettings) -> pd.DataFrame:
             continue
         rng = np.random.default_rng(np.random.SeedSequence([int(settings.seed), int(sid), POSTURE_STREAM]))
         name = settings.mix[rng.integers(len(settings.mix))] if settings.posture == "mixed" else settings.posture
-        u = rng.uniform(-1.0, 1.0, size=len(ANGLE_COLUMNS))
-        spec = POSTURES[name]
-        nominal = np.array([spec.nominal(m) for _ in SIDES for m in JOINT_MOTIONS])
-        jitter = np.array([spec.jitter(m) for _ in SIDES for m in JOINT_MOTIONS])
         names.append(name)
-        angles[row] = nominal + u * jitter
+        angles[row] = draw_angles(name, rng)
     out = pd.DataFrame(angles, columns=list(ANGLE_COLUMNS))
     out.insert(0, "posture", names)
     return out
+
+
+def draw_angles(name: str, rng: np.random.Generator) -> np.ndarray:
+    """(10,) float64 joint angles of posture ``name`` (:data:`ANGLE_COLUMNS` order): nominal + uniform jitter."""
+    spec = POSTURES[name]
+    u = rng.uniform(-1.0, 1.0, size=len(ANGLE_COLUMNS))
+    nominal = np.array([spec.nominal(m) for _ in SIDES for m in JOINT_MOTIONS])
+    jitter = np.array([spec.jitter(m) for _ in SIDES for m in JOINT_MOTIONS])
+    return nominal + u * jitter
+
+
+#: ``(rest vertices (n, 3), bone heads (j, 3), rng) -> (posed vertices (n, 3), posture name)``: how the
+#: estimator's training and test captures pose a body.
+PoseBody = Callable[[np.ndarray, np.ndarray, np.random.Generator], tuple[np.ndarray, str]]
+
+
+class RandomPosture:
+    """A :data:`PoseBody`: a posture drawn uniformly from ``names``, jittered, settled and applied.
+
+    The same postures, jitter and settling as a ``posture = "mixed"`` population
+    (:func:`draw_postures`, :func:`settle_posture`), drawn from the caller's generator.
+
+    Parameters
+    ----------
+    model : wbsa.bodies.body_model.BodyModel
+    names : tuple of str, optional
+        Names of :data:`POSTURES` to draw from (default: all).
+    """
+
+    def __init__(self, model, names: tuple[str, ...] | None = None) -> None:
+        from wbsa.bodies.posing import Rig
+
+        self.names = tuple(POSTURES) if names is None else tuple(names)
+        unknown = [n for n in self.names if n not in POSTURES]
+        if unknown or not self.names:
+            raise WbsaError(f"postures {unknown or list(self.names)} are unknown; use some of {', '.join(POSTURES)}")
+        self.rig = Rig.from_model(model)
+
+    def __call__(self, vertices: np.ndarray, bone_heads: np.ndarray,
+                 rng: np.random.Generator) -> tuple[np.ndarray, str]:
+        """Posed vertices (n, 3) float64 standing on z = 0, and the posture's name."""
+        name = self.names[int(rng.integers(len(self.names)))]
+        _, posed = settle_posture(np.asarray(vertices, dtype=np.float64), np.asarray(bone_heads, dtype=np.float64),
+                                  draw_angles(name, rng), self.rig)
+        return posed, name
 
 
 def has_posture(table: pd.DataFrame) -> bool:

@@ -1,7 +1,7 @@
 """Virtual captures of posed bodies, measured by the estimator's own code: the training and test material.
 
 :func:`render_samples` takes a population table (phenotypes and true WBSA), poses each body with a
-:data:`~wbsa.estimation.posing.PoseBody` callable (swap in another posture model without touching
+:data:`~wbsa.bodies.posture.PoseBody` callable (swap in another posture model without touching
 anything else), draws captures (:func:`~wbsa.estimation.capture.sample_capture`), renders each with
 :func:`wbsa.simulate.simulate_view` (sensor and grid reconstruction on) and measures the sensed frame with
 :func:`~wbsa.estimation.measure.measure_subject`, given the render's floor. Sample ``i`` draws from its own
@@ -32,7 +32,7 @@ class RenderSettings:
         Captures per body (each with its own posture, camera and view).
     capture : CaptureSettings
     postures : tuple of str or None
-        Named postures of :data:`wbsa.estimation.posing.POSTURES` (None = all, with jitter).
+        Named postures of :data:`wbsa.bodies.posture.POSTURES` (None = all, with jitter).
     floor_error_m, floor_tilt_deg : float
         Standard deviation of the error put on the render's floor before the floor cut, as a detected
         floor would have.
@@ -94,7 +94,7 @@ def render_chunk(population: pd.DataFrame, first_sample: int, settings: RenderSe
     from wbsa.camera.extrinsics import pose_from_view
     from wbsa.camera.scene import MeshScene
     from wbsa.estimation.measure import measure_subject
-    from wbsa.estimation.posing import Poser
+    from wbsa.bodies.posture import RandomPosture
     from wbsa.parallel import keep_large_allocations, single_threaded_math
     from wbsa.simulate import simulate_view
 
@@ -102,7 +102,7 @@ def render_chunk(population: pd.DataFrame, first_sample: int, settings: RenderSe
     rows, descriptors = [], []
     with single_threaded_math():
         model = BodyModel()
-        poser = Poser(model, settings.postures if posture_names is None else posture_names)
+        poser = RandomPosture(model, settings.postures if posture_names is None else posture_names)
         bodies = model.rest_bodies(population)
         sample = first_sample
         for b in range(len(population)):

@@ -54,7 +54,7 @@ def room_capture_chunk(population: pd.DataFrame, others: pd.DataFrame, first: in
     from wbsa.bodies.body_model import BodyModel
     from wbsa.camera.scene import MeshScene
     from wbsa.errors import WbsaError
-    from wbsa.estimation.posing import Poser
+    from wbsa.bodies.posture import RandomPosture
     from wbsa.estimation.predict import load_any_model
     from wbsa.estimation.room import compose_room
     from wbsa.estimation.segment import SegmentSettings
@@ -67,7 +67,7 @@ def room_capture_chunk(population: pd.DataFrame, others: pd.DataFrame, first: in
     rows = []
     with single_threaded_math():
         body_model = BodyModel()
-        poser = Poser(body_model)
+        poser = RandomPosture(body_model)
         model = load_any_model(model_path)
         bodies = body_model.rest_bodies(population)
         extra = body_model.rest_bodies(others)

@@ -3,8 +3,9 @@
 :func:`render_samples` takes a population table (phenotypes and true WBSA), poses each body with a
 :data:`~wbsa.bodies.posture.PoseBody` callable (swap in another posture model without touching
 anything else), draws captures (:func:`~wbsa.estimation.capture.sample_capture`), renders each with
-:func:`wbsa.simulate.simulate_view` (sensor and grid reconstruction on) and measures the sensed frame with
-:func:`~wbsa.estimation.measure.measure_subject`, given the render's floor. Sample ``i`` draws from its own
+:func:`wbsa.simulate.simulate_view` (sensor on), by default standing in a room whose floor and subject are
+then found by :func:`~wbsa.estimation.segment.segment_subject` as in a real image, and measures the sensed
+frame with :func:`~wbsa.estimation.measure.measure_subject`. Sample ``i`` draws from its own
 stream ``SeedSequence([seed, i])``: the same seed gives the same rows whatever the chunking or workers.
 """
 
@@ -34,8 +35,14 @@ class RenderSettings:
     postures : tuple of str or None
         Named postures of :data:`wbsa.bodies.posture.POSTURES` (None = all, with jitter).
     floor_error_m, floor_tilt_deg : float
-        Standard deviation of the error put on the render's floor before the floor cut, as a detected
-        floor would have.
+        Without a room: standard deviation of the error put on the render's floor before the floor cut, as
+        a detected floor would have.
+    room : bool
+        Stand the body on a floor before a wall (``wall_behind_m`` behind it, uniform), store the depth
+        in millimetres and find the subject and the floor with
+        :func:`~wbsa.estimation.segment.segment_subject`: the measures then see what they see in a real
+        image (the segmentation's edges, the detected floor). False: the body alone, its own pixels and
+        the render's floor.
     seed : int
     """
 
@@ -44,6 +51,8 @@ class RenderSettings:
     postures: tuple[str, ...] | None = None
     floor_error_m: float = 0.003
     floor_tilt_deg: float = 0.1
+    room: bool = True
+    wall_behind_m: tuple[float, float] = (0.5, 1.5)
     seed: int = 0
 
 
@@ -55,9 +64,9 @@ class Samples:
     ----------
     table : pandas.DataFrame
         One row per capture: :data:`TRUTH_COLUMNS`, ``posture, camera, azimuth_deg, elevation_deg,
-        distance_m, camera_height_m, fits``, the render's ``vbsa_visible_m2`` and ``vbsa_recon_grid_m2``,
-        and the measures (``m_`` + :meth:`SubjectMeasures.features`, ``m_touches_border``; ``m_ok`` False
-        where the render had almost no returns).
+        distance_m, camera_height_m, fits``, without a room the render's ``vbsa_visible_m2`` and
+        ``vbsa_recon_grid_m2``, and the measures (``m_`` + :meth:`SubjectMeasures.features`,
+        ``m_touches_border``; ``m_ok`` False where the render had almost no returns or no subject was found).
     descriptors : (n, d) float32
         View descriptor then shape bands of each sample (:class:`SubjectMeasures` ``descriptor``, ``shape``).
     """
@@ -109,29 +118,34 @@ def render_chunk(population: pd.DataFrame, first_sample: int, settings: RenderSe
             truth = population.iloc[b]
             for _ in range(settings.views_per_subject):
                 rng = np.random.default_rng(np.random.SeedSequence([settings.seed, sample]))
-                pose_rng, capture_rng, floor_rng = rng.spawn(3)
+                pose_rng, capture_rng, floor_rng, room_rng = rng.spawn(4)
                 vertices, posture = poser(bodies.vertices[b], bodies.bone_heads[b], pose_rng)
                 mesh = model.skin_mesh(vertices)
-                scene = MeshScene(mesh, nthreads=1)
                 cap = sample_capture(vertices, capture_rng, settings.capture)
-                sim = simulate_view(scene, cap.camera, cap.view, sensor=cap.sensor, seed=settings.seed,
-                                    subject_id=sample, reconstruct=("grid",), keep_frame=True)
-                pose = pose_from_view(cap.view, scene.center)
-                floor = render_floor(pose, floor_rng, settings.floor_error_m, settings.floor_tilt_deg)
                 row = {c: truth[c] for c in TRUTH_COLUMNS if c in truth.index}
                 row.update(sample=sample, posture=posture, camera=cap.camera.name, azimuth_deg=cap.view.azimuth_deg,
                            elevation_deg=cap.view.elevation_deg, distance_m=cap.view.distance_m,
                            camera_height_m=cap.camera_height_m, fits=cap.fits,
-                           holes_fraction=cap.sensor.holes_fraction, pixel_dropout=cap.sensor.pixel_dropout,
-                           vbsa_visible_m2=sim.row["vbsa_visible_m2"], vbsa_recon_grid_m2=sim.row["vbsa_recon_grid_m2"])
-                depth = sim.frame.depth_m
-                if np.count_nonzero(depth) < 200:
+                           holes_fraction=cap.sensor.holes_fraction, pixel_dropout=cap.sensor.pixel_dropout)
+                if settings.room:
+                    depth, mask, floor = _room_capture(mesh, cap, room_rng, settings, sample)
+                else:
+                    scene = MeshScene(mesh, nthreads=1)
+                    sim = simulate_view(scene, cap.camera, cap.view, sensor=cap.sensor, seed=settings.seed,
+                                        subject_id=sample, reconstruct=("grid",), keep_frame=True)
+                    floor = render_floor(pose_from_view(cap.view, scene.center), floor_rng, settings.floor_error_m,
+                                         settings.floor_tilt_deg)
+                    row.update(vbsa_visible_m2=sim.row["vbsa_visible_m2"],
+                               vbsa_recon_grid_m2=sim.row["vbsa_recon_grid_m2"])
+                    depth = sim.frame.depth_m
+                    mask = depth > 0 if np.count_nonzero(depth) >= 200 else None
+                if mask is None:
                     row.update(m_ok=False)
                     rows.append(row)
                     descriptors.append(None)
                     sample += 1
                     continue
-                m = measure_subject(depth, depth > 0, cap.camera, floor)
+                m = measure_subject(depth, mask, cap.camera, floor)
                 row.update({f"m_{k}": v for k, v in m.features().items()})
                 row.update(m_ok=True, m_touches_border=m.touches_border)
                 rows.append(row)
@@ -141,6 +155,27 @@ def render_chunk(population: pd.DataFrame, first_sample: int, settings: RenderSe
     desc = np.stack([d if d is not None else np.full(width, np.nan, np.float32) for d in descriptors]) \
         if descriptors else np.zeros((0, width), np.float32)
     return Samples(pd.DataFrame(rows), desc)
+
+
+def _room_capture(mesh, cap, rng: np.random.Generator, settings: RenderSettings, sample: int):
+    """(depth (h, w) float64 in whole millimetres, subject mask or None, detected floor) of ``mesh`` in a room."""
+    from wbsa.camera.scene import MeshScene
+    from wbsa.errors import WbsaError
+    from wbsa.estimation.room import compose_room
+    from wbsa.estimation.segment import SegmentSettings, segment_subject
+    from wbsa.simulate import simulate_view
+
+    room = compose_room(mesh, cap.view.azimuth_deg, wall_behind_m=float(rng.uniform(*settings.wall_behind_m)))
+    sim = simulate_view(MeshScene(room.mesh, nthreads=1), cap.camera, cap.view, sensor=cap.sensor, seed=settings.seed,
+                        subject_id=sample, keep_frame=True, target=room.subject_center)
+    depth = np.round(sim.frame.depth_m.astype(np.float64) * 1000.0) / 1000.0  # as a millimetre depth image
+    try:
+        seg = segment_subject(depth, cap.camera, SegmentSettings(pick="center"))
+    except WbsaError:
+        return depth, None, None
+    if np.count_nonzero(seg.mask) < 200:
+        return depth, None, None
+    return depth, seg.mask, seg.floor
 
 
 def render_samples(population: pd.DataFrame, settings: RenderSettings = RenderSettings(), *, workers: int = 1,

@@ -2,7 +2,9 @@
 
 1. Returns within the depth range are back-projected and thinned to one point per voxel.
 2. Room surfaces: the largest planes (RANSAC, inliers within the depth noise along the normal) that have
-   (almost) nothing behind them as seen from the camera: a floor or a wall has, a body's chest has not.
+   (almost) nothing behind them as seen from the camera and run out of the image (reach its border): a
+   floor or a wall does both; a body's chest has its sides behind it, and a body alone in the image (no
+   room), which a plane fits loosely, is inside the frame.
    The floor is the room surface whose normal is closest to the image's up (within 50°); the others are
    walls. Returns on or below the floor (within its noise) and on or behind a wall are background.
 3. What is left is clustered in 3-D: voxels closer than ``cluster_gap_m`` (or three pixel pitches at that
@@ -28,6 +30,8 @@ from wbsa.estimation.clusters import MAX_FOOTPRINT_M, attach_low, footprint_m, m
 PICKS = ("nearest", "largest", "center")
 #: Height over the floor below which returns are not used to link objects (only to extend them).
 LOW_BAND_M = 0.10
+#: A room surface reaches this close to the image's border (pixels).
+BORDER_PX = 3
 #: Subject returns this close to the floor mark the image columns where the soles are looked for.
 FEET_BAND_M = 0.12
 
@@ -47,7 +51,9 @@ class SegmentSettings:
     min_plane_fraction : float
         A room surface holds at least this fraction of the thinned returns.
     behind_fraction : float
-        A plane is a room surface if at most this fraction of the other returns lies behind it.
+        A plane is a room surface if at most this fraction of the other returns lies behind it ...
+        It must also run out of the image (reach its border, :data:`BORDER_PX`): a floor or a wall
+        does, a body alone in the image (no room), which a plane fits loosely, does not.
     cluster_gap_m : float
         Points closer than this (or three pixel pitches, if more) belong to one object.
     min_person_height_m, max_person_height_m, max_person_width_m : float
@@ -137,8 +143,9 @@ def _voxelise(points: np.ndarray, voxel_m: float) -> tuple[np.ndarray, np.ndarra
     return sums / counts[:, None], inverse
 
 
-def find_room(cloud: np.ndarray, settings: SegmentSettings) -> tuple[Plane | None, list[Plane]]:
-    """Floor and walls among the largest planes of a thinned (v, 3) cloud (see the module doc)."""
+def find_room(cloud: np.ndarray, settings: SegmentSettings, intrinsics,
+              shape: tuple[int, int]) -> tuple[Plane | None, list[Plane]]:
+    """Floor and walls among the largest planes of a thinned (v, 3) cloud of an (h, w) image (see the module doc)."""
     rng = np.random.default_rng(settings.seed)
     free = np.ones(len(cloud), dtype=bool)
     surfaces: list[Plane] = []
@@ -155,7 +162,7 @@ def find_room(cloud: np.ndarray, settings: SegmentSettings) -> tuple[Plane | Non
         free[idx[inliers]] = False
         h = plane.height(cloud)
         behind = np.count_nonzero(h < -plane.tolerance(cloud) - 0.05)
-        if behind <= settings.behind_fraction * len(cloud):
+        if behind <= settings.behind_fraction * len(cloud) and _meets_border(cloud[idx[inliers]], intrinsics, shape):
             surfaces.append(plane)
     up = np.array([0.0, -1.0, 0.0])
     floor = None
@@ -164,6 +171,16 @@ def find_room(cloud: np.ndarray, settings: SegmentSettings) -> tuple[Plane | Non
         floor = max(cands, key=lambda p: p.normal @ up)
     walls = [p for p in surfaces if p is not floor and (floor is None or abs(p.normal @ floor.normal) < 0.5)]
     return floor, walls
+
+
+def _meets_border(points: np.ndarray, intrinsics, shape: tuple[int, int]) -> bool:
+    """Whether (k, 3) camera-frame points reach within :data:`BORDER_PX` pixels of the image's border."""
+    h, w = shape
+    z = np.maximum(points[:, 2], 1e-9)
+    u = float(intrinsics.fx) * points[:, 0] / z + float(intrinsics.cx)
+    v = float(intrinsics.fy) * points[:, 1] / z + float(intrinsics.cy)
+    margin = BORDER_PX
+    return bool(np.any((u < margin) | (u > w - 1 - margin) | (v < margin) | (v > h - 1 - margin)))
 
 
 def segment_subject(depth_m: np.ndarray, intrinsics, settings: SegmentSettings = SegmentSettings()) -> Segmentation:
@@ -200,7 +217,7 @@ def segment_subject(depth_m: np.ndarray, intrinsics, settings: SegmentSettings =
     pix = np.flatnonzero(ok.ravel())
     points = backproject_depth(np.where(ok, depth, 0.0), intrinsics).reshape(-1, 3)[pix].astype(np.float64)
     cloud, voxel_of = _voxelise(points, settings.voxel_m)
-    floor, walls = find_room(cloud, settings)
+    floor, walls = find_room(cloud, settings, intrinsics, (h, w))
     keep = np.ones(len(cloud), dtype=bool) if floor is None else floor.height(cloud) > floor.tolerance(cloud)
     for wall in walls:
         keep &= wall.height(cloud) > wall.tolerance(cloud)

@@ -43,6 +43,9 @@ class TrainSettings:
         Ages of the random subjects, uniform in years.
     capture : CaptureSettings
     postures : tuple of str or None
+    room : bool
+        Capture the bodies in a room and find them by segmentation, as real images are
+        (:class:`~wbsa.estimation.renders.RenderSettings`).
     folds : int
         Folds of the out-of-fold view estimates and residuals.
     seed : int
@@ -55,6 +58,7 @@ class TrainSettings:
     age_years: tuple[float, float] = (3.0, 80.0)
     capture: CaptureSettings = field(default_factory=CaptureSettings)
     postures: tuple[str, ...] | None = None
+    room: bool = True
     folds: int = 3
     seed: int = 0
 
@@ -158,7 +162,7 @@ def train_model(settings: TrainSettings = TrainSettings(), *, workers: int = 1, 
         rng = np.random.default_rng(settings.seed)
         calib = rng.random(len(pop)) < settings.calibration_fraction
         render = RenderSettings(views_per_subject=settings.views_per_subject, capture=settings.capture,
-                                postures=settings.postures, seed=settings.seed)
+                                postures=settings.postures, room=settings.room, seed=settings.seed)
         fit_s = render_samples(pop[~calib].reset_index(drop=True), render, workers=workers,
                                show_progress=show_progress)
         cal_s = render_samples(pop[calib].reset_index(drop=True), replace(render, seed=settings.seed + 7919),

@@ -16,11 +16,13 @@ Passes, each launched over (view, item) for a batch of views of one body:
    the nearest triangle per pixel (keys);
 3. :func:`resolve_pixels` — per grid row: depth, pixel count, footprint sum ``z³ / h``, border pixels,
    the triangles hit;
-4. (host) the list of grazing triangles;
+4. (``warp.utils.array_scan``) the first slot of every grazing triangle's points;
 5. :func:`grazing_points` — their points (centroids, or sub-triangle centroids of large triangles)
-   decided from the depth buffer, each in a slot of its own; :func:`anyhit_queries` — the undecided
-   ones by an any-hit ray through Warp's BVH; :func:`grazing_area` — area × visible share per triangle;
-6. :func:`reduce_triangles` — per chunk of triangles: hit area and triangles hit.
+   decided from the depth buffer, each in a slot of its own (an exclusive scan of the points per view and
+   triangle), the undecided ones with their any-hit ray; :func:`anyhit_queries` — those rays through Warp's
+   BVH (on a GPU);
+6. :func:`reduce_triangles` — per chunk of triangles: hit area, triangles hit, and the grazing triangles'
+   visible area (area × visible share).
 
 Sums are taken per row or per chunk in a fixed order and added up on the host, so the results do not
 depend on thread scheduling. Importing this module imports Warp (and compiles the kernels on first use,
@@ -223,9 +225,10 @@ def raster_triangles(faces: wp.array(dtype=wp.vec3i), xyz: wp.array2d(dtype=wp.v
                      soa: wp.array2d(dtype=wp.float32), edges: wp.array(dtype=wp.float64),
                      vt: wp.array2d(dtype=wp.float32), cam: Camera, grids: wp.array(dtype=wp.vec4i),
                      offsets: wp.array(dtype=int), boxes: wp.array2d(dtype=wp.vec4d), keys: wp.array(dtype=wp.uint64),
-                     split: wp.array2d(dtype=int)):
-    """Classify a triangle (grazing: sub-triangles per side in ``split``, else 0) and write its depth keys at
-    every pixel centre its projection holds (atomic minimum).
+                     split: wp.array2d(dtype=int), n_points: wp.array(dtype=wp.int64)):
+    """Classify a triangle (grazing: sub-triangles per side in ``split`` and its s² points in ``n_points``,
+    flat over (view, triangle); else 0) and write its depth keys at every pixel centre its projection holds
+    (atomic minimum).
 
     ``grids[b]`` = (v0, u0, stride, n_rows) of view b's pixel grid (an empty border of one cell on each side).
     In a one-sided scene (closed, outward surface) a back face can be the first hit only of a ray that
@@ -247,6 +250,7 @@ def raster_triangles(faces: wp.array(dtype=wp.vec3i), xyz: wp.array2d(dtype=wp.v
                 if size > cam.split_px:
                     s = wp.min(int(wp.ceil(wp.min(size, f64(1.0e9)) / cam.sample_px)), cam.max_split)
     split[b, tri] = s
+    n_points[b * split.shape[1] + tri] = wp.int64(s * s)
     g = grids[b]
     if g[3] <= 2:
         return
@@ -343,33 +347,29 @@ def lookup(depth: wp.array(dtype=wp.float32), base: int, g: wp.vec4i, row: int, 
     return depth[base + r * g[2] + c]
 
 
-@wp.kernel
-def grazing_points(cand_view: wp.array(dtype=int), cand_tri: wp.array(dtype=int), cand_split: wp.array(dtype=int),
-                   cand_slot: wp.array(dtype=int), faces: wp.array(dtype=wp.vec3i), verts: wp.array(dtype=wp.vec3f),
-                   soa: wp.array2d(dtype=wp.float32), vt: wp.array2d(dtype=wp.float32), cam: Camera,
-                   grids: wp.array(dtype=wp.vec4i), offsets: wp.array(dtype=int), depth: wp.array(dtype=wp.float32),
-                   state: wp.array(dtype=int), point: wp.array(dtype=wp.vec3)):
-    """Decide the points of one grazing triangle from the depth buffer: its centroid, or the centroids of
-    its s × s equal sub-triangles (float32, as :func:`wbsa.camera.grazing.points_visible`).
-
-    A point in the image is visible (state 1) when none of the 2 × 2 pixels around it has a return more
-    than ``clear_px`` footprints in front of it (front faces only), hidden (0) when all have one more than
-    ``hidden_px`` in front, otherwise a query (2, ``point`` its position relative to the scene centre) for
-    an any-hit ray. Points outside the image are 0.
-    """
-    k = wp.tid()
-    b = cand_view[k]
-    tri = cand_tri[k]
-    s = cand_split[k]
-    slot = cand_slot[k]
+@wp.func
+def grazing_triangle(split: wp.array2d(dtype=int), slots: wp.array(dtype=wp.int64), faces: wp.array(dtype=wp.vec3i),
+                     verts: wp.array(dtype=wp.vec3f), soa: wp.array2d(dtype=wp.float32),
+                     vt: wp.array2d(dtype=wp.float32), cam: Camera, grids: wp.array(dtype=wp.vec4i),
+                     offsets: wp.array(dtype=int), depth: wp.array(dtype=wp.float32), origins: wp.array(dtype=wp.vec3),
+                     centers: wp.array(dtype=wp.vec3d), state: wp.array(dtype=int), rays: wp.array2d(dtype=wp.float32),
+                     b: int, tri: int, s: int):
+    """The points of one grazing triangle of view b (:func:`grazing_points`)."""
+    slot = int(slots[b * split.shape[1] + tri])
     g = grids[b]
     base = offsets[b]
-    height, dist2 = facing(vt, b, soa, tri)
-    front = cam.one_sided != 0 or height > wp.float32(0.0)
-    f = faces[tri]
-    V0 = wp.vec3d(verts[f[0]])
-    V1 = wp.vec3d(verts[f[1]])
-    V2 = wp.vec3d(verts[f[2]])
+    front = cam.one_sided != 0
+    if not front:
+        front = facing_height(vt, b, soa, tri) > wp.float32(0.0)
+    C = wp.vec3(centers[b])
+    V0 = wp.vec3d()
+    V1 = wp.vec3d()
+    V2 = wp.vec3d()
+    if s > 1:
+        f = faces[tri]
+        V0 = wp.vec3d(verts[f[0]])
+        V1 = wp.vec3d(verts[f[1]])
+        V2 = wp.vec3d(verts[f[2]])
     third = f64(1.0) / f64(3.0)
     for i in range(s):
         for half in range(2):
@@ -400,64 +400,94 @@ def grazing_points(cand_view: wp.array(dtype=int), cand_tri: wp.array(dtype=int)
                         result = 1
                     elif far >= z - cam.hidden_px * fp:
                         result = 2
-                        point[slot] = P
+                        o = origins[b]
+                        d = P - C
+                        rays[slot, 0] = o[0]
+                        rays[slot, 1] = o[1]
+                        rays[slot, 2] = o[2]
+                        rays[slot, 3] = d[0]
+                        rays[slot, 4] = d[1]
+                        rays[slot, 5] = d[2]
                 state[slot] = result
                 slot += 1
 
 
 @wp.kernel
-def anyhit_queries(mesh: wp.uint64, view_of: wp.array(dtype=int), centers: wp.array(dtype=wp.vec3d),
-                   origins: wp.array(dtype=wp.vec3), cam: Camera, state: wp.array(dtype=int),
-                   point: wp.array(dtype=wp.vec3)):
+def grazing_points(split: wp.array2d(dtype=int), slots: wp.array(dtype=wp.int64), faces: wp.array(dtype=wp.vec3i),
+                   verts: wp.array(dtype=wp.vec3f), soa: wp.array2d(dtype=wp.float32), vt: wp.array2d(dtype=wp.float32),
+                   cam: Camera, grids: wp.array(dtype=wp.vec4i), offsets: wp.array(dtype=int),
+                   depth: wp.array(dtype=wp.float32), origins: wp.array(dtype=wp.vec3), centers: wp.array(dtype=wp.vec3d),
+                   state: wp.array(dtype=int), rays: wp.array2d(dtype=wp.float32), chunk: int):
+    """Decide the points of the grazing triangles (``split[b, tri]`` > 0) of a chunk of ``chunk`` triangles of a
+    view from the depth buffer: each one's centroid, or the centroids of its s × s equal sub-triangles
+    (float32, as :func:`wbsa.camera.grazing.points_visible`), in the slots from ``slots[b · m + tri]`` on (an
+    exclusive scan of the points per view and triangle). (A chunk per thread: on a CPU most threads would
+    find no grazing triangle; use chunk 1 on a GPU.)
+
+    A point in the image is visible (state 1) when none of the 2 × 2 pixels around it has a return more
+    than ``clear_px`` footprints in front of it (front faces only), hidden (0) when all have one more than
+    ``hidden_px`` in front, otherwise a query (2) whose any-hit ray is written to ``rays`` as the reference
+    casts it: origin the camera centre in world coordinates (``origins``, float32), direction
+    (point − centre) − (C − centre) in float32. Points outside the image are 0.
+    """
+    b, k = wp.tid()
+    m = split.shape[1]
+    for tri in range(k * chunk, wp.min(k * chunk + chunk, m)):
+        s = split[b, tri]
+        if s != 0:
+            grazing_triangle(split, slots, faces, verts, soa, vt, cam, grids, offsets, depth, origins, centers,
+                             state, rays, b, tri, s)
+
+
+@wp.kernel
+def anyhit_queries(mesh: wp.uint64, rays: wp.array2d(dtype=wp.float32), cam: Camera, state: wp.array(dtype=int)):
     """Queries (state 2): visible (1) unless Warp's BVH finds a triangle on the segment from the camera
     centre before ``1 − t_tol`` of the way to the point, hidden (0) otherwise.
 
-    The rays are the reference's (:func:`wbsa.camera.grazing.points_visible`): origin the camera centre in
-    world coordinates (``origins``, float32), direction (point − centre) − (C − centre) in float32, against
-    the mesh's float32 world coordinates (``mesh``), as Embree sees them.
+    The rays are the reference's (:func:`wbsa.camera.grazing.points_visible`, written by
+    :func:`grazing_points`), against the mesh's float32 world coordinates (``mesh``), as Embree sees them.
     """
     k = wp.tid()
     if state[k] != 2:
         return
-    b = view_of[k]
-    d = point[k] - wp.vec3(centers[b])
-    if wp.mesh_query_ray_anyhit(mesh, origins[b], d, float(f64(1.0) - cam.t_tol)):
+    o = wp.vec3(rays[k, 0], rays[k, 1], rays[k, 2])
+    d = wp.vec3(rays[k, 3], rays[k, 4], rays[k, 5])
+    if wp.mesh_query_ray_anyhit(mesh, o, d, float(f64(1.0) - cam.t_tol)):
         state[k] = 0
     else:
         state[k] = 1
 
 
 @wp.kernel
-def grazing_area(cand_tri: wp.array(dtype=int), cand_split: wp.array(dtype=int), cand_slot: wp.array(dtype=int),
-                 areas: wp.array(dtype=wp.float64), state: wp.array(dtype=int), out: wp.array(dtype=wp.float64)):
-    """Visible area of each grazing triangle: its area times its share of visible points."""
-    k = wp.tid()
-    s = cand_split[k]
-    n = s * s
-    start = cand_slot[k]
-    visible = int(0)
-    for i in range(start, start + n):
-        if state[i] == 1:
-            visible += 1
-    out[k] = areas[cand_tri[k]] * f64(visible) / f64(n)
-
-
-@wp.kernel
 def reduce_triangles(areas: wp.array(dtype=wp.float64), seen: wp.array2d(dtype=wp.uint8), chunk: int,
-                     hit_area: wp.array2d(dtype=wp.float64), n_hit: wp.array2d(dtype=int)):
-    """Per view and chunk of triangles, in order: area of the triangles hit and their number."""
+                     split: wp.array2d(dtype=int), slots: wp.array(dtype=wp.int64), state: wp.array(dtype=int),
+                     hit_area: wp.array2d(dtype=wp.float64), n_hit: wp.array2d(dtype=int),
+                     graze: wp.array2d(dtype=wp.float64)):
+    """Per view and chunk of triangles, in order: area of the triangles hit, their number, and the visible
+    area of the grazing ones (area × share of visible points, ``state`` 1; ``split`` all 0 when there are none)."""
     b, k = wp.tid()
     m = areas.shape[0]
     start = k * chunk
     end = wp.min(start + chunk, m)
     hit = f64(0.0)
     count = int(0)
+    grazing = f64(0.0)
     for t in range(start, end):
         if seen[b, t] != wp.uint8(0):
             hit += areas[t]
             count += 1
+        s = split[b, t]
+        if s != 0:
+            n = s * s
+            first = int(slots[b * m + t])
+            visible = int(0)
+            for i in range(first, first + n):
+                if state[i] == 1:
+                    visible += 1
+            grazing += areas[t] * f64(visible) / f64(n)
     hit_area[b, k] = hit
     n_hit[b, k] = count
+    graze[b, k] = grazing
 
 
 @wp.kernel

@@ -30,6 +30,10 @@ REDUCE_CHUNK = 1024
 #: Triangles per thread of :func:`~.warp_kernels.grazing_points` on the CPU (one on a GPU): a thread per
 #: triangle would mostly find none of the grazing ones, at a few ns per thread.
 GRAZING_CHUNK = 256
+#: Vertices or triangles per thread of :func:`~.warp_kernels.project_vertices` and
+#: :func:`~.warp_kernels.raster_triangles` on the CPU (one on a GPU): Warp's CPU launch loop spends a few
+#: ns per thread (a 2-D thread id costs an integer division).
+ITEMS_PER_THREAD = 64
 #: Skip back faces that cannot be a first hit (one-sided scenes, away from holes); False only to test that
 #: it changes nothing.
 CULL_BACK_FACES = True
@@ -250,7 +254,9 @@ def _measure_batch(data: _MeshData, k: Intrinsics, poses: list[Pose], grazing_co
     lo = wp.full((B, 2), np.inf, dtype=wp.float64, device=dev)
     hi = wp.full((B, 2), -np.inf, dtype=wp.float64, device=dev)
     behind = wp.zeros(B, dtype=int, device=dev)
-    wp.launch(K.project_vertices, dim=(B, n), inputs=[data.verts, rot, trans, cam, xyz, uv, lo, hi, behind], device=dev)
+    per = ITEMS_PER_THREAD if dev == "cpu" else 1
+    wp.launch(K.project_vertices, dim=(B, -(-n // per)), inputs=[data.verts, rot, trans, cam, xyz, uv, lo, hi, behind, per],
+              device=dev)
 
     lo_h, hi_h, behind_h = lo.numpy(), hi.numpy(), behind.numpy()
     grids = np.array([_grid(k, lo_h[b], hi_h[b]) if not behind_h[b] else (-1, -1, 2, 2) for b in range(B)],
@@ -273,9 +279,9 @@ def _measure_batch(data: _MeshData, k: Intrinsics, poses: list[Pose], grazing_co
                   device=dev)
     split = wp.empty((B, m), dtype=int, device=dev)
     n_points = wp.empty(B * m, dtype=wp.int64, device=dev)
-    wp.launch(K.raster_triangles, dim=(B, m),
+    wp.launch(K.raster_triangles, dim=(B, -(-m // per)),
               inputs=[data.faces, xyz, uv, data.soa, data.edges, vt, cam, grids_w, offsets_w, boxes, keys, split,
-                      n_points], device=dev)
+                      n_points, per], device=dev)
 
     rows_max = int(grids[:, 3].max())
     seen = wp.zeros((B, m), dtype=wp.uint8, device=dev)

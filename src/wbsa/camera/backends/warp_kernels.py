@@ -184,21 +184,36 @@ def project32(vt: wp.array2d(dtype=wp.float32), b: int, P: wp.vec3):
 def project_vertices(verts: wp.array(dtype=wp.vec3f), rot: wp.array(dtype=wp.mat33d), trans: wp.array(dtype=wp.vec3d),
                      cam: Camera, xyz: wp.array2d(dtype=wp.vec3d), uv: wp.array2d(dtype=wp.vec2d),
                      lo: wp.array2d(dtype=wp.float64), hi: wp.array2d(dtype=wp.float64),
-                     behind: wp.array(dtype=int)):
-    """Camera coordinates and pixel coordinates of every vertex in every view; per-view pixel bounds."""
-    b, i = wp.tid()
-    X = rot[b] * wp.vec3d(verts[i]) + trans[b]
-    xyz[b, i] = X
-    if X[2] <= f64(1.0e-6):
+                     behind: wp.array(dtype=int), chunk: int):
+    """Camera coordinates and pixel coordinates of every vertex in every view (``chunk`` vertices per
+    thread); per-view pixel bounds (atomic minimum and maximum of each chunk's)."""
+    b, k = wp.tid()
+    n = verts.shape[0]
+    inf = f64(wp.inf)
+    umin = inf
+    vmin = inf
+    umax = -inf
+    vmax = -inf
+    back = int(0)
+    for i in range(k * chunk, wp.min(k * chunk + chunk, n)):
+        X = rot[b] * wp.vec3d(verts[i]) + trans[b]
+        xyz[b, i] = X
+        if X[2] <= f64(1.0e-6):
+            back = 1
+            uv[b, i] = wp.vec2d(f64(0.0), f64(0.0))
+        else:
+            u, v = to_pixel(cam, X)
+            uv[b, i] = wp.vec2d(u, v)
+            umin = wp.min(umin, u)
+            vmin = wp.min(vmin, v)
+            umax = wp.max(umax, u)
+            vmax = wp.max(vmax, v)
+    if back != 0:
         wp.atomic_max(behind, b, 1)
-        uv[b, i] = wp.vec2d(f64(0.0), f64(0.0))
-        return
-    u, v = to_pixel(cam, X)
-    uv[b, i] = wp.vec2d(u, v)
-    wp.atomic_min(lo, b, 0, u)
-    wp.atomic_min(lo, b, 1, v)
-    wp.atomic_max(hi, b, 0, u)
-    wp.atomic_max(hi, b, 1, v)
+    wp.atomic_min(lo, b, 0, umin)
+    wp.atomic_min(lo, b, 1, vmin)
+    wp.atomic_max(hi, b, 0, umax)
+    wp.atomic_max(hi, b, 1, vmax)
 
 
 @wp.kernel
@@ -220,21 +235,13 @@ def hole_boxes(hole_vertices: wp.array(dtype=int), hole_start: wp.array(dtype=in
     boxes[b, h] = box
 
 
-@wp.kernel
-def raster_triangles(faces: wp.array(dtype=wp.vec3i), xyz: wp.array2d(dtype=wp.vec3d), uv: wp.array2d(dtype=wp.vec2d),
+@wp.func
+def raster_triangle(faces: wp.array(dtype=wp.vec3i), xyz: wp.array2d(dtype=wp.vec3d), uv: wp.array2d(dtype=wp.vec2d),
                      soa: wp.array2d(dtype=wp.float32), edges: wp.array(dtype=wp.float64),
                      vt: wp.array2d(dtype=wp.float32), cam: Camera, grids: wp.array(dtype=wp.vec4i),
                      offsets: wp.array(dtype=int), boxes: wp.array2d(dtype=wp.vec4d), keys: wp.array(dtype=wp.uint64),
-                     split: wp.array2d(dtype=int), n_points: wp.array(dtype=wp.int64)):
-    """Classify a triangle (grazing: sub-triangles per side in ``split`` and its s² points in ``n_points``,
-    flat over (view, triangle); else 0) and write its depth keys at every pixel centre its projection holds
-    (atomic minimum).
-
-    ``grids[b]`` = (v0, u0, stride, n_rows) of view b's pixel grid (an empty border of one cell on each side).
-    In a one-sided scene (closed, outward surface) a back face can be the first hit only of a ray that
-    enters through a hole, so back faces outside every hole's cap box (``boxes``) are not rasterized.
-    """
-    b, tri = wp.tid()
+                     split: wp.array2d(dtype=int), n_points: wp.array(dtype=wp.int64), b: int, tri: int):
+    """Triangle ``tri`` of view ``b`` (:func:`raster_triangles`)."""
     height = facing_height(vt, b, soa, tri)
     s = int(0)
     # (in a one-sided scene a back face is never grazing: its distance need not be computed)
@@ -294,6 +301,26 @@ def raster_triangles(faces: wp.array(dtype=wp.vec3i), xyz: wp.array2d(dtype=wp.v
                 if z > f64(0.0):
                     cell = base + (row - g[0]) * g[2] + (col - g[1])
                     wp.atomic_min(keys, cell, depth_key(z, tri))
+
+
+@wp.kernel
+def raster_triangles(faces: wp.array(dtype=wp.vec3i), xyz: wp.array2d(dtype=wp.vec3d), uv: wp.array2d(dtype=wp.vec2d),
+                     soa: wp.array2d(dtype=wp.float32), edges: wp.array(dtype=wp.float64),
+                     vt: wp.array2d(dtype=wp.float32), cam: Camera, grids: wp.array(dtype=wp.vec4i),
+                     offsets: wp.array(dtype=int), boxes: wp.array2d(dtype=wp.vec4d), keys: wp.array(dtype=wp.uint64),
+                     split: wp.array2d(dtype=int), n_points: wp.array(dtype=wp.int64), chunk: int):
+    """Classify a triangle (grazing: sub-triangles per side in ``split`` and its s² points in ``n_points``,
+    flat over (view, triangle); else 0) and write its depth keys at every pixel centre its projection holds
+    (atomic minimum); ``chunk`` triangles per thread.
+
+    ``grids[b]`` = (v0, u0, stride, n_rows) of view b's pixel grid (an empty border of one cell on each side).
+    In a one-sided scene (closed, outward surface) a back face can be the first hit only of a ray that
+    enters through a hole, so back faces outside every hole's cap box (``boxes``) are not rasterized.
+    """
+    b, k = wp.tid()
+    m = faces.shape[0]
+    for tri in range(k * chunk, wp.min(k * chunk + chunk, m)):
+        raster_triangle(faces, xyz, uv, soa, edges, vt, cam, grids, offsets, boxes, keys, split, n_points, b, tri)
 
 
 @wp.kernel

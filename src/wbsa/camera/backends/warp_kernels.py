@@ -375,13 +375,50 @@ def lookup(depth: wp.array(dtype=wp.float32), base: int, g: wp.vec4i, row: int, 
 
 
 @wp.func
+def grazing_point(vt: wp.array2d(dtype=wp.float32), cam: Camera, g: wp.vec4i, base: int,
+                  depth: wp.array(dtype=wp.float32), origins: wp.array(dtype=wp.vec3), C: wp.vec3, front: bool,
+                  state: wp.array(dtype=int), rays: wp.array2d(dtype=wp.float32), b: int, P: wp.vec3, slot: int):
+    """Decide one point P (relative to the scene centre) of a grazing triangle of view b (:func:`grazing_points`)."""
+    u, v, z = project32(vt, b, P)
+    result = int(0)
+    inside = z > wp.float32(0.0)
+    inside = inside and u >= wp.float32(-0.5) and u < wp.float32(float(cam.width) - 0.5)
+    inside = inside and v >= wp.float32(-0.5) and v < wp.float32(float(cam.height) - 0.5)
+    if inside:
+        col = int(wp.floor(u))
+        row = int(wp.floor(v))
+        d0 = lookup(depth, base, g, row, col)
+        d1 = lookup(depth, base, g, row, col + 1)
+        d2 = lookup(depth, base, g, row + 1, col)
+        d3 = lookup(depth, base, g, row + 1, col + 1)
+        near = wp.min(wp.min(d0, d1), wp.min(d2, d3))
+        far = wp.max(wp.max(d0, d1), wp.max(d2, d3))
+        fp = z / cam.footprint
+        if front and near >= z - cam.clear_px * fp:
+            result = 1
+        elif far >= z - cam.hidden_px * fp:
+            result = 2
+            o = origins[b]
+            d = P - C
+            rays[slot, 0] = o[0]
+            rays[slot, 1] = o[1]
+            rays[slot, 2] = o[2]
+            rays[slot, 3] = d[0]
+            rays[slot, 4] = d[1]
+            rays[slot, 5] = d[2]
+    state[slot] = result
+
+
+@wp.func
 def grazing_triangle(split: wp.array2d(dtype=int), slots: wp.array(dtype=wp.int64), faces: wp.array(dtype=wp.vec3i),
                      verts: wp.array(dtype=wp.vec3f), soa: wp.array2d(dtype=wp.float32),
                      vt: wp.array2d(dtype=wp.float32), cam: Camera, grids: wp.array(dtype=wp.vec4i),
                      offsets: wp.array(dtype=int), depth: wp.array(dtype=wp.float32), origins: wp.array(dtype=wp.vec3),
                      centers: wp.array(dtype=wp.vec3d), state: wp.array(dtype=int), rays: wp.array2d(dtype=wp.float32),
                      b: int, tri: int, s: int):
-    """The points of one grazing triangle of view b (:func:`grazing_points`)."""
+    """The points of one grazing triangle of view b (:func:`grazing_points`): its centroid (s = 1), or the
+    centroids of its s × s equal sub-triangles (as :func:`wbsa.camera.grazing.subtriangle_centroids` and
+    :func:`wbsa.camera.grazing.split_area_m2`, in float64), in slot order."""
     slot = int(slots[b * split.shape[1] + tri])
     g = grids[b]
     base = offsets[b]
@@ -389,53 +426,24 @@ def grazing_triangle(split: wp.array2d(dtype=int), slots: wp.array(dtype=wp.int6
     if not front:
         front = facing_height(vt, b, soa, tri) > wp.float32(0.0)
     C = wp.vec3(centers[b])
-    V0 = wp.vec3d()
-    V1 = wp.vec3d()
-    V2 = wp.vec3d()
-    if s > 1:
-        f = faces[tri]
-        V0 = wp.vec3d(verts[f[0]])
-        V1 = wp.vec3d(verts[f[1]])
-        V2 = wp.vec3d(verts[f[2]])
+    if s == 1:
+        grazing_point(vt, cam, g, base, depth, origins, C, front, state, rays, b,
+                      wp.vec3(soa[3, tri], soa[4, tri], soa[5, tri]), slot)
+        return
+    f = faces[tri]
+    V0 = wp.vec3d(verts[f[0]])
+    V1 = wp.vec3d(verts[f[1]])
+    V2 = wp.vec3d(verts[f[2]])
     third = f64(1.0) / f64(3.0)
     for i in range(s):
         for half in range(2):
             # half 0: the s − i sub-triangles pointing like the triangle; half 1: the s − i − 1 others
             for j in range(s - i - half):
-                P = wp.vec3(soa[3, tri], soa[4, tri], soa[5, tri])
-                if s > 1:  # as wbsa.camera.grazing.subtriangle_centroids and split_area_m2, in float64
-                    a1 = (f64(i) + third * f64(1 + half)) / f64(s)
-                    a2 = (f64(j) + third * f64(1 + half)) / f64(s)
-                    a0 = f64(1.0) - a1 - a2
-                    P = wp.vec3(V0 * a0 + V1 * a1 + V2 * a2)
-                u, v, z = project32(vt, b, P)
-                result = int(0)
-                inside = z > wp.float32(0.0)
-                inside = inside and u >= wp.float32(-0.5) and u < wp.float32(float(cam.width) - 0.5)
-                inside = inside and v >= wp.float32(-0.5) and v < wp.float32(float(cam.height) - 0.5)
-                if inside:
-                    col = int(wp.floor(u))
-                    row = int(wp.floor(v))
-                    d0 = lookup(depth, base, g, row, col)
-                    d1 = lookup(depth, base, g, row, col + 1)
-                    d2 = lookup(depth, base, g, row + 1, col)
-                    d3 = lookup(depth, base, g, row + 1, col + 1)
-                    near = wp.min(wp.min(d0, d1), wp.min(d2, d3))
-                    far = wp.max(wp.max(d0, d1), wp.max(d2, d3))
-                    fp = z / cam.footprint
-                    if front and near >= z - cam.clear_px * fp:
-                        result = 1
-                    elif far >= z - cam.hidden_px * fp:
-                        result = 2
-                        o = origins[b]
-                        d = P - C
-                        rays[slot, 0] = o[0]
-                        rays[slot, 1] = o[1]
-                        rays[slot, 2] = o[2]
-                        rays[slot, 3] = d[0]
-                        rays[slot, 4] = d[1]
-                        rays[slot, 5] = d[2]
-                state[slot] = result
+                a1 = (f64(i) + third * f64(1 + half)) / f64(s)
+                a2 = (f64(j) + third * f64(1 + half)) / f64(s)
+                a0 = f64(1.0) - a1 - a2
+                grazing_point(vt, cam, g, base, depth, origins, C, front, state, rays, b,
+                              wp.vec3(V0 * a0 + V1 * a1 + V2 * a2), slot)
                 slot += 1
 
 

@@ -255,8 +255,8 @@ def _measure_batch(data: _MeshData, k: Intrinsics, poses: list[Pose], grazing_co
     hi = wp.full((B, 2), -np.inf, dtype=wp.float64, device=dev)
     behind = wp.zeros(B, dtype=int, device=dev)
     per = ITEMS_PER_THREAD if dev == "cpu" else 1
-    wp.launch(K.project_vertices, dim=(B, -(-n // per)), inputs=[data.verts, rot, trans, cam, xyz, uv, lo, hi, behind, per],
-              device=dev)
+    wp.launch(K.project_vertices, dim=(B, -(-n // per)),
+              inputs=[data.verts, rot, trans, cam, xyz, uv, lo, hi, behind, per], device=dev)
 
     lo_h, hi_h, behind_h = lo.numpy(), hi.numpy(), behind.numpy()
     grids = np.array([_grid(k, lo_h[b], hi_h[b]) if not behind_h[b] else (-1, -1, 2, 2) for b in range(B)],

@@ -451,10 +451,11 @@ def grazing_triangle(split: wp.array2d(dtype=int), slots: wp.array(dtype=wp.int6
 def grazing_points(split: wp.array2d(dtype=int), slots: wp.array(dtype=wp.int64), faces: wp.array(dtype=wp.vec3i),
                    verts: wp.array(dtype=wp.vec3f), soa: wp.array2d(dtype=wp.float32), vt: wp.array2d(dtype=wp.float32),
                    cam: Camera, grids: wp.array(dtype=wp.vec4i), offsets: wp.array(dtype=int),
-                   depth: wp.array(dtype=wp.float32), origins: wp.array(dtype=wp.vec3), centers: wp.array(dtype=wp.vec3d),
-                   state: wp.array(dtype=int), rays: wp.array2d(dtype=wp.float32), chunk: int):
-    """Decide the points of the grazing triangles (``split[b, tri]`` > 0) of a chunk of ``chunk`` triangles of a
-    view from the depth buffer: each one's centroid, or the centroids of its s × s equal sub-triangles
+                   depth: wp.array(dtype=wp.float32), origins: wp.array(dtype=wp.vec3),
+                   centers: wp.array(dtype=wp.vec3d), state: wp.array(dtype=int), rays: wp.array2d(dtype=wp.float32),
+                   chunk: int):
+    """Decide the points of the grazing triangles (``split[b, tri]`` > 0) of a chunk of ``chunk`` triangles of
+    a view from the depth buffer: each one's centroid, or the centroids of its s × s equal sub-triangles
     (float32, as :func:`wbsa.camera.grazing.points_visible`), in the slots from ``slots[b · m + tri]`` on (an
     exclusive scan of the points per view and triangle). (A chunk per thread: on a CPU most threads would
     find no grazing triangle; use chunk 1 on a GPU.)

@@ -47,6 +47,7 @@ bench: $(STAMP)
 	$(VENV)/bin/python benchmarks/bench_posture.py --n 300
 	OPENBLAS_NUM_THREADS=1 $(VENV)/bin/python benchmarks/bench_raycast.py --anny --accuracy
 	$(VENV)/bin/python benchmarks/bench_scan.py --subjects 24 --chunk-size 6
+	$(VENV)/bin/python benchmarks/bench_scan_stages.py --subjects 12
 	$(VENV)/bin/python benchmarks/bench_reconstruction.py
 	$(VENV)/bin/python benchmarks/bench_fit.py 20000 65
 	$(VENV)/bin/python benchmarks/bench_survey_match.py --n 500 --seed 0

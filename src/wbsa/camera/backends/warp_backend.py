@@ -27,6 +27,13 @@ from wbsa.errors import WbsaError
 GRID_SLACK_PX = 0.05
 #: Triangles per partial sum of :func:`~.warp_kernels.reduce_triangles`.
 REDUCE_CHUNK = 1024
+#: Triangles per thread of :func:`~.warp_kernels.grazing_points` on the CPU (one on a GPU): a thread per
+#: triangle would mostly find none of the grazing ones, at a few ns per thread.
+GRAZING_CHUNK = 256
+#: Vertices or triangles per thread of :func:`~.warp_kernels.project_vertices` and
+#: :func:`~.warp_kernels.raster_triangles` on the CPU (one on a GPU): Warp's CPU launch loop spends a few
+#: ns per thread (a 2-D thread id costs an integer division).
+ITEMS_PER_THREAD = 64
 #: Skip back faces that cannot be a first hit (one-sided scenes, away from holes); False only to test that
 #: it changes nothing.
 CULL_BACK_FACES = True
@@ -247,7 +254,9 @@ def _measure_batch(data: _MeshData, k: Intrinsics, poses: list[Pose], grazing_co
     lo = wp.full((B, 2), np.inf, dtype=wp.float64, device=dev)
     hi = wp.full((B, 2), -np.inf, dtype=wp.float64, device=dev)
     behind = wp.zeros(B, dtype=int, device=dev)
-    wp.launch(K.project_vertices, dim=(B, n), inputs=[data.verts, rot, trans, cam, xyz, uv, lo, hi, behind], device=dev)
+    per = ITEMS_PER_THREAD if dev == "cpu" else 1
+    wp.launch(K.project_vertices, dim=(B, -(-n // per)),
+              inputs=[data.verts, rot, trans, cam, xyz, uv, lo, hi, behind, per], device=dev)
 
     lo_h, hi_h, behind_h = lo.numpy(), hi.numpy(), behind.numpy()
     grids = np.array([_grid(k, lo_h[b], hi_h[b]) if not behind_h[b] else (-1, -1, 2, 2) for b in range(B)],
@@ -269,9 +278,10 @@ def _measure_batch(data: _MeshData, k: Intrinsics, poses: list[Pose], grazing_co
                   inputs=[data.hole_vertices, data.hole_start, data.hole_centroids, uv, rot, trans, cam, boxes],
                   device=dev)
     split = wp.empty((B, m), dtype=int, device=dev)
-    wp.launch(K.raster_triangles, dim=(B, m),
-              inputs=[data.faces, xyz, uv, data.soa, data.edges, vt, cam, grids_w, offsets_w, boxes, keys, split],
-              device=dev)
+    n_points = wp.empty(B * m, dtype=wp.int64, device=dev)
+    wp.launch(K.raster_triangles, dim=(B, -(-m // per)),
+              inputs=[data.faces, xyz, uv, data.soa, data.edges, vt, cam, grids_w, offsets_w, boxes, keys, split,
+                      n_points, per], device=dev)
 
     rows_max = int(grids[:, 3].max())
     seen = wp.zeros((B, m), dtype=wp.uint8, device=dev)
@@ -281,20 +291,20 @@ def _measure_batch(data: _MeshData, k: Intrinsics, poses: list[Pose], grazing_co
     wp.launch(K.resolve_pixels, dim=(B, rows_max),
               inputs=[data.soa, vt, cam, grids_w, offsets_w, keys, depth, seen, n_pix, foot, border], device=dev)
 
-    graze = np.zeros(B)
-    if grazing_cos > 0:
-        graze = _grazing(data, cam, vt, centers, grids_w, offsets_w, depth, split, B)
+    slots, state = _grazing(data, cam, vt, centers, grids_w, offsets_w, depth, split, n_points, B)
 
     chunks = -(-m // REDUCE_CHUNK)
-    hit_area = wp.zeros((B, chunks), dtype=wp.float64, device=dev)
-    n_hit = wp.zeros((B, chunks), dtype=int, device=dev)
-    wp.launch(K.reduce_triangles, dim=(B, chunks), inputs=[data.areas, seen, REDUCE_CHUNK, hit_area, n_hit],
-              device=dev)
+    hit_area = wp.empty((B, chunks), dtype=wp.float64, device=dev)
+    n_hit = wp.empty((B, chunks), dtype=int, device=dev)
+    graze_parts = wp.empty((B, chunks), dtype=wp.float64, device=dev)
+    wp.launch(K.reduce_triangles, dim=(B, chunks),
+              inputs=[data.areas, seen, REDUCE_CHUNK, split, slots, state, hit_area, n_hit, graze_parts], device=dev)
 
     pixels = n_pix.numpy().sum(axis=1)
     footprint = foot.numpy().sum(axis=1)
     touches = border.numpy().any(axis=1)
     hit_m2 = hit_area.numpy().sum(axis=1)
+    graze = graze_parts.numpy().sum(axis=1)
     tri_hit = n_hit.numpy().sum(axis=1)
     keys_h = keys.numpy() if return_frames else None
     depth_h = depth.numpy() if return_frames else None
@@ -303,9 +313,7 @@ def _measure_batch(data: _MeshData, k: Intrinsics, poses: list[Pose], grazing_co
         if behind_h[b]:
             out.append(None)
             continue
-        visible = float(footprint[b]) / (k.fx * k.fy)
-        if grazing_cos > 0:
-            visible += float(graze[b])
+        visible = float(footprint[b]) / (k.fx * k.fy) + float(graze[b])
         row = {"vbsa_hit_m2": float(hit_m2[b]), "vbsa_visible_m2": visible, "n_pixels": int(pixels[b]),
                "n_triangles_hit": int(tri_hit[b]), "fits_in_frame": not bool(touches[b])}
         frame = None
@@ -316,57 +324,42 @@ def _measure_batch(data: _MeshData, k: Intrinsics, poses: list[Pose], grazing_co
     return out
 
 
-def _grazing(data: _MeshData, cam, vt, centers, grids_w, offsets_w, depth, split, B: int) -> np.ndarray:
-    """(B,) visible area of the grazing triangles of each view of the batch.
+def _grazing(data: _MeshData, cam, vt, centers, grids_w, offsets_w, depth, split, n_points, B: int):
+    """Decide the points of the grazing triangles of a batch of views: ``(slots, state)``.
 
-    The grazing triangles and their sub-sampling (``split``, from :func:`~.warp_kernels.raster_triangles`)
-    are listed on the host, each point gets a slot, the depth buffer decides most points and an any-hit
-    ray the rest (Embree through Open3D on the CPU, Warp's BVH on a GPU).
+    The grazing triangles and their sub-sampling (``split``, and their point counts ``n_points``, from
+    :func:`~.warp_kernels.raster_triangles`) get consecutive slots (``slots``, an exclusive scan over (view,
+    triangle)); the depth buffer decides most points and an any-hit ray the rest (Embree through Open3D on
+    the CPU, Warp's BVH on a GPU). ``state`` holds 1 for a visible point, 0 for a hidden one.
     """
     wp = warp_module()
     K = _kernels()
     dev = data.device
     m = data.n_triangles
-    flat = split.numpy().reshape(-1)
-    cand = np.flatnonzero(flat)
-    if cand.size == 0:
-        return np.zeros(B)
-    view, tri = np.divmod(cand, m)
-    s = flat[cand]
-    n_points = s.astype(np.int64) ** 2
-    total = int(n_points.sum())
+    slots = wp.empty(B * m, dtype=wp.int64, device=dev)
+    wp.utils.array_scan(n_points, slots, inclusive=False)
+    total = int(slots[B * m - 1:].numpy()[0]) + int(n_points[B * m - 1:].numpy()[0])
     if total >= 2**31:
         raise WbsaError("too many grazing sample points in one batch of views for the warp backend")
-    slots = np.concatenate([[0], np.cumsum(n_points)[:-1]]).astype(np.int32)
-    cand_view = wp.array(view.astype(np.int32), dtype=int, device=dev)
-    cand_tri = wp.array(tri.astype(np.int32), dtype=int, device=dev)
-    cand_split = wp.array(s.astype(np.int32), dtype=int, device=dev)
-    cand_slot = wp.array(slots, dtype=int, device=dev)
-    state = wp.empty(total, dtype=int, device=dev)
-    point = wp.empty(total, dtype=wp.vec3, device=dev)
-    wp.launch(K.grazing_points, dim=cand.size,
-              inputs=[cand_view, cand_tri, cand_split, cand_slot, data.faces, data.verts, data.soa, vt, cam, grids_w,
-                      offsets_w, depth, state, point], device=dev)
+    state = wp.empty(max(total, 1), dtype=int, device=dev)
+    if total == 0:
+        return slots, state
+    origins = wp.array(np.ascontiguousarray(centers.numpy() + data.scene.center, dtype=np.float32), dtype=wp.vec3,
+                       device=dev)
+    rays = wp.empty((total, 6), dtype=wp.float32, device=dev)
+    chunk = GRAZING_CHUNK if dev == "cpu" else 1
+    wp.launch(K.grazing_points, dim=(B, -(-m // chunk)),
+              inputs=[split, slots, data.faces, data.verts, data.soa, vt, cam, grids_w, offsets_w, depth, origins,
+                      centers, state, rays, chunk], device=dev)
     if dev == "cpu" and ANYHIT == "auto":  # Embree's any-hit rays (Open3D) are about 3x faster than Warp's BVH on a CPU
         state_h = state.numpy()  # views of the same memory: the updates below are seen by the kernels
         ask = np.flatnonzero(state_h == 2)
         if ask.size:
-            # as wbsa.camera.grazing.points_visible: origin C, direction (point − centre) − (C − centre) in float32
-            origins = centers.numpy()[np.repeat(view, n_points)[ask]]
-            rays = np.empty((ask.size, 6), dtype=np.float32)
-            rays[:, :3] = origins + data.scene.center
-            rays[:, 3:] = point.numpy()[ask] - origins.astype(np.float32)
-            state_h[ask] = np.where(data.scene.occluded(rays, 1.0 - _CENTROID_T_TOL), 0, 1)
+            hidden = data.scene.occluded(rays.numpy()[ask], 1.0 - _CENTROID_T_TOL)
+            state_h[ask] = np.where(hidden, 0, 1)
     else:
-        view_of = wp.array(np.repeat(view.astype(np.int32), n_points), dtype=int, device=dev)
-        origins = wp.array(np.ascontiguousarray(centers.numpy() + data.scene.center, dtype=np.float32), dtype=wp.vec3,
-                           device=dev)
-        wp.launch(K.anyhit_queries, dim=total, inputs=[data.mesh.id, view_of, centers, origins, cam, state, point],
-                  device=dev)
-    area = wp.empty(cand.size, dtype=wp.float64, device=dev)
-    wp.launch(K.grazing_area, dim=cand.size, inputs=[cand_tri, cand_split, cand_slot, data.areas, state, area],
-              device=dev)
-    return np.bincount(view, weights=area.numpy(), minlength=B)
+        wp.launch(K.anyhit_queries, dim=total, inputs=[data.mesh.id, rays, cam, state], device=dev)
+    return slots, state
 
 
 def _frame(scene: MeshScene, k: Intrinsics, pose: Pose, grid: tuple[int, int, int, int], keys: np.ndarray,

@@ -16,11 +16,13 @@ Passes, each launched over (view, item) for a batch of views of one body:
    the nearest triangle per pixel (keys);
 3. :func:`resolve_pixels` — per grid row: depth, pixel count, footprint sum ``z³ / h``, border pixels,
    the triangles hit;
-4. (host) the list of grazing triangles;
+4. (``warp.utils.array_scan``) the first slot of every grazing triangle's points;
 5. :func:`grazing_points` — their points (centroids, or sub-triangle centroids of large triangles)
-   decided from the depth buffer, each in a slot of its own; :func:`anyhit_queries` — the undecided
-   ones by an any-hit ray through Warp's BVH; :func:`grazing_area` — area × visible share per triangle;
-6. :func:`reduce_triangles` — per chunk of triangles: hit area and triangles hit.
+   decided from the depth buffer, each in a slot of its own (an exclusive scan of the points per view and
+   triangle), the undecided ones with their any-hit ray; :func:`anyhit_queries` — those rays through Warp's
+   BVH (on a GPU);
+6. :func:`reduce_triangles` — per chunk of triangles: hit area, triangles hit, and the grazing triangles'
+   visible area (area × visible share).
 
 Sums are taken per row or per chunk in a fixed order and added up on the host, so the results do not
 depend on thread scheduling. Importing this module imports Warp (and compiles the kernels on first use,
@@ -182,21 +184,36 @@ def project32(vt: wp.array2d(dtype=wp.float32), b: int, P: wp.vec3):
 def project_vertices(verts: wp.array(dtype=wp.vec3f), rot: wp.array(dtype=wp.mat33d), trans: wp.array(dtype=wp.vec3d),
                      cam: Camera, xyz: wp.array2d(dtype=wp.vec3d), uv: wp.array2d(dtype=wp.vec2d),
                      lo: wp.array2d(dtype=wp.float64), hi: wp.array2d(dtype=wp.float64),
-                     behind: wp.array(dtype=int)):
-    """Camera coordinates and pixel coordinates of every vertex in every view; per-view pixel bounds."""
-    b, i = wp.tid()
-    X = rot[b] * wp.vec3d(verts[i]) + trans[b]
-    xyz[b, i] = X
-    if X[2] <= f64(1.0e-6):
+                     behind: wp.array(dtype=int), chunk: int):
+    """Camera coordinates and pixel coordinates of every vertex in every view (``chunk`` vertices per
+    thread); per-view pixel bounds (atomic minimum and maximum of each chunk's)."""
+    b, k = wp.tid()
+    n = verts.shape[0]
+    inf = f64(wp.inf)
+    umin = inf
+    vmin = inf
+    umax = -inf
+    vmax = -inf
+    back = int(0)
+    for i in range(k * chunk, wp.min(k * chunk + chunk, n)):
+        X = rot[b] * wp.vec3d(verts[i]) + trans[b]
+        xyz[b, i] = X
+        if X[2] <= f64(1.0e-6):
+            back = 1
+            uv[b, i] = wp.vec2d(f64(0.0), f64(0.0))
+        else:
+            u, v = to_pixel(cam, X)
+            uv[b, i] = wp.vec2d(u, v)
+            umin = wp.min(umin, u)
+            vmin = wp.min(vmin, v)
+            umax = wp.max(umax, u)
+            vmax = wp.max(vmax, v)
+    if back != 0:
         wp.atomic_max(behind, b, 1)
-        uv[b, i] = wp.vec2d(f64(0.0), f64(0.0))
-        return
-    u, v = to_pixel(cam, X)
-    uv[b, i] = wp.vec2d(u, v)
-    wp.atomic_min(lo, b, 0, u)
-    wp.atomic_min(lo, b, 1, v)
-    wp.atomic_max(hi, b, 0, u)
-    wp.atomic_max(hi, b, 1, v)
+    wp.atomic_min(lo, b, 0, umin)
+    wp.atomic_min(lo, b, 1, vmin)
+    wp.atomic_max(hi, b, 0, umax)
+    wp.atomic_max(hi, b, 1, vmax)
 
 
 @wp.kernel
@@ -218,20 +235,13 @@ def hole_boxes(hole_vertices: wp.array(dtype=int), hole_start: wp.array(dtype=in
     boxes[b, h] = box
 
 
-@wp.kernel
-def raster_triangles(faces: wp.array(dtype=wp.vec3i), xyz: wp.array2d(dtype=wp.vec3d), uv: wp.array2d(dtype=wp.vec2d),
+@wp.func
+def raster_triangle(faces: wp.array(dtype=wp.vec3i), xyz: wp.array2d(dtype=wp.vec3d), uv: wp.array2d(dtype=wp.vec2d),
                      soa: wp.array2d(dtype=wp.float32), edges: wp.array(dtype=wp.float64),
                      vt: wp.array2d(dtype=wp.float32), cam: Camera, grids: wp.array(dtype=wp.vec4i),
                      offsets: wp.array(dtype=int), boxes: wp.array2d(dtype=wp.vec4d), keys: wp.array(dtype=wp.uint64),
-                     split: wp.array2d(dtype=int)):
-    """Classify a triangle (grazing: sub-triangles per side in ``split``, else 0) and write its depth keys at
-    every pixel centre its projection holds (atomic minimum).
-
-    ``grids[b]`` = (v0, u0, stride, n_rows) of view b's pixel grid (an empty border of one cell on each side).
-    In a one-sided scene (closed, outward surface) a back face can be the first hit only of a ray that
-    enters through a hole, so back faces outside every hole's cap box (``boxes``) are not rasterized.
-    """
-    b, tri = wp.tid()
+                     split: wp.array2d(dtype=int), n_points: wp.array(dtype=wp.int64), b: int, tri: int):
+    """Triangle ``tri`` of view ``b`` (:func:`raster_triangles`)."""
     height = facing_height(vt, b, soa, tri)
     s = int(0)
     # (in a one-sided scene a back face is never grazing: its distance need not be computed)
@@ -247,6 +257,7 @@ def raster_triangles(faces: wp.array(dtype=wp.vec3i), xyz: wp.array2d(dtype=wp.v
                 if size > cam.split_px:
                     s = wp.min(int(wp.ceil(wp.min(size, f64(1.0e9)) / cam.sample_px)), cam.max_split)
     split[b, tri] = s
+    n_points[b * split.shape[1] + tri] = wp.int64(s * s)
     g = grids[b]
     if g[3] <= 2:
         return
@@ -290,6 +301,26 @@ def raster_triangles(faces: wp.array(dtype=wp.vec3i), xyz: wp.array2d(dtype=wp.v
                 if z > f64(0.0):
                     cell = base + (row - g[0]) * g[2] + (col - g[1])
                     wp.atomic_min(keys, cell, depth_key(z, tri))
+
+
+@wp.kernel
+def raster_triangles(faces: wp.array(dtype=wp.vec3i), xyz: wp.array2d(dtype=wp.vec3d), uv: wp.array2d(dtype=wp.vec2d),
+                     soa: wp.array2d(dtype=wp.float32), edges: wp.array(dtype=wp.float64),
+                     vt: wp.array2d(dtype=wp.float32), cam: Camera, grids: wp.array(dtype=wp.vec4i),
+                     offsets: wp.array(dtype=int), boxes: wp.array2d(dtype=wp.vec4d), keys: wp.array(dtype=wp.uint64),
+                     split: wp.array2d(dtype=int), n_points: wp.array(dtype=wp.int64), chunk: int):
+    """Classify a triangle (grazing: sub-triangles per side in ``split`` and its s² points in ``n_points``,
+    flat over (view, triangle); else 0) and write its depth keys at every pixel centre its projection holds
+    (atomic minimum); ``chunk`` triangles per thread.
+
+    ``grids[b]`` = (v0, u0, stride, n_rows) of view b's pixel grid (an empty border of one cell on each side).
+    In a one-sided scene (closed, outward surface) a back face can be the first hit only of a ray that
+    enters through a hole, so back faces outside every hole's cap box (``boxes``) are not rasterized.
+    """
+    b, k = wp.tid()
+    m = faces.shape[0]
+    for tri in range(k * chunk, wp.min(k * chunk + chunk, m)):
+        raster_triangle(faces, xyz, uv, soa, edges, vt, cam, grids, offsets, boxes, keys, split, n_points, b, tri)
 
 
 @wp.kernel
@@ -343,29 +374,62 @@ def lookup(depth: wp.array(dtype=wp.float32), base: int, g: wp.vec4i, row: int, 
     return depth[base + r * g[2] + c]
 
 
-@wp.kernel
-def grazing_points(cand_view: wp.array(dtype=int), cand_tri: wp.array(dtype=int), cand_split: wp.array(dtype=int),
-                   cand_slot: wp.array(dtype=int), faces: wp.array(dtype=wp.vec3i), verts: wp.array(dtype=wp.vec3f),
-                   soa: wp.array2d(dtype=wp.float32), vt: wp.array2d(dtype=wp.float32), cam: Camera,
-                   grids: wp.array(dtype=wp.vec4i), offsets: wp.array(dtype=int), depth: wp.array(dtype=wp.float32),
-                   state: wp.array(dtype=int), point: wp.array(dtype=wp.vec3)):
-    """Decide the points of one grazing triangle from the depth buffer: its centroid, or the centroids of
-    its s × s equal sub-triangles (float32, as :func:`wbsa.camera.grazing.points_visible`).
+@wp.func
+def grazing_point(vt: wp.array2d(dtype=wp.float32), cam: Camera, g: wp.vec4i, base: int,
+                  depth: wp.array(dtype=wp.float32), origins: wp.array(dtype=wp.vec3), C: wp.vec3, front: bool,
+                  state: wp.array(dtype=int), rays: wp.array2d(dtype=wp.float32), b: int, P: wp.vec3, slot: int):
+    """Decide one point P (relative to the scene centre) of a grazing triangle of view b (:func:`grazing_points`)."""
+    u, v, z = project32(vt, b, P)
+    result = int(0)
+    inside = z > wp.float32(0.0)
+    inside = inside and u >= wp.float32(-0.5) and u < wp.float32(float(cam.width) - 0.5)
+    inside = inside and v >= wp.float32(-0.5) and v < wp.float32(float(cam.height) - 0.5)
+    if inside:
+        col = int(wp.floor(u))
+        row = int(wp.floor(v))
+        d0 = lookup(depth, base, g, row, col)
+        d1 = lookup(depth, base, g, row, col + 1)
+        d2 = lookup(depth, base, g, row + 1, col)
+        d3 = lookup(depth, base, g, row + 1, col + 1)
+        near = wp.min(wp.min(d0, d1), wp.min(d2, d3))
+        far = wp.max(wp.max(d0, d1), wp.max(d2, d3))
+        fp = z / cam.footprint
+        if front and near >= z - cam.clear_px * fp:
+            result = 1
+        elif far >= z - cam.hidden_px * fp:
+            result = 2
+            o = origins[b]
+            d = P - C
+            rays[slot, 0] = o[0]
+            rays[slot, 1] = o[1]
+            rays[slot, 2] = o[2]
+            rays[slot, 3] = d[0]
+            rays[slot, 4] = d[1]
+            rays[slot, 5] = d[2]
+    state[slot] = result
 
-    A point in the image is visible (state 1) when none of the 2 × 2 pixels around it has a return more
-    than ``clear_px`` footprints in front of it (front faces only), hidden (0) when all have one more than
-    ``hidden_px`` in front, otherwise a query (2, ``point`` its position relative to the scene centre) for
-    an any-hit ray. Points outside the image are 0.
-    """
-    k = wp.tid()
-    b = cand_view[k]
-    tri = cand_tri[k]
-    s = cand_split[k]
-    slot = cand_slot[k]
+
+@wp.func
+def grazing_triangle(split: wp.array2d(dtype=int), slots: wp.array(dtype=wp.int64), faces: wp.array(dtype=wp.vec3i),
+                     verts: wp.array(dtype=wp.vec3f), soa: wp.array2d(dtype=wp.float32),
+                     vt: wp.array2d(dtype=wp.float32), cam: Camera, grids: wp.array(dtype=wp.vec4i),
+                     offsets: wp.array(dtype=int), depth: wp.array(dtype=wp.float32), origins: wp.array(dtype=wp.vec3),
+                     centers: wp.array(dtype=wp.vec3d), state: wp.array(dtype=int), rays: wp.array2d(dtype=wp.float32),
+                     b: int, tri: int, s: int):
+    """The points of one grazing triangle of view b (:func:`grazing_points`): its centroid (s = 1), or the
+    centroids of its s × s equal sub-triangles (as :func:`wbsa.camera.grazing.subtriangle_centroids` and
+    :func:`wbsa.camera.grazing.split_area_m2`, in float64), in slot order."""
+    slot = int(slots[b * split.shape[1] + tri])
     g = grids[b]
     base = offsets[b]
-    height, dist2 = facing(vt, b, soa, tri)
-    front = cam.one_sided != 0 or height > wp.float32(0.0)
+    front = cam.one_sided != 0
+    if not front:
+        front = facing_height(vt, b, soa, tri) > wp.float32(0.0)
+    C = wp.vec3(centers[b])
+    if s == 1:
+        grazing_point(vt, cam, g, base, depth, origins, C, front, state, rays, b,
+                      wp.vec3(soa[3, tri], soa[4, tri], soa[5, tri]), slot)
+        return
     f = faces[tri]
     V0 = wp.vec3d(verts[f[0]])
     V1 = wp.vec3d(verts[f[1]])
@@ -375,89 +439,91 @@ def grazing_points(cand_view: wp.array(dtype=int), cand_tri: wp.array(dtype=int)
         for half in range(2):
             # half 0: the s − i sub-triangles pointing like the triangle; half 1: the s − i − 1 others
             for j in range(s - i - half):
-                P = wp.vec3(soa[3, tri], soa[4, tri], soa[5, tri])
-                if s > 1:  # as wbsa.camera.grazing.subtriangle_centroids and split_area_m2, in float64
-                    a1 = (f64(i) + third * f64(1 + half)) / f64(s)
-                    a2 = (f64(j) + third * f64(1 + half)) / f64(s)
-                    a0 = f64(1.0) - a1 - a2
-                    P = wp.vec3(V0 * a0 + V1 * a1 + V2 * a2)
-                u, v, z = project32(vt, b, P)
-                result = int(0)
-                inside = z > wp.float32(0.0)
-                inside = inside and u >= wp.float32(-0.5) and u < wp.float32(float(cam.width) - 0.5)
-                inside = inside and v >= wp.float32(-0.5) and v < wp.float32(float(cam.height) - 0.5)
-                if inside:
-                    col = int(wp.floor(u))
-                    row = int(wp.floor(v))
-                    d0 = lookup(depth, base, g, row, col)
-                    d1 = lookup(depth, base, g, row, col + 1)
-                    d2 = lookup(depth, base, g, row + 1, col)
-                    d3 = lookup(depth, base, g, row + 1, col + 1)
-                    near = wp.min(wp.min(d0, d1), wp.min(d2, d3))
-                    far = wp.max(wp.max(d0, d1), wp.max(d2, d3))
-                    fp = z / cam.footprint
-                    if front and near >= z - cam.clear_px * fp:
-                        result = 1
-                    elif far >= z - cam.hidden_px * fp:
-                        result = 2
-                        point[slot] = P
-                state[slot] = result
+                a1 = (f64(i) + third * f64(1 + half)) / f64(s)
+                a2 = (f64(j) + third * f64(1 + half)) / f64(s)
+                a0 = f64(1.0) - a1 - a2
+                grazing_point(vt, cam, g, base, depth, origins, C, front, state, rays, b,
+                              wp.vec3(V0 * a0 + V1 * a1 + V2 * a2), slot)
                 slot += 1
 
 
 @wp.kernel
-def anyhit_queries(mesh: wp.uint64, view_of: wp.array(dtype=int), centers: wp.array(dtype=wp.vec3d),
-                   origins: wp.array(dtype=wp.vec3), cam: Camera, state: wp.array(dtype=int),
-                   point: wp.array(dtype=wp.vec3)):
+def grazing_points(split: wp.array2d(dtype=int), slots: wp.array(dtype=wp.int64), faces: wp.array(dtype=wp.vec3i),
+                   verts: wp.array(dtype=wp.vec3f), soa: wp.array2d(dtype=wp.float32), vt: wp.array2d(dtype=wp.float32),
+                   cam: Camera, grids: wp.array(dtype=wp.vec4i), offsets: wp.array(dtype=int),
+                   depth: wp.array(dtype=wp.float32), origins: wp.array(dtype=wp.vec3),
+                   centers: wp.array(dtype=wp.vec3d), state: wp.array(dtype=int), rays: wp.array2d(dtype=wp.float32),
+                   chunk: int):
+    """Decide the points of the grazing triangles (``split[b, tri]`` > 0) of a chunk of ``chunk`` triangles of
+    a view from the depth buffer: each one's centroid, or the centroids of its s × s equal sub-triangles
+    (float32, as :func:`wbsa.camera.grazing.points_visible`), in the slots from ``slots[b · m + tri]`` on (an
+    exclusive scan of the points per view and triangle). (A chunk per thread: on a CPU most threads would
+    find no grazing triangle; use chunk 1 on a GPU.)
+
+    A point in the image is visible (state 1) when none of the 2 × 2 pixels around it has a return more
+    than ``clear_px`` footprints in front of it (front faces only), hidden (0) when all have one more than
+    ``hidden_px`` in front, otherwise a query (2) whose any-hit ray is written to ``rays`` as the reference
+    casts it: origin the camera centre in world coordinates (``origins``, float32), direction
+    (point − centre) − (C − centre) in float32. Points outside the image are 0.
+    """
+    b, k = wp.tid()
+    m = split.shape[1]
+    for tri in range(k * chunk, wp.min(k * chunk + chunk, m)):
+        s = split[b, tri]
+        if s != 0:
+            grazing_triangle(split, slots, faces, verts, soa, vt, cam, grids, offsets, depth, origins, centers,
+                             state, rays, b, tri, s)
+
+
+@wp.kernel
+def anyhit_queries(mesh: wp.uint64, rays: wp.array2d(dtype=wp.float32), cam: Camera, state: wp.array(dtype=int)):
     """Queries (state 2): visible (1) unless Warp's BVH finds a triangle on the segment from the camera
     centre before ``1 − t_tol`` of the way to the point, hidden (0) otherwise.
 
-    The rays are the reference's (:func:`wbsa.camera.grazing.points_visible`): origin the camera centre in
-    world coordinates (``origins``, float32), direction (point − centre) − (C − centre) in float32, against
-    the mesh's float32 world coordinates (``mesh``), as Embree sees them.
+    The rays are the reference's (:func:`wbsa.camera.grazing.points_visible`, written by
+    :func:`grazing_points`), against the mesh's float32 world coordinates (``mesh``), as Embree sees them.
     """
     k = wp.tid()
     if state[k] != 2:
         return
-    b = view_of[k]
-    d = point[k] - wp.vec3(centers[b])
-    if wp.mesh_query_ray_anyhit(mesh, origins[b], d, float(f64(1.0) - cam.t_tol)):
+    o = wp.vec3(rays[k, 0], rays[k, 1], rays[k, 2])
+    d = wp.vec3(rays[k, 3], rays[k, 4], rays[k, 5])
+    if wp.mesh_query_ray_anyhit(mesh, o, d, float(f64(1.0) - cam.t_tol)):
         state[k] = 0
     else:
         state[k] = 1
 
 
 @wp.kernel
-def grazing_area(cand_tri: wp.array(dtype=int), cand_split: wp.array(dtype=int), cand_slot: wp.array(dtype=int),
-                 areas: wp.array(dtype=wp.float64), state: wp.array(dtype=int), out: wp.array(dtype=wp.float64)):
-    """Visible area of each grazing triangle: its area times its share of visible points."""
-    k = wp.tid()
-    s = cand_split[k]
-    n = s * s
-    start = cand_slot[k]
-    visible = int(0)
-    for i in range(start, start + n):
-        if state[i] == 1:
-            visible += 1
-    out[k] = areas[cand_tri[k]] * f64(visible) / f64(n)
-
-
-@wp.kernel
 def reduce_triangles(areas: wp.array(dtype=wp.float64), seen: wp.array2d(dtype=wp.uint8), chunk: int,
-                     hit_area: wp.array2d(dtype=wp.float64), n_hit: wp.array2d(dtype=int)):
-    """Per view and chunk of triangles, in order: area of the triangles hit and their number."""
+                     split: wp.array2d(dtype=int), slots: wp.array(dtype=wp.int64), state: wp.array(dtype=int),
+                     hit_area: wp.array2d(dtype=wp.float64), n_hit: wp.array2d(dtype=int),
+                     graze: wp.array2d(dtype=wp.float64)):
+    """Per view and chunk of triangles, in order: area of the triangles hit, their number, and the visible
+    area of the grazing ones (area × share of visible points, ``state`` 1; ``split`` all 0 when there are none)."""
     b, k = wp.tid()
     m = areas.shape[0]
     start = k * chunk
     end = wp.min(start + chunk, m)
     hit = f64(0.0)
     count = int(0)
+    grazing = f64(0.0)
     for t in range(start, end):
         if seen[b, t] != wp.uint8(0):
             hit += areas[t]
             count += 1
+        s = split[b, t]
+        if s != 0:
+            n = s * s
+            first = int(slots[b * m + t])
+            visible = int(0)
+            for i in range(first, first + n):
+                if state[i] == 1:
+                    visible += 1
+            grazing += areas[t] * f64(visible) / f64(n)
     hit_area[b, k] = hit
     n_hit[b, k] = count
+    graze[b, k] = grazing
 
 
 @wp.kernel

@@ -66,6 +66,21 @@ def test_segmentation_keeps_a_wide_armed_tall_body_and_drops_the_room(room_view)
     assert 1.8 < seg.subject.height_m < 2.0 and len(seg.others) == 1
 
 
+def test_a_body_alone_in_the_image_is_not_taken_for_a_wall(bodies):
+    """A background-free frame (a render of a body or a scan, no room): before, its front became a wall."""
+    from wbsa.camera import MeshScene, View, preset
+    from wbsa.estimation.segment import segment_subject
+    from wbsa.simulate import simulate_view
+
+    camera = preset("kinect-v2")
+    for azimuth in (0.0, 45.0):
+        frame = simulate_view(MeshScene(bodies[1]), camera, View(azimuth, 10.0, 2.6), keep_frame=True).frame
+        seg = segment_subject(frame.depth_m, camera)
+        truth = frame.depth_m > 0
+        assert seg.floor is None and not seg.walls
+        assert (seg.mask & truth).sum() / truth.sum() > 0.97
+
+
 def test_several_people_are_listed_or_picked(room_view):
     from wbsa.estimation.segment import SegmentSettings, segment_subject
 

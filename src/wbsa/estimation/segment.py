@@ -136,7 +136,10 @@ class Segmentation:
 def _voxelise(points: np.ndarray, voxel_m: float) -> tuple[np.ndarray, np.ndarray]:
     """Voxel centroids (v, 3) of (k, 3) points and the voxel of each point (k,)."""
     keys = np.floor(points / voxel_m).astype(np.int64)
-    _, inverse, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
+    keys -= keys.min(axis=0)
+    size = keys.max(axis=0) + 1
+    flat = (keys[:, 0] * size[1] + keys[:, 1]) * size[2] + keys[:, 2]  # lexicographic order kept: same voxels
+    _, inverse, counts = np.unique(flat, return_inverse=True, return_counts=True)
     inverse = inverse.ravel()
     sums = np.zeros((len(counts), 3))
     np.add.at(sums, inverse, points)

@@ -42,7 +42,8 @@ def room_view(bodies):
     man, woman = bodies
     room = compose_room(man, 20.0, wall_behind_m=0.8, others=((woman, 1.3),))
     camera = preset("kinect-v2")
-    sim = simulate_view(MeshScene(room.mesh), camera, View(20.0, 12.0, 3.2), sensor=SensorSettings(noise="nguyen2012"),
+    sim = simulate_view(MeshScene(room.mesh, surroundings=True), camera, View(20.0, 12.0, 3.2),
+                        sensor=SensorSettings(noise="nguyen2012"),
                         seed=4, keep_frame=True, target=room.subject_center)
     return room, camera, sim.frame
 

@@ -22,6 +22,9 @@ class MeshScene:
         Vertices in metres; at least one triangle with non-zero area, finite coordinates.
     nthreads : int
         Threads Open3D may use per cast (0 = all cores). Use 1 when many processes cast in parallel.
+    surroundings : bool
+        The mesh is a scene the camera stands in (a room with its floor and walls), not a body it must
+        stay outside: the camera-inside-the-body check (:meth:`contains`) is off.
 
     Attributes
     ----------
@@ -43,13 +46,14 @@ class MeshScene:
         Bounding-box centre, the subject's centre for the camera.
     """
 
-    def __init__(self, mesh: TriangleMesh, nthreads: int = 0) -> None:
+    def __init__(self, mesh: TriangleMesh, nthreads: int = 0, *, surroundings: bool = False) -> None:
         import open3d as o3d
 
         mesh = TriangleMesh.from_any(mesh)  # also a trimesh or Open3D mesh, or a (vertices, faces) pair
         vertices, faces = validate_mesh(mesh)
         self.mesh = mesh
         self.nthreads = int(nthreads)
+        self.surroundings = bool(surroundings)
         v0, v1, v2 = (vertices[f] for f in faces.T)
         e01, e20 = v1 - v0, v0 - v2
         cross = np.cross(e01, -e20)
@@ -106,8 +110,11 @@ class MeshScene:
         """Whether ``point`` (3,) lies inside the closed surface (ray parity, majority of 3 rays).
 
         Points outside the bounding box are outside without casting. For open meshes the answer is
-        only as good as the parity test (it is used to refuse a camera placed inside the body).
+        only as good as the parity test (it is used to refuse a camera placed inside the body). A scene
+        built with ``surroundings=True`` (a room the camera stands in) contains no point.
         """
+        if self.surroundings:
+            return False
         p = np.asarray(point, dtype=np.float64).reshape(3)
         if np.any(p < self.bbox_min) or np.any(p > self.bbox_max):
             return False

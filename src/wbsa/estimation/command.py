@@ -46,7 +46,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="farthest return kept, metres (default 8)")
     p.add_argument("--pick", type=_pick, default=None,
                    help="with several people: nearest, largest, center or x,y (a pixel of the subject)")
-    p.add_argument("--no-segment", action="store_true", help="every return is the subject (skip the segmentation; a body alone in the image is also found without it)")
+    p.add_argument("--no-segment", action="store_true",
+                   help="every return is the subject (skip the segmentation; a body alone in the image is found "
+                        "without it too)")
     p.add_argument("--mask-out", default=None, help="write the subject's mask here (8-bit PNG, 255 = subject)")
     p.add_argument("--out-mesh", default=None, help="write the reconstructed visible surface here (.ply/.obj)")
     p.add_argument("--json", action="store_true", help="print the estimate, view and flags as JSON")

@@ -166,8 +166,9 @@ def _room_capture(mesh, cap, rng: np.random.Generator, settings: RenderSettings,
     from wbsa.simulate import simulate_view
 
     room = compose_room(mesh, cap.view.azimuth_deg, wall_behind_m=float(rng.uniform(*settings.wall_behind_m)))
-    sim = simulate_view(MeshScene(room.mesh, nthreads=1), cap.camera, cap.view, sensor=cap.sensor, seed=settings.seed,
-                        subject_id=sample, keep_frame=True, target=room.subject_center)
+    scene = MeshScene(room.mesh, nthreads=1, surroundings=True)
+    sim = simulate_view(scene, cap.camera, cap.view, sensor=cap.sensor, seed=settings.seed, subject_id=sample,
+                        keep_frame=True, target=room.subject_center)
     depth = np.round(sim.frame.depth_m.astype(np.float64) * 1000.0) / 1000.0  # as a millimetre depth image
     try:
         seg = segment_subject(depth, cap.camera, SegmentSettings(pick="center"))

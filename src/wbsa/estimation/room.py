@@ -3,7 +3,8 @@
 :func:`compose_room` puts a body mesh on a floor with a wall behind it (as seen from a camera at a given
 azimuth) and optionally other people beside it, as one :class:`~wbsa.core.TriangleMesh` whose first
 ``n_subject_faces`` triangles are the subject's, so every rendered pixel knows whether it is the subject
-(its triangle ID). Render it with :func:`wbsa.simulate.simulate_view` aimed at the subject's centre.
+(its triangle ID). Render it with :func:`wbsa.simulate.simulate_view` aimed at the subject's centre, in a
+``MeshScene(room.mesh, surroundings=True)`` (the camera stands in the room: no inside-the-body check).
 The floor and walls are tiled into small squares so that the sensor's triangle holes stay small.
 """
 

@@ -85,8 +85,9 @@ def room_capture_chunk(population: pd.DataFrame, others: pd.DataFrame, first: in
                 people = ((body_model.skin_mesh(v2), float(side)),)
             room = compose_room(subject, cap.view.azimuth_deg, wall_behind_m=float(room_rng.uniform(*settings.wall_behind_m)),
                                 others=people)
-            sim = simulate_view(MeshScene(room.mesh, nthreads=1), cap.camera, cap.view, sensor=cap.sensor,
-                                seed=settings.seed, subject_id=index, keep_frame=True, target=room.subject_center)
+            scene = MeshScene(room.mesh, nthreads=1, surroundings=True)
+            sim = simulate_view(scene, cap.camera, cap.view, sensor=cap.sensor, seed=settings.seed, subject_id=index,
+                                keep_frame=True, target=room.subject_center)
             depth = np.round(sim.frame.depth_m.astype(np.float64) * 1000.0) / 1000.0  # a millimetre depth image
             truth = room.is_subject(sim.frame.triangle_id) & (depth > 0)
             t = population.iloc[b]

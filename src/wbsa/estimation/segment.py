@@ -273,11 +273,12 @@ def _grow_feet(mask: np.ndarray, pix: np.ndarray, points: np.ndarray, pixel_labe
     """Add the lowest returns of the feet, hidden in the floor's noise, that touch the subject in the image.
 
     The floor cut of the clustering (2.5 σ of the depth noise) hides the lowest centimetres of the feet.
-    Returns not in any object are added when 8-connected to the subject in the image and
+    A return in no object (and not on or behind a wall) joins the subject when it is 8-connected to it in
+    the image and
 
-    * elsewhere: above the measures' floor cut (:func:`~wbsa.estimation.cloud.above_floor`) and the floor's
-      own noise; the floor's stray returns are too sparse to reach far;
-    * under the feet instead: down each foot's image column to where the floor takes over (:func:`_sole_pixels`).
+    * under a foot: it is one of the sole's returns (:func:`_sole_pixels`);
+    * elsewhere: it lies above the measures' floor cut (:func:`~wbsa.estimation.cloud.above_floor`) and the
+      floor's own measured noise (the floor's stray returns are then too sparse to reach far).
 
     The measures (:func:`~wbsa.estimation.measure.measure_subject`) cut the floor strip again, as in
     training, so this changes the subject's mask, not the VBSA.
@@ -290,16 +291,14 @@ def _grow_feet(mask: np.ndarray, pix: np.ndarray, points: np.ndarray, pixel_labe
     for wall in walls:
         free &= wall.height(points) > wall.tolerance(points)
     under_feet, sole = _sole_pixels(mask, pix, points, floor)
-    # elsewhere, above the measures' cut and the floor's own measured noise (noisier cameras than the envelope)
     clear = above_floor(points, floor) & (floor.height(points) > floor.tolerance(points))
-    cand = free & np.where(under_feet, sole & (floor.height(points) > 0.0), clear)
+    cand = free & np.where(under_feet, sole, clear)
     grow = np.zeros(mask.size, dtype=bool)
     grow[pix[cand]] = True
     both = mask | grow.reshape(mask.shape)
     labels, _ = ndimage.label(both, structure=np.ones((3, 3), dtype=bool))
     touching = np.unique(labels[mask])
-    out = np.isin(labels, touching[touching > 0])
-    return out
+    return np.isin(labels, touching[touching > 0])
 
 
 def _sole_pixels(mask: np.ndarray, pix: np.ndarray, points: np.ndarray,
@@ -311,7 +310,8 @@ def _sole_pixels(mask: np.ndarray, pix: np.ndarray, points: np.ndarray,
     column, the returns first continue the foot (range near the foot's) and then show the floor in front of
     it (range near where the ray meets the floor). The row where one gives way to the other is where the
     two models, scored over the whole column, fit best (a change point): one noisy return cannot move it
-    far, as a threshold on each return's height would.
+    far, as a threshold on each return's height would. The sole's returns are those above that row and
+    above the floor plane.
     """
     _, w = mask.shape
     rng = np.linalg.norm(points, axis=1)
@@ -348,7 +348,7 @@ def _sole_pixels(mask: np.ndarray, pix: np.ndarray, points: np.ndarray,
         j = int(np.argmin(total))
         under[below] = True
         sole[below[:j]] = True
-    return under, sole
+    return under, sole & (height > 0.0)
 
 
 def _describe(pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarray, width: int,

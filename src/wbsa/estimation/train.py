@@ -41,8 +41,6 @@ class TrainSettings:
         Share of subjects kept for the interval's calibration (never fitted on).
     age_years : (float, float)
         Ages of the random subjects, uniform in years.
-    weight : (float, float)
-        anny's weight phenotype of the random subjects, uniform (its whole range: thin to obese).
     capture : CaptureSettings
     postures : tuple of str or None
     room : bool
@@ -58,7 +56,6 @@ class TrainSettings:
     views_per_subject: int = 4
     calibration_fraction: float = 0.25
     age_years: tuple[float, float] = (3.0, 80.0)
-    weight: tuple[float, float] = (0.0, 1.0)
     capture: CaptureSettings = field(default_factory=CaptureSettings)
     postures: tuple[str, ...] | None = None
     room: bool = True
@@ -82,8 +79,7 @@ def training_population(settings: TrainSettings, show_progress: bool | None = No
     parts = []
     if settings.n_random:
         params = sample_random_parameters(RandomPopulationSettings(n=settings.n_random, seed=settings.seed,
-                                                                   age_years=settings.age_years, age_sampling="years",
-                                                                   weight=settings.weight))
+                                                                   age_years=settings.age_years, age_sampling="years"))
         parts.append(measure_population(params, show_progress=show_progress).assign(population="random"))
     if settings.n_survey:
         import warnings

@@ -39,8 +39,8 @@ def default_model_path(settings: TrainSettings = TrainSettings()) -> Path:
 def default_model(settings: TrainSettings = TrainSettings(), show_progress: bool | None = None) -> EstimatorModel:
     """The cached default model; trained and written to :func:`default_model_path` if missing.
 
-    Training renders and segments ``(n_random + n_survey) × views_per_subject`` captures in rooms (about 30
-    minutes on 2 cores).
+    Training renders and segments ``(n_random + n_survey) × views_per_subject`` captures in rooms (about 15
+    minutes on 2 idle cores).
     """
     from wbsa.parallel import default_workers
 

@@ -159,17 +159,12 @@ def render_chunk(population: pd.DataFrame, first_sample: int, settings: RenderSe
 
 def _room_capture(mesh, cap, rng: np.random.Generator, settings: RenderSettings, sample: int):
     """(depth (h, w) float64 in whole millimetres, subject mask or None, detected floor) of ``mesh`` in a room."""
-    from wbsa.camera.scene import MeshScene
     from wbsa.errors import WbsaError
-    from wbsa.estimation.room import compose_room
+    from wbsa.estimation.room import capture_room, compose_room
     from wbsa.estimation.segment import SegmentSettings, segment_subject
-    from wbsa.simulate import simulate_view
 
     room = compose_room(mesh, cap.view.azimuth_deg, wall_behind_m=float(rng.uniform(*settings.wall_behind_m)))
-    scene = MeshScene(room.mesh, nthreads=1, surroundings=True)
-    sim = simulate_view(scene, cap.camera, cap.view, sensor=cap.sensor, seed=settings.seed, subject_id=sample,
-                        keep_frame=True, target=room.subject_center)
-    depth = np.round(sim.frame.depth_m.astype(np.float64) * 1000.0) / 1000.0  # as a millimetre depth image
+    _, depth = capture_room(room, cap, seed=settings.seed, subject_id=sample)
     try:
         seg = segment_subject(depth, cap.camera, SegmentSettings(pick="center"))
     except WbsaError:

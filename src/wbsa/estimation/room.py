@@ -3,8 +3,7 @@
 :func:`compose_room` puts a body mesh on a floor with a wall behind it (as seen from a camera at a given
 azimuth) and optionally other people beside it, as one :class:`~wbsa.core.TriangleMesh` whose first
 ``n_subject_faces`` triangles are the subject's, so every rendered pixel knows whether it is the subject
-(its triangle ID). Render it with :func:`wbsa.simulate.simulate_view` aimed at the subject's centre, in a
-``MeshScene(room.mesh, surroundings=True)`` (the camera stands in the room: no inside-the-body check).
+(its triangle ID). :func:`capture_room` renders it as a millimetre depth image.
 The floor and walls are tiled into small squares so that the sensor's triangle holes stay small.
 """
 
@@ -126,3 +125,31 @@ def compose_room(subject: TriangleMesh, camera_azimuth_deg: float, *, wall_behin
         # facing the camera: edge_u × edge_v = to_camera
         parts.append(tiled_rectangle(corner, 2 * room_half_width_m * right, np.array([0.0, 0.0, wall_height_m])))
     return RoomScene(merge_meshes(*parts), int(len(subject.faces)), centre)
+
+
+def capture_room(room: RoomScene, capture, *, seed: int, subject_id: int):
+    """Render ``room`` as one drawn capture sees it, stored as a millimetre depth image would be.
+
+    The camera aims at the subject's centre and stands in the room (``MeshScene(surroundings=True)``: no
+    inside-the-body check); the capture's sensor reads the frame with the stream of ``(seed, subject_id)``.
+
+    Parameters
+    ----------
+    room : RoomScene
+    capture : wbsa.estimation.capture.Capture
+    seed, subject_id : int
+
+    Returns
+    -------
+    frame : wbsa.core.DepthFrame
+        The sensed frame (its ``triangle_id`` tells the subject's pixels, :meth:`RoomScene.is_subject`).
+    depth_m : (h, w) float64
+        Its depth rounded to whole millimetres.
+    """
+    from wbsa.camera.scene import MeshScene
+    from wbsa.simulate import simulate_view
+
+    scene = MeshScene(room.mesh, nthreads=1, surroundings=True)
+    frame = simulate_view(scene, capture.camera, capture.view, sensor=capture.sensor, seed=seed, subject_id=subject_id,
+                          keep_frame=True, target=room.subject_center).frame
+    return frame, np.round(frame.depth_m.astype(np.float64) * 1000.0) / 1000.0

@@ -182,8 +182,7 @@ def _meets_border(points: np.ndarray, intrinsics, shape: tuple[int, int]) -> boo
     z = np.maximum(points[:, 2], 1e-9)
     u = float(intrinsics.fx) * points[:, 0] / z + float(intrinsics.cx)
     v = float(intrinsics.fy) * points[:, 1] / z + float(intrinsics.cy)
-    margin = BORDER_PX
-    return bool(np.any((u < margin) | (u > w - 1 - margin) | (v < margin) | (v > h - 1 - margin)))
+    return bool(np.any((u < BORDER_PX) | (u > w - 1 - BORDER_PX) | (v < BORDER_PX) | (v > h - 1 - BORDER_PX)))
 
 
 def segment_subject(depth_m: np.ndarray, intrinsics, settings: SegmentSettings = SegmentSettings()) -> Segmentation:

@@ -52,16 +52,14 @@ def room_capture_chunk(population: pd.DataFrame, others: pd.DataFrame, first: in
     (``est_*``, ``flags``; ``error`` when it raised) and the estimate's wall time.
     """
     from wbsa.bodies.body_model import BodyModel
-    from wbsa.camera.scene import MeshScene
     from wbsa.errors import WbsaError
     from wbsa.bodies.posture import RandomPosture
     from wbsa.estimation.predict import load_any_model
-    from wbsa.estimation.room import compose_room
+    from wbsa.estimation.room import capture_room, compose_room
     from wbsa.estimation.segment import SegmentSettings
     from wbsa.estimation.single_view import estimate
     from wbsa.estimation.view import fold_azimuth
     from wbsa.parallel import keep_large_allocations, single_threaded_math
-    from wbsa.simulate import simulate_view
 
     keep_large_allocations()
     rows = []
@@ -85,11 +83,8 @@ def room_capture_chunk(population: pd.DataFrame, others: pd.DataFrame, first: in
                 people = ((body_model.skin_mesh(v2), float(side)),)
             room = compose_room(subject, cap.view.azimuth_deg, wall_behind_m=float(room_rng.uniform(*settings.wall_behind_m)),
                                 others=people)
-            scene = MeshScene(room.mesh, nthreads=1, surroundings=True)
-            sim = simulate_view(scene, cap.camera, cap.view, sensor=cap.sensor, seed=settings.seed, subject_id=index,
-                                keep_frame=True, target=room.subject_center)
-            depth = np.round(sim.frame.depth_m.astype(np.float64) * 1000.0) / 1000.0  # a millimetre depth image
-            truth = room.is_subject(sim.frame.triangle_id) & (depth > 0)
+            frame, depth = capture_room(room, cap, seed=settings.seed, subject_id=index)
+            truth = room.is_subject(frame.triangle_id) & (depth > 0)
             t = population.iloc[b]
             row = {k: t[k] for k in ("subject_id", "population", "sex", "age_years", "stature_m", "mass_kg", "wbsa_m2")
                    if k in t.index}

@@ -67,6 +67,29 @@ def test_segmentation_keeps_a_wide_armed_tall_body_and_drops_the_room(room_view)
     assert 1.8 < seg.subject.height_m < 2.0 and len(seg.others) == 1
 
 
+def test_side_view_keeps_both_soles_and_no_floor_strip(body_model):
+    """Side view, feet apart: the far foot's sole, seen above the near foot, is walked too, and lone
+    columns of floor noise under a foot are not taken (before: soles 75 %, floor 0.50 % of the mask)."""
+    from wbsa.camera import MeshScene, View, preset
+    from wbsa.core.backproject import backproject_depth
+    from wbsa.estimation.room import compose_room
+    from wbsa.estimation.segment import SegmentSettings, segment_subject
+    from wbsa.sensor.settings import SensorSettings
+    from wbsa.simulate import simulate_view
+
+    man = body_model.rest_bodies(reference_adult(0.0))
+    room = compose_room(body_model.skin_mesh(_posed(body_model, man, "feet-apart")), 80.0, wall_behind_m=0.8)
+    camera = preset("kinect-v2")
+    frame = simulate_view(MeshScene(room.mesh, surroundings=True), camera, View(80.0, 15.0, 2.8),
+                          sensor=SensorSettings(noise="nguyen2012"), seed=4, keep_frame=True,
+                          target=room.subject_center).frame
+    truth = room.is_subject(frame.triangle_id)
+    seg = segment_subject(frame.depth_m, camera, SegmentSettings(pick="center"))
+    soles = truth & (seg.floor.height(backproject_depth(frame.depth_m, camera)) < 0.05)
+    assert soles.sum() > 300 and (seg.mask & soles).sum() / soles.sum() > 0.81
+    assert (seg.mask & ~truth).sum() / seg.mask.sum() < 0.0045
+
+
 def test_a_body_alone_in_the_image_is_not_taken_for_a_wall(bodies):
     """A background-free frame (a render of a body or a scan, no room): before, its front became a wall."""
     from wbsa.camera import MeshScene, View, preset

@@ -289,7 +289,7 @@ def _grow_feet(mask: np.ndarray, pix: np.ndarray, points: np.ndarray, pixel_labe
     free = pixel_label < 0
     for wall in walls:
         free &= wall.height(points) > wall.tolerance(points)
-    under_feet, sole = _sole_pixels(mask, pix, points, floor)
+    under_feet, sole = _sole_pixels(mask, pix, points, floor, free)
     clear = above_floor(points, floor) & (floor.height(points) > floor.tolerance(points))
     cand = free & np.where(under_feet, sole, clear)
     grow = np.zeros(mask.size, dtype=bool)
@@ -300,54 +300,96 @@ def _grow_feet(mask: np.ndarray, pix: np.ndarray, points: np.ndarray, pixel_labe
     return np.isin(labels, touching[touching > 0])
 
 
-def _sole_pixels(mask: np.ndarray, pix: np.ndarray, points: np.ndarray,
-                 floor: Plane) -> tuple[np.ndarray, np.ndarray]:
-    """(k,) bool returns under the feet, and (k,) bool those of them that are the soles'.
+def _sole_pixels(mask: np.ndarray, pix: np.ndarray, points: np.ndarray, floor: Plane,
+                 free: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(k,) bool returns under the feet that were looked at, and (k,) bool those of them that are the feet's.
 
-    A foot column is an image column whose lowest subject return lies within :data:`FEET_BAND_M` of the
-    floor; the foot's range there is the median range of its three lowest subject returns. Going down the
-    column, the returns first continue the foot (range near the foot's) and then show the floor in front of
-    it (range near where the ray meets the floor). The row where one gives way to the other is where the
-    two models, scored over the whole column, fit best (a change point): one noisy return cannot move it
-    far, as a threshold on each return's height would. The sole's returns are those above that row and
-    above the floor plane.
+    The lowest centimetres of a foot lie inside the floor's depth noise. Walking down an image column from
+    the end of a run of subject returns that lies within :data:`FEET_BAND_M` of the floor, the returns
+    first continue the foot (range near the foot's) and then show the floor in front of it (range near
+    where the ray meets the floor); the split is a change point (:func:`_walk`). Every run of a column is
+    walked, so the far foot, seen above the near one, keeps its sole too. A foot return found so must have
+    a foot or subject return beside it in its row: a sole is a strip across the foot, and a lone column of
+    "foot" is the floor's noise. (Walking along the rows as well, for toes pointing across the image in
+    side views, found as much floor as toes on the benchmark images: the floor beside a foot is at the
+    foot's range.)
     """
-    _, w = mask.shape
+    h, w = mask.shape
+    rows, cols = np.divmod(pix, w)
+    subject = mask.ravel()[pix]
+    if not subject.any():
+        none = np.zeros(len(pix), dtype=bool)
+        return none, none
     rng = np.linalg.norm(points, axis=1)
     height = floor.height(points)
-    rows, cols = np.divmod(pix, w)
-    none = np.zeros(len(pix), dtype=bool)
-    subject = np.flatnonzero(mask.ravel()[pix])
-    if len(subject) == 0:
-        return none, none
     ray_down = -(points @ floor.normal) / np.maximum(rng, 1e-9)  # cosine between the ray and the floor's normal
     t_floor = np.where(ray_down > 1e-6, -floor.offset / np.maximum(ray_down, 1e-6), np.inf)
     sigma = Plane.unit_noise(points) * floor.noise_scale
-    by_col = np.lexsort((rows, cols))  # every return, by column then row
-    col_start = np.searchsorted(cols[by_col], np.arange(w + 1))
-    subject = subject[np.lexsort((-rows[subject], cols[subject]))]  # by column, lowest in the image first
-    starts = np.flatnonzero(np.r_[True, cols[subject][1:] != cols[subject][:-1]])
-    under, sole = none.copy(), none.copy()
-    for s0 in starts:
-        k = subject[s0]
-        if height[k] >= FEET_BAND_M:
+    low = height < FEET_BAND_M
+    walkable = free & low
+    looked, feet = _walk(cols, rows, subject, low, walkable, (rng, t_floor, sigma))
+    feet &= height > 0.0
+    return looked, feet & _beside_in_row(feet, subject, pix, (h, w))
+
+
+def _walk(line: np.ndarray, step: np.ndarray, foot: np.ndarray, low: np.ndarray, walkable: np.ndarray,
+          models: tuple[np.ndarray, np.ndarray, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """Change points along image lines, from the end of every low run of ``foot`` returns.
+
+    Parameters
+    ----------
+    line, step : (k,) int
+        Line of every return (its column or row) and its place along the line, in walking order.
+    foot : (k,) bool
+        Returns known to be the subject's.
+    low, walkable : (k,) bool
+        Returns near the floor (where runs may end), and those a walk may cross.
+    models : ((k,) float, (k,) float, (k,) float)
+        Range of every return, the range where its ray meets the floor, and its depth noise (m).
+
+    Returns
+    -------
+    looked, found : (k,) bool
+        Returns walked over, and those of them before a change point (the foot's).
+    """
+    rng, t_floor, sigma = models
+    looked, found = np.zeros(len(line), dtype=bool), np.zeros(len(line), dtype=bool)
+    order = np.lexsort((step, line))
+    o_line, o_foot = line[order], foot[order]
+    same_next = np.r_[o_line[1:] == o_line[:-1], False]
+    # a run ends where the next return along the line is not the subject's
+    ends = np.flatnonzero(o_foot & np.r_[~o_foot[1:], True] & same_next & low[order])
+    # a walk stops before the subject, a return it may not cross, or the next line
+    breaks = np.r_[np.flatnonzero(o_foot | ~walkable[order] | ~np.r_[True, same_next[:-1]]), len(order)]
+    for e in ends:
+        first = e
+        while first > 0 and e - first < 2 and o_foot[first - 1] and o_line[first - 1] == o_line[e]:
+            first -= 1
+        foot_range = float(np.median(rng[order[first:e + 1]]))
+        walk = order[e + 1:int(breaks[np.searchsorted(breaks, e + 1)])]
+        walk = walk[t_floor[walk] > foot_range - 3.0 * sigma[walk]]
+        if len(walk) == 0:
             continue
-        c = cols[k]
-        foot_range = float(np.median(rng[subject[s0:s0 + 3][cols[subject[s0:s0 + 3]] == c]]))
-        col = by_col[col_start[c]:col_start[c + 1]]
-        below = col[(rows[col] > rows[k]) & (height[col] < FEET_BAND_M)
-                    & (t_floor[col] > foot_range - 3.0 * sigma[col])]
-        if len(below) == 0:
-            continue
-        cap = (3.0 * sigma[below]) ** 2
-        foot_cost = np.minimum((rng[below] - foot_range) ** 2, cap)
-        floor_cost = np.minimum((rng[below] - t_floor[below]) ** 2, cap)
+        cap = (3.0 * sigma[walk]) ** 2
+        foot_cost = np.minimum((rng[walk] - foot_range) ** 2, cap)
+        floor_cost = np.minimum((rng[walk] - t_floor[walk]) ** 2, cap)
         # cost of the split after j returns: the first j are the foot's, the rest the floor's
         total = np.r_[0.0, np.cumsum(foot_cost)] + np.r_[np.cumsum(floor_cost[::-1])[::-1], 0.0]
         j = int(np.argmin(total))
-        under[below] = True
-        sole[below[:j]] = True
-    return under, sole & (height > 0.0)
+        looked[walk] = True
+        found[walk[:j]] = True
+    return looked, found
+
+
+def _beside_in_row(found: np.ndarray, body: np.ndarray, pix: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+    """(k,) bool: returns with a ``found`` or ``body`` return next to them in their image row."""
+    img = np.zeros(shape[0] * shape[1], dtype=bool)
+    img[pix[found | body]] = True
+    img = img.reshape(shape)
+    near = np.zeros_like(img)
+    near[:, 1:] |= img[:, :-1]
+    near[:, :-1] |= img[:, 1:]
+    return near.ravel()[pix]
 
 
 def _describe(pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarray, width: int,

@@ -25,6 +25,7 @@ FLAGS: dict[str, str] = {
     "uncertain_view": "the camera may be in front of or behind the subject (azimuth uncertain)",
     "model_mismatch": "the model was fitted for another camera, distance or view",
     "camera_assumed": "no camera was given; the preset of the image's size was assumed",
+    "interval_unsure": "the model's calibration has too few subjects to promise the interval's level",
 }
 #: Heights from the point cloud outside this range (m) mean a wrong depth scale or units.
 HUMAN_HEIGHT_M = (0.5, 2.5)

@@ -5,7 +5,8 @@ the view: a ridge regression of log WBSA on log VBSA, log stature (paper eq. 8),
 width and thickness, each times a view basis (1, cos ψ, cos 2ψ, cos 3ψ, sin φ), plus distance and pixel
 pitch; boosted trees then correct its residual from the same measures, the body's band widths and
 thicknesses and the view's uncertainty. The interval is split-conformal: residuals divided by a fitted
-spread s(x) on held-out calibration renders (never used in fitting) give the quantile of any level.
+spread s(x) on held-out calibration renders (never used in fitting) give the quantile of any level, taken
+so that the level is met with 90 % confidence over the calibration draw (:meth:`EstimatorModel.quantile`).
 
 File layout: one ``.npz`` of numbers (no pickle) with ``meta_json`` (format ``wbsa-estimator``, version 1,
 training settings, feature ranges, held-out metrics).
@@ -28,6 +29,8 @@ FORMAT = "wbsa-estimator"
 VERSION = 1
 #: Measures whose training range is recorded and checked (flag ``out_of_training_range``).
 RANGE_KEYS = ("vbsa_m2", "stature_m", "distance_m", "elevation_deg")
+#: Probability, over the calibration draw, that an interval covers at least its stated level.
+QUANTILE_CONFIDENCE = 0.9
 _BASE = ("vbsa_m2", "stature_m", "silhouette_m2", "width_m", "thickness_m")
 
 
@@ -113,13 +116,29 @@ class EstimatorModel:
         return out
 
     def quantile(self, level: float) -> float:
-        """Calibrated multiplier of s(x) for a two-sided interval of ``level`` (split conformal)."""
+        """Calibrated multiplier of s(x) for a two-sided interval of ``level`` (split conformal).
+
+        The plain split-conformal quantile covers ``level`` on average over calibration draws; from a few
+        hundred subjects it falls short as often as not. The quantile taken here is the one that covers
+        ``level`` with probability :data:`QUANTILE_CONFIDENCE` over the calibration draw (normal
+        approximation of the score's coverage), counting each calibration subject once, since its views
+        share one body (``meta["n_calibration_subjects"]``; every score without it). With too few subjects
+        for that, the largest score is taken (:meth:`quantile_is_sure` is then False).
+        """
+        return float(self.scores[min(self._sure_rank(level), len(self.scores)) - 1])
+
+    def quantile_is_sure(self, level: float) -> bool:
+        """Whether the calibration has enough subjects for :meth:`quantile`'s confidence at ``level``."""
+        return self._sure_rank(level) <= len(self.scores)
+
+    def _sure_rank(self, level: float) -> int:
         n = len(self.scores)
-        k = int(np.ceil((n + 1) * level))
-        if k > n:
+        if int(np.ceil((n + 1) * level)) > n:
             raise WbsaError(f"the model was calibrated on {n} renders, too few for a {100 * level:g} % interval; "
                             f"use a lower level")
-        return float(self.scores[k - 1])
+        n_eff = max(float(self.meta.get("n_calibration_subjects", n)), 1.0)
+        sure = level + _normal_quantile(QUANTILE_CONFIDENCE) * np.sqrt(level * (1.0 - level) / n_eff)
+        return int(np.ceil((n + 1) * sure))
 
     def predict(self, features: dict[str, np.ndarray], shape: np.ndarray, psi_deg, psi_sd_deg, elevation_deg,
                 level: float = 0.95) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -173,6 +192,12 @@ class EstimatorModel:
         return cls(ViewModel.from_arrays(arrays), arrays["mean"], arrays["scale"], arrays["coef"],
                    float(arrays["intercept"][0]), residual, arrays["spread_coef"], arrays["spread_range"],
                    np.sort(arrays["scores"]), meta)
+
+
+def _normal_quantile(p: float) -> float:
+    from scipy.stats import norm
+
+    return float(norm.ppf(p))
 
 
 def _json_default(o: object) -> object:

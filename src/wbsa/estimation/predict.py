@@ -93,7 +93,7 @@ def predict_wbsa(model, measures, camera, azimuth_deg: float | None, elevation_d
                  level: float) -> Prediction:
     """Predict WBSA from measures with either kind of model (see the module doc)."""
     from wbsa.estimation.checks import range_flags
-    from wbsa.estimation.model import EstimatorModel
+    from wbsa.estimation.model import QUANTILE_CONFIDENCE, EstimatorModel
 
     view = _view(model, measures, azimuth_deg)
     az = view.azimuth_deg if azimuth_deg is None else float(fold_azimuth(azimuth_deg))
@@ -108,6 +108,10 @@ def predict_wbsa(model, measures, camera, azimuth_deg: float | None, elevation_d
         w, lo, hi = model.predict(feats, measures.shape[None], np.array([az]), np.array([az_sd]), np.array([el]), level)
         flags.update(range_flags({"vbsa_m2": measures.vbsa_m2, "stature_m": measures.stature_m,
                                   "distance_m": measures.distance_m, "elevation_deg": el}, model.ranges))
+        if not model.quantile_is_sure(level):
+            flags["interval_unsure"] = (f"the model was calibrated on {model.meta.get('n_calibration_subjects', '?')} "
+                                        f"subjects, too few to promise {100 * level:g} % with "
+                                        f"{100 * QUANTILE_CONFIDENCE:g} % confidence; its widest score is used")
         return Prediction(float(w[0]), float(lo[0]), float(hi[0]), view, (az, el), model.name, flags)
     return _predict_legacy(model, measures, camera, view, az, el, level, flags)
 

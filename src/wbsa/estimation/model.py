@@ -6,7 +6,8 @@ width and thickness, each times a view basis (1, cos ψ, cos 2ψ, cos 3ψ, sin �
 pitch; boosted trees then correct its residual from the same measures, the body's band widths and
 thicknesses and the view's uncertainty. The interval is split-conformal: residuals divided by a fitted
 spread s(x) on held-out calibration renders (never used in fitting) give the quantile of any level, taken
-so that the level is met with 90 % confidence over the calibration draw (:meth:`EstimatorModel.quantile`).
+so that the level is met with at least 90 % confidence over the calibration draw
+(:meth:`EstimatorModel.quantile`).
 
 File layout: one ``.npz`` of numbers (no pickle) with ``meta_json`` (format ``wbsa-estimator``, version 1,
 training settings, feature ranges, held-out metrics).
@@ -118,12 +119,15 @@ class EstimatorModel:
     def quantile(self, level: float) -> float:
         """Calibrated multiplier of s(x) for a two-sided interval of ``level`` (split conformal).
 
-        The plain split-conformal quantile covers ``level`` on average over calibration draws; from a few
-        hundred subjects it falls short as often as not. The quantile taken here is the one that covers
-        ``level`` with probability :data:`QUANTILE_CONFIDENCE` over the calibration draw (normal
-        approximation of the score's coverage), counting each calibration subject once, since its views
-        share one body (``meta["n_calibration_subjects"]``; every score without it). With too few subjects
-        for that, the largest score is taken (:meth:`quantile_is_sure` is then False).
+        The plain split-conformal quantile, the ⌈(n + 1) L⌉-th of n scores, covers ``level`` on average over
+        calibration draws; from a few hundred subjects it falls short about half the time. The one taken
+        here covers ``level`` with probability at least :data:`QUANTILE_CONFIDENCE` over the calibration
+        draw, counting each calibration subject once, since its captures share one body: with m subjects,
+        the smallest k with P(Binomial(m, L) ≤ k − 1) ≥ confidence (the k-th of m independent scores then
+        covers L with that probability) sets the level L′ = k / (m + 1), and the ⌈(n + 1) L′⌉-th score is
+        taken. ``meta["n_calibration_subjects"]`` gives m (for older files, n over the captures per
+        subject). When k > m, no score can promise it; the largest is taken and :meth:`quantile_is_sure`
+        is False.
         """
         return float(self.scores[min(self._sure_rank(level), len(self.scores)) - 1])
 
@@ -132,13 +136,21 @@ class EstimatorModel:
         return self._sure_rank(level) <= len(self.scores)
 
     def _sure_rank(self, level: float) -> int:
+        """1-based rank of the score :meth:`quantile` takes (more than the number of scores: not sure)."""
+        from scipy.stats import binom
+
         n = len(self.scores)
+        if not 0.0 < level < 1.0:
+            raise WbsaError(f"interval level {level} must lie in (0, 1), e.g. 0.95")
         if int(np.ceil((n + 1) * level)) > n:
             raise WbsaError(f"the model was calibrated on {n} renders, too few for a {100 * level:g} % interval; "
                             f"use a lower level")
-        n_eff = max(float(self.meta.get("n_calibration_subjects", n)), 1.0)
-        sure = level + _normal_quantile(QUANTILE_CONFIDENCE) * np.sqrt(level * (1.0 - level) / n_eff)
-        return int(np.ceil((n + 1) * sure))
+        per_subject = float(self.meta.get("settings", {}).get("views_per_subject", 1))
+        m = max(int(self.meta.get("n_calibration_subjects", round(n / per_subject))), 1)
+        k = int(binom.ppf(QUANTILE_CONFIDENCE, m, level)) + 1
+        if k > m:
+            return n + 1
+        return int(np.ceil((n + 1) * k / (m + 1)))
 
     def predict(self, features: dict[str, np.ndarray], shape: np.ndarray, psi_deg, psi_sd_deg, elevation_deg,
                 level: float = 0.95) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -192,12 +204,6 @@ class EstimatorModel:
         return cls(ViewModel.from_arrays(arrays), arrays["mean"], arrays["scale"], arrays["coef"],
                    float(arrays["intercept"][0]), residual, arrays["spread_coef"], arrays["spread_range"],
                    np.sort(arrays["scores"]), meta)
-
-
-def _normal_quantile(p: float) -> float:
-    from scipy.stats import norm
-
-    return float(norm.ppf(p))
 
 
 def _json_default(o: object) -> object:

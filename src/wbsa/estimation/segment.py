@@ -12,6 +12,7 @@
    object they touch, so stray floor returns cannot chain objects together. Objects that touch in the image
    with less than 0.8 m between them in depth (a body's near and far sides, an arm in front of the waist)
    are one object if together they are still person-sized.
+   The subject's feet are then taken down to the floor (:mod:`wbsa.estimation.feet`).
 4. A cluster is person-sized if it is 0.45–2.6 m tall (along the floor normal, or its long axis) and at
    most 2.6 m wide; with several, ``pick`` chooses (``nearest``, ``largest``, ``center`` of the image, or an
    ``(x, y)`` pixel), else a :class:`~wbsa.errors.WbsaError` lists them.
@@ -24,22 +25,15 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from wbsa.errors import WbsaError, check_field
-from wbsa.estimation.cloud import Plane, above_floor, ransac_plane
+from wbsa.estimation.cloud import Plane, ransac_plane
 from wbsa.estimation.clusters import MAX_FOOTPRINT_M, attach_low, footprint_m, merge_occluding
+from wbsa.estimation.feet import grow_feet
 
 PICKS = ("nearest", "largest", "center")
 #: Height over the floor below which returns are not used to link objects (only to extend them).
 LOW_BAND_M = 0.10
 #: A room surface reaches this close to the image's border (pixels).
 BORDER_PX = 3
-#: Subject returns this close to the floor mark the image columns where the soles are looked for.
-FEET_BAND_M = 0.12
-#: Side of the square window of the median height (m at the feet; 5-7 pixels, else no window is taken).
-RAISED_WINDOW_M = 0.04
-#: Floor returns at least this far from the subject (m at the feet) give the floor's own median heights ...
-RAISED_AWAY_M = 0.25
-#: ... and this quantile of them is the highest the floor reaches.
-RAISED_QUANTILE = 0.999
 
 
 @dataclass(frozen=True)
@@ -268,194 +262,9 @@ def segment_subject(depth_m: np.ndarray, intrinsics, settings: SegmentSettings =
     chosen = _choose(people, settings.pick, (w, h), pixel_label, pix)
     mask = np.zeros(h * w, dtype=bool)
     mask[pix[pixel_label == chosen.label]] = True
-    mask = _grow_feet(mask.reshape(h, w), pix, points, pixel_label, floor, walls, float(intrinsics.fx))
+    mask = grow_feet(mask.reshape(h, w), pix, points, pixel_label, floor, walls, float(intrinsics.fx))
     others = tuple(c for c in people if c.label != chosen.label)
     return Segmentation(mask, floor, tuple(walls), chosen, others)
-
-
-def _grow_feet(mask: np.ndarray, pix: np.ndarray, points: np.ndarray, pixel_label: np.ndarray,
-               floor: Plane | None, walls: list[Plane], fx: float) -> np.ndarray:
-    """Add the lowest returns of the feet, hidden in the floor's noise, that touch the subject in the image.
-
-    The floor cut of the clustering (2.5 σ of the depth noise) hides the lowest centimetres of the feet.
-    A return in no object (and not on or behind a wall) joins the subject when it is 8-connected to it in
-    the image and
-
-    * under a foot: it is one of the sole's returns (:func:`_sole_pixels`);
-    * elsewhere: it lies above the measures' floor cut (:func:`~wbsa.estimation.cloud.above_floor`) and the
-      floor's own measured noise (the floor's stray returns are then too sparse to reach far);
-    * or, anywhere, its neighbourhood stands clear of the floor (:func:`_raised_pixels`: toes across the
-      image).
-
-    The measures (:func:`~wbsa.estimation.measure.measure_subject`) cut the floor strip again, as in
-    training, so this changes the subject's mask, not the VBSA.
-    """
-    from scipy import ndimage
-
-    if floor is None:
-        return mask
-    free = pixel_label < 0
-    for wall in walls:
-        free &= wall.height(points) > wall.tolerance(points)
-    under_feet, sole = _sole_pixels(mask, pix, points, floor, free)
-    clear = above_floor(points, floor) & (floor.height(points) > floor.tolerance(points))
-    raised = _raised_pixels(mask, pix, points, floor, free, fx)
-    cand = free & (np.where(under_feet, sole, clear) | raised)
-    grow = np.zeros(mask.size, dtype=bool)
-    grow[pix[cand]] = True
-    both = mask | grow.reshape(mask.shape)
-    labels, _ = ndimage.label(both, structure=np.ones((3, 3), dtype=bool))
-    touching = np.unique(labels[mask])
-    return np.isin(labels, touching[touching > 0])
-
-
-def _raised_pixels(mask: np.ndarray, pix: np.ndarray, points: np.ndarray, floor: Plane,
-                   free: np.ndarray, fx: float) -> np.ndarray:
-    """(k,) bool free low returns whose neighbourhood, by its median height, stands clear of the floor.
-
-    Toes and heels that point across the image in a side view lie a few centimetres over the floor,
-    inside one return's noise. The median height of the low free returns in a square window around a
-    return (:data:`RAISED_WINDOW_M` wide at the feet) is far less noisy than the return; it stays on the
-    floor beside a foot (the subject's own returns are left out of the window), and rises with a toe. A
-    return is raised when that median exceeds what the same median reaches on the floor itself, more than
-    :data:`RAISED_AWAY_M` from the subject (its :data:`RAISED_QUANTILE` quantile): this measures the
-    floor's correlated errors too, such as the depth terraces of a stereo camera's disparity steps, which
-    no per-return noise model sees. With pixels coarser than a 5-pixel window (the phone LiDAR), nothing
-    is raised.
-
-    On the 300 benchmark captures, through ``segment_subject``: subject pixels missed 19,940 → 13,711,
-    non-subject pixels taken 6,333 → 8,643, share of images meeting the target 0.937 → 0.943.
-    """
-    from scipy import ndimage
-
-    h, w = mask.shape
-    height = floor.height(points)
-    low = free & (height < FEET_BAND_M)
-    out = np.zeros(len(pix), dtype=bool)
-    rows, cols = np.divmod(pix, w)
-    mr, mc = np.nonzero(mask)
-    if len(mr) == 0 or not low.any():
-        return out
-    sub = mask.ravel()[pix] & (height < FEET_BAND_M)
-    pitch = float(np.median(points[sub, 2])) / fx if sub.any() else float(np.median(points[:, 2])) / fx
-    half = min(int(round(0.5 * RAISED_WINDOW_M / pitch)), 3)
-    if half < 2:  # coarse pixels: a median of 9 is too noisy, and a toe is a pixel or two
-        return out
-    size, away_px = 2 * half + 1, max(int(round(RAISED_AWAY_M / pitch)), 5)
-    pad = away_px + size
-    r0, r1 = max(int(mr.max()) - 4 * pad, 0), min(int(mr.max()) + pad, h)
-    c0, c1 = max(int(mc.min()) - 2 * pad, 0), min(int(mc.max()) + 2 * pad, w)
-    crop = np.full((r1 - r0 + 2 * half, c1 - c0 + 2 * half), np.nan)
-    use = low & (rows >= r0) & (rows < r1) & (cols >= c0) & (cols < c1)
-    crop[rows[use] - r0 + half, cols[use] - c0 + half] = height[use]
-    windows = np.lib.stride_tricks.sliding_window_view(crop, (size, size))
-    windows = windows.reshape(r1 - r0, c1 - c0, -1)
-    count = np.count_nonzero(np.isfinite(windows), axis=2)
-    med = np.full((r1 - r0, c1 - c0), np.nan)
-    enough = count >= size * size // 3
-    med[enough] = np.nanmedian(windows[enough], axis=1)
-    away = ~ndimage.maximum_filter(mask[r0:r1, c0:c1], size=2 * away_px + 1)
-    is_low = np.isfinite(crop[half:half + r1 - r0, half:half + c1 - c0])
-    reference = med[away & is_low & enough]
-    if len(reference) < 200:
-        return out
-    threshold = max(float(np.quantile(reference, RAISED_QUANTILE)), 0.005)
-    sel = np.flatnonzero(use & (height > 0.0))
-    out[sel] = med[rows[sel] - r0, cols[sel] - c0] > threshold
-    return out
-
-
-
-def _sole_pixels(mask: np.ndarray, pix: np.ndarray, points: np.ndarray, floor: Plane,
-                 free: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(k,) bool returns under the feet that were looked at, and (k,) bool those of them that are the feet's.
-
-    The lowest centimetres of a foot lie inside the floor's depth noise. Walking down an image column from
-    the end of a run of subject returns that lies within :data:`FEET_BAND_M` of the floor, the returns
-    first continue the foot (range near the foot's) and then show the floor in front of it (range near
-    where the ray meets the floor); the split is a change point (:func:`_walk`). Every run of a column is
-    walked, so the far foot, seen above the near one, keeps its sole too. A foot return found so must have
-    a foot or subject return beside it in its row: a sole is a strip across the foot, and a lone column of
-    "foot" is the floor's noise. (Walking along the rows as well, for toes pointing across the image in
-    side views, found as much floor as toes on the benchmark images: the floor beside a foot is at the
-    foot's range.)
-    """
-    h, w = mask.shape
-    rows, cols = np.divmod(pix, w)
-    subject = mask.ravel()[pix]
-    if not subject.any():
-        none = np.zeros(len(pix), dtype=bool)
-        return none, none
-    rng = np.linalg.norm(points, axis=1)
-    height = floor.height(points)
-    ray_down = -(points @ floor.normal) / np.maximum(rng, 1e-9)  # cosine between the ray and the floor's normal
-    t_floor = np.where(ray_down > 1e-6, -floor.offset / np.maximum(ray_down, 1e-6), np.inf)
-    sigma = Plane.unit_noise(points) * floor.noise_scale
-    low = height < FEET_BAND_M
-    walkable = free & low
-    looked, feet = _walk(cols, rows, subject, low, walkable, (rng, t_floor, sigma))
-    feet &= height > 0.0
-    return looked, feet & _beside_in_row(feet, subject, pix, (h, w))
-
-
-def _walk(line: np.ndarray, step: np.ndarray, foot: np.ndarray, low: np.ndarray, walkable: np.ndarray,
-          models: tuple[np.ndarray, np.ndarray, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
-    """Change points along image lines, from the end of every low run of ``foot`` returns.
-
-    Parameters
-    ----------
-    line, step : (k,) int
-        Line of every return (its column or row) and its place along the line, in walking order.
-    foot : (k,) bool
-        Returns known to be the subject's.
-    low, walkable : (k,) bool
-        Returns near the floor (where runs may end), and those a walk may cross.
-    models : ((k,) float, (k,) float, (k,) float)
-        Range of every return, the range where its ray meets the floor, and its depth noise (m).
-
-    Returns
-    -------
-    looked, found : (k,) bool
-        Returns walked over, and those of them before a change point (the foot's).
-    """
-    rng, t_floor, sigma = models
-    looked, found = np.zeros(len(line), dtype=bool), np.zeros(len(line), dtype=bool)
-    order = np.lexsort((step, line))
-    o_line, o_foot = line[order], foot[order]
-    same_next = np.r_[o_line[1:] == o_line[:-1], False]
-    # a run ends where the next return along the line is not the subject's
-    ends = np.flatnonzero(o_foot & np.r_[~o_foot[1:], True] & same_next & low[order])
-    # a walk stops before the subject, a return it may not cross, or the next line
-    breaks = np.r_[np.flatnonzero(o_foot | ~walkable[order] | ~np.r_[True, same_next[:-1]]), len(order)]
-    for e in ends:
-        first = e
-        while first > 0 and e - first < 2 and o_foot[first - 1] and o_line[first - 1] == o_line[e]:
-            first -= 1
-        foot_range = float(np.median(rng[order[first:e + 1]]))
-        walk = order[e + 1:int(breaks[np.searchsorted(breaks, e + 1)])]
-        walk = walk[t_floor[walk] > foot_range - 3.0 * sigma[walk]]
-        if len(walk) == 0:
-            continue
-        cap = (3.0 * sigma[walk]) ** 2
-        foot_cost = np.minimum((rng[walk] - foot_range) ** 2, cap)
-        floor_cost = np.minimum((rng[walk] - t_floor[walk]) ** 2, cap)
-        # cost of the split after j returns: the first j are the foot's, the rest the floor's
-        total = np.r_[0.0, np.cumsum(foot_cost)] + np.r_[np.cumsum(floor_cost[::-1])[::-1], 0.0]
-        j = int(np.argmin(total))
-        looked[walk] = True
-        found[walk[:j]] = True
-    return looked, found
-
-
-def _beside_in_row(found: np.ndarray, body: np.ndarray, pix: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
-    """(k,) bool: returns with a ``found`` or ``body`` return next to them in their image row."""
-    img = np.zeros(shape[0] * shape[1], dtype=bool)
-    img[pix[found | body]] = True
-    img = img.reshape(shape)
-    near = np.zeros_like(img)
-    near[:, 1:] |= img[:, :-1]
-    near[:, :-1] |= img[:, 1:]
-    return near.ravel()[pix]
 
 
 def _describe(pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarray, width: int,

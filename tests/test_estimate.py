@@ -125,6 +125,27 @@ def test_toes_across_the_image_are_found_by_their_raised_neighbourhood(body_mode
     assert np.array_equal(with_rule, without)
 
 
+def test_a_steep_view_keeps_its_floor(bodies):
+    """A camera 55° above the subject (mounted high, close): the floor's normal is 55° from the image's up
+    and is still the floor (with the former 50° limit: no floor, elevation from the body's axis)."""
+    from wbsa.camera import MeshScene, View, preset
+    from wbsa.estimation.room import compose_room
+    from wbsa.estimation.segment import segment_subject
+    from wbsa.sensor.settings import SensorSettings
+    from wbsa.simulate import simulate_view
+
+    room = compose_room(bodies[1], 0.0, wall_behind_m=0.8)
+    camera = preset("kinect-v2")
+    frame = simulate_view(MeshScene(room.mesh, surroundings=True), camera, View(0.0, 55.0, 2.0),
+                          sensor=SensorSettings(noise="nguyen2012"), seed=4, keep_frame=True,
+                          target=room.subject_center).frame
+    seg = segment_subject(frame.depth_m, camera)
+    assert seg.floor is not None
+    assert np.degrees(np.arccos(-seg.floor.normal[1])) == pytest.approx(55.0, abs=2.0)
+    truth = room.is_subject(frame.triangle_id)
+    assert (seg.mask & truth).sum() / truth.sum() > 0.98
+
+
 def test_a_body_alone_in_the_image_is_not_taken_for_a_wall(bodies):
     """A background-free frame (a render of a body or a scan, no room): before, its front became a wall."""
     from wbsa.camera import MeshScene, View, preset

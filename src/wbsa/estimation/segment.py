@@ -5,7 +5,7 @@
    (almost) nothing behind them as seen from the camera and run out of the image (reach its border): a
    floor or a wall does both; a body's chest has its sides behind it, and a body alone in the image (no
    room), which a plane fits loosely, is inside the frame.
-   The floor is the room surface whose normal is closest to the image's up (within 50°); the others are
+   The floor is the room surface whose normal is closest to the image's up (within 75°); the others are
    walls. Returns on or below the floor (within its noise) and on or behind a wall are background.
 3. What is left is clustered in 3-D: voxels closer than ``cluster_gap_m`` (or three pixel pitches at that
    depth) are one object. Voxels in a band over the floor (10 cm, or twice the floor's noise) only join the
@@ -34,6 +34,10 @@ PICKS = ("nearest", "largest", "center")
 LOW_BAND_M = 0.10
 #: A room surface reaches this close to the image's border (pixels).
 BORDER_PX = 3
+#: The floor's normal lies within this angle of the image's up. A camera looking down by ε sees it ε away,
+#: a wall behind the subject 90° + ε and a side wall 90° (plus the camera's roll); at 50° a camera 2 m up
+#: and 1.5 m from a child lost the floor.
+FLOOR_MAX_TILT_DEG = 75.0
 
 
 @dataclass(frozen=True)
@@ -169,7 +173,7 @@ def find_room(cloud: np.ndarray, settings: SegmentSettings, intrinsics,
             surfaces.append(plane)
     up = np.array([0.0, -1.0, 0.0])
     floor = None
-    cands = [p for p in surfaces if p.normal @ up > np.cos(np.radians(50))]
+    cands = [p for p in surfaces if p.normal @ up > np.cos(np.radians(FLOOR_MAX_TILT_DEG))]
     if cands:
         floor = max(cands, key=lambda p: p.normal @ up)
     walls = [p for p in surfaces if p is not floor and (floor is None or abs(p.normal @ floor.normal) < 0.5)]

@@ -67,7 +67,6 @@ def grow_feet(mask: np.ndarray, pix: np.ndarray, points: np.ndarray, pixel_label
     if floor is None:
         return mask
     height_m = floor.height(points)
-    subject = mask.ravel()[pix]
     free = pixel_label < 0
     for wall in walls:
         free &= wall.height(points) > wall.tolerance(points)
@@ -245,9 +244,7 @@ def raised_pixels(mask: np.ndarray, pix: np.ndarray, points: np.ndarray, height_
     crop = np.full((r1 - r0, c1 - c0), np.nan)
     use = low & inside
     crop[rows[use] - r0, cols[use] - c0] = height_m[use]
-    body = np.zeros((h, w), dtype=bool)
-    body[mask] = True
-    near_subject = ndimage.maximum_filter(body[r0:r1, c0:c1], size=2 * away_px + 1)
+    near_subject = ndimage.maximum_filter(mask[r0:r1, c0:c1], size=2 * away_px + 1)
     bare_r, bare_c = np.nonzero(np.isfinite(crop) & ~near_subject)
     floor_median = windowed_nanmedian(crop, half_px, bare_r, bare_c)
     floor_median = floor_median[np.isfinite(floor_median)]

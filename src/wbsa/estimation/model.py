@@ -131,6 +131,12 @@ class EstimatorModel:
         """
         return float(self.scores[min(self._sure_rank(level), len(self.scores)) - 1])
 
+    @property
+    def n_calibration_subjects(self) -> int:
+        """Subjects behind the calibration scores (older files: scores over the captures per subject)."""
+        per_subject = float(self.meta.get("settings", {}).get("views_per_subject", 1))
+        return max(int(self.meta.get("n_calibration_subjects", round(len(self.scores) / per_subject))), 1)
+
     def quantile_is_sure(self, level: float) -> bool:
         """Whether the calibration has enough subjects for :meth:`quantile`'s confidence at ``level``."""
         return self._sure_rank(level) <= len(self.scores)
@@ -145,8 +151,7 @@ class EstimatorModel:
         if int(np.ceil((n + 1) * level)) > n:
             raise WbsaError(f"the model was calibrated on {n} renders, too few for a {100 * level:g} % interval; "
                             f"use a lower level")
-        per_subject = float(self.meta.get("settings", {}).get("views_per_subject", 1))
-        m = max(int(self.meta.get("n_calibration_subjects", round(n / per_subject))), 1)
+        m = self.n_calibration_subjects
         k = int(binom.ppf(QUANTILE_CONFIDENCE, m, level)) + 1
         if k > m:
             return n + 1

@@ -109,7 +109,7 @@ def predict_wbsa(model, measures, camera, azimuth_deg: float | None, elevation_d
         flags.update(range_flags({"vbsa_m2": measures.vbsa_m2, "stature_m": measures.stature_m,
                                   "distance_m": measures.distance_m, "elevation_deg": el}, model.ranges))
         if not model.quantile_is_sure(level):
-            flags["interval_unsure"] = (f"the model was calibrated on {model.meta.get('n_calibration_subjects', '?')} "
+            flags["interval_unsure"] = (f"the model was calibrated on {model.n_calibration_subjects} "
                                         f"subjects, too few to promise {100 * level:g} % with "
                                         f"{100 * QUANTILE_CONFIDENCE:g} % confidence; its widest score is used")
         return Prediction(float(w[0]), float(lo[0]), float(hi[0]), view, (az, el), model.name, flags)

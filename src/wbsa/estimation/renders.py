@@ -103,6 +103,7 @@ def render_chunk(population: pd.DataFrame, first_sample: int, settings: RenderSe
     from wbsa.camera.extrinsics import pose_from_view
     from wbsa.camera.scene import MeshScene
     from wbsa.estimation.measure import measure_subject
+    from wbsa.estimation.mixed_pixels import repair_mixed_pixels
     from wbsa.bodies.posture import RandomPosture
     from wbsa.parallel import keep_large_allocations, single_threaded_math
     from wbsa.simulate import simulate_view
@@ -137,7 +138,7 @@ def render_chunk(population: pd.DataFrame, first_sample: int, settings: RenderSe
                                          settings.floor_tilt_deg)
                     row.update(vbsa_visible_m2=sim.row["vbsa_visible_m2"],
                                vbsa_recon_grid_m2=sim.row["vbsa_recon_grid_m2"])
-                    depth = sim.frame.depth_m
+                    depth, _ = repair_mixed_pixels(sim.frame.depth_m, cap.camera.fx)
                     mask = depth > 0 if np.count_nonzero(depth) >= 200 else None
                 if mask is None:
                     row.update(m_ok=False)
@@ -160,11 +161,13 @@ def render_chunk(population: pd.DataFrame, first_sample: int, settings: RenderSe
 def _room_capture(mesh, cap, rng: np.random.Generator, settings: RenderSettings, sample: int):
     """(depth (h, w) float64 in whole millimetres, subject mask or None, detected floor) of ``mesh`` in a room."""
     from wbsa.errors import WbsaError
+    from wbsa.estimation.mixed_pixels import repair_mixed_pixels
     from wbsa.estimation.room import capture_room, compose_room
     from wbsa.estimation.segment import SegmentSettings, segment_subject
 
     room = compose_room(mesh, cap.view.azimuth_deg, wall_behind_m=float(rng.uniform(*settings.wall_behind_m)))
     _, depth = capture_room(room, cap, seed=settings.seed, subject_id=sample)
+    depth, _ = repair_mixed_pixels(depth, cap.camera.fx)
     try:
         seg = segment_subject(depth, cap.camera, SegmentSettings(pick="center"))
     except WbsaError:

@@ -144,6 +144,7 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     from wbsa.camera.intrinsics import resolve_camera
     from wbsa.estimation import checks
     from wbsa.estimation.measure import measure_subject
+    from wbsa.estimation.mixed_pixels import repair_mixed_pixels
     from wbsa.estimation.predict import load_any_model, predict_wbsa
     from wbsa.estimation.segment import segment_subject
 
@@ -159,6 +160,7 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     intrinsics = resolve_camera(camera)
     depth_m = _depth_array(depth, depth_scale)
     checks.check_image_size(depth_m, intrinsics)
+    depth_m, _ = repair_mixed_pixels(depth_m, intrinsics.fx)
     mdl = load_any_model(model, show_progress=show_progress)
     flags: dict[str, str] = {}
     if segment is None:

@@ -16,6 +16,7 @@ import numpy as np
 import pandas as pd
 
 from wbsa.estimation.capture import CaptureSettings, sample_capture
+from wbsa.errors import WbsaError
 
 
 @dataclass(frozen=True)
@@ -33,6 +34,9 @@ class RoomTestSettings:
         Sideways offset of the second person (centre to centre), uniform, either side.
     pick : str
         How the estimator chooses among several people (the operator aims the camera at the subject).
+    mixed_pixels : float
+        Share of the depth edges whose straddling pixel returns a mixed depth, as time-of-flight cameras
+        do (:func:`wbsa.sensor.mixed_pixels.mix_edge_pixels`); 0 = none, as in training.
     seed : int
     """
 
@@ -41,7 +45,12 @@ class RoomTestSettings:
     second_person: float = 0.3
     side_m: tuple[float, float] = (0.9, 1.6)
     pick: str = "center"
+    mixed_pixels: float = 0.0
     seed: int = 1000
+
+    def __post_init__(self) -> None:
+        if not 0.0 <= self.mixed_pixels <= 1.0:
+            raise WbsaError(f"mixed_pixels {self.mixed_pixels} must be a share of the depth edges in [0, 1]")
 
 
 def room_capture_chunk(population: pd.DataFrame, others: pd.DataFrame, first: int, settings: RoomTestSettings,
@@ -52,13 +61,13 @@ def room_capture_chunk(population: pd.DataFrame, others: pd.DataFrame, first: in
     (``est_*``, ``flags``; ``error`` when it raised) and the estimate's wall time.
     """
     from wbsa.bodies.body_model import BodyModel
-    from wbsa.errors import WbsaError
     from wbsa.bodies.posture import RandomPosture
     from wbsa.estimation.predict import load_any_model
     from wbsa.estimation.room import capture_room, compose_room
     from wbsa.estimation.segment import SegmentSettings
     from wbsa.estimation.single_view import estimate
     from wbsa.estimation.view import fold_azimuth
+    from wbsa.sensor.mixed_pixels import mix_edge_pixels
     from wbsa.parallel import keep_large_allocations, single_threaded_math
 
     keep_large_allocations()
@@ -72,7 +81,7 @@ def room_capture_chunk(population: pd.DataFrame, others: pd.DataFrame, first: in
         for b in range(len(population)):
             index = first + b
             rng = np.random.default_rng(np.random.SeedSequence([settings.seed, index]))
-            pose_rng, other_rng, capture_rng, room_rng = rng.spawn(4)
+            pose_rng, other_rng, capture_rng, room_rng, edge_rng = rng.spawn(5)
             vertices, posture = poser(bodies.vertices[b], bodies.bone_heads[b], pose_rng)
             subject = body_model.skin_mesh(vertices)
             cap = sample_capture(vertices, capture_rng, settings.capture)
@@ -85,6 +94,8 @@ def room_capture_chunk(population: pd.DataFrame, others: pd.DataFrame, first: in
                                 others=people)
             frame, depth = capture_room(room, cap, seed=settings.seed, subject_id=index)
             truth = room.is_subject(frame.triangle_id) & (depth > 0)
+            if settings.mixed_pixels > 0:
+                depth = np.round(mix_edge_pixels(depth, edge_rng, settings.mixed_pixels) * 1000.0) / 1000.0
             t = population.iloc[b]
             row = {k: t[k] for k in ("subject_id", "population", "sex", "age_years", "stature_m", "mass_kg", "wbsa_m2")
                    if k in t.index}

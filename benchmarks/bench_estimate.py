@@ -7,7 +7,8 @@ subject fits, camera height 0.8–2.0 m, azimuth uniform over the circle, sensor
 holes on; the estimator is not told the view. Seeded: the same arguments print the same table.
 
     python benchmarks/bench_estimate.py --subjects 300 --workers 2 [--out results.csv]
-    python benchmarks/bench_estimate.py --mixed-pixels 1     # time-of-flight mixed pixels at every depth edge
+    python benchmarks/bench_estimate.py --edge-pixels mixed    # time-of-flight mixed pixels at every depth edge
+    python benchmarks/bench_estimate.py --edge-pixels dropped  # ... or none there (a camera's flying-pixel filter)
 
 The model is the default one (built and cached first if missing, which is not timed), or --model.
 """
@@ -135,8 +136,10 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--model", default=None, help="estimator model (.npz); default: the cached default model")
     ap.add_argument("--out", default=None, help="write the per-image results here (.csv)")
-    ap.add_argument("--mixed-pixels", type=float, default=0.0,
-                    help="share of depth edges with a time-of-flight mixed pixel (default 0; 1 = every edge)")
+    ap.add_argument("--edge-pixels", choices=("kept", "mixed", "dropped"), default="kept",
+                    help="what the camera returns for pixels straddling a depth edge: the render's depth (default, "
+                         "as in training), a time-of-flight mix of the two surfaces, or nothing (a flying-pixel filter)")
+    ap.add_argument("--edge-share", type=float, default=1.0, help="share of the depth edges so affected (default 1)")
     args = ap.parse_args()
 
     from wbsa.estimation.cache import default_model, default_model_path
@@ -148,11 +151,12 @@ def main() -> None:
         model_path = str(default_model_path())
     t0 = time.perf_counter()
     pop = population(args.subjects, args.survey_share, args.seed)
-    res = run_room_tests(pop, RoomTestSettings(seed=args.seed, mixed_pixels=args.mixed_pixels), model_path, workers=args.workers)
+    res = run_room_tests(pop, RoomTestSettings(seed=args.seed, edge_pixels=args.edge_pixels, edge_share=args.edge_share), model_path, workers=args.workers)
     if args.out:
         res.to_csv(args.out, index=False)
     print(f"model {model_path}; {len(pop)} subjects ({(pop['population'] == 'survey').sum()} survey-matched), "
-          f"seed {args.seed}, mixed pixels at {args.mixed_pixels:g} of the depth edges")
+          f"seed {args.seed}, edge pixels {args.edge_pixels}"
+          + (f" at {args.edge_share:g} of the depth edges" if args.edge_pixels != "kept" else ""))
     report(res, time.perf_counter() - t0)
 
 

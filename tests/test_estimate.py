@@ -67,6 +67,34 @@ def test_segmentation_keeps_a_wide_armed_tall_body_and_drops_the_room(room_view)
     assert 1.8 < seg.subject.height_m < 2.0 and len(seg.others) == 1
 
 
+def test_mixed_pixels_between_body_and_wall_are_put_back_on_a_surface(room_view):
+    """Time-of-flight mixed pixels at every depth edge: most of those floating in a gap land on a surface."""
+    from wbsa.estimation.cloud import depth_noise_m
+    from wbsa.estimation.mixed_pixels import mixed_pixels, repair_mixed_pixels
+    from wbsa.sensor.depth_edges import edge_pixels
+
+    _, camera, frame = room_view
+    clean = frame.depth_m.astype(np.float64)
+    h, w = clean.shape
+    padded = np.pad(clean, 1)
+
+    def floating(z):
+        """Returns farther than 4 σ from every clean return of their 3 × 3 neighbourhood."""
+        gap = np.full(z.shape, np.inf)
+        for dy in (-1, 0, 1):
+            for dx in (-1, 0, 1):
+                n = padded[1 + dy:1 + dy + h, 1 + dx:1 + dx + w]
+                gap = np.where(n > 0, np.minimum(gap, np.abs(z - n)), gap)
+        return int(np.count_nonzero((z > 0) & (gap > 4 * depth_noise_m(z))))
+
+    assert mixed_pixels(clean, camera.fx).sum() < 1e-3 * (clean > 0).sum()  # a clean frame is left alone
+    assert floating(repair_mixed_pixels(clean, camera.fx)[0]) == 0
+    mixed = edge_pixels(clean, np.random.default_rng(0), "mixed")
+    before = floating(mixed)
+    after = floating(repair_mixed_pixels(mixed, camera.fx)[0])
+    assert before > 2000 and after < 0.3 * before, (before, after)  # measured 2,142 -> 453
+
+
 def test_side_view_keeps_both_soles_and_no_floor_strip(body_model):
     """Side view, feet apart: the far foot's sole, seen above the near foot, is walked too, and lone
     columns of floor noise under a foot are not taken (with the lowest run walked alone and no strip
@@ -375,6 +403,12 @@ def test_estimate_finds_the_view_flags_and_writes_outputs(room_view, small_model
     assert "interval_unsure" not in estimate(frame.depth_m, "kinect-v2", small_model, level=0.8,
                                              segment=SegmentSettings(pick="center")).flags
     assert est.view.elevation_deg == pytest.approx(12.0, abs=2.0) and 0 <= est.view.azimuth_deg <= 180
+    assert "mixed_pixels" not in est.flags
+    from wbsa.sensor.depth_edges import edge_pixels
+
+    mixed = estimate(edge_pixels(frame.depth_m, np.random.default_rng(0), "mixed"), "kinect-v2", small_model,
+                     segment=SegmentSettings(pick="center"))
+    assert "mixed_pixels" in mixed.flags and "outline" in mixed.flags["mixed_pixels"]
     assert len(repr(est)) < 200 and est.mask.shape == frame.depth_m.shape
     stated = estimate(frame.depth_m, "kinect-v2", small_model, segment=SegmentSettings(pick="center"),
                       azimuth_deg=(est.view.azimuth_deg + 90.0) % 180.0, elevation_deg=12.0)
@@ -422,3 +456,13 @@ def test_a_wbsa_fit_model_is_used_with_its_mismatches_flagged(room_view, tmp_pat
     assert est.wbsa_lo_m2 < est.wbsa_m2 < est.wbsa_hi_m2
     mismatch = est.flags["model_mismatch"]
     assert "kinect-v1" in mismatch and "4.3 m" in mismatch and "nearest fitted view" in mismatch
+
+
+def test_benchmark_edge_pixel_settings_are_checked():
+    from wbsa.estimation.testset import RoomTestSettings
+
+    assert RoomTestSettings(edge_pixels="dropped", edge_share=0.5).edge_share == 0.5
+    with pytest.raises(WbsaError, match="edge_share"):
+        RoomTestSettings(edge_pixels="mixed", edge_share=1.5)
+    with pytest.raises(WbsaError, match="edge_pixels"):
+        RoomTestSettings(edge_pixels="blurred")

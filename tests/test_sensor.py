@@ -294,3 +294,28 @@ def test_sensor_rng_is_keyed():
     np.testing.assert_array_equal(a, view_rng(1, 5, View(30.0, -45.0, 4.3)).random(3))
     assert not np.array_equal(a, view_rng(1, 5, View(45.0, -45.0, 4.3)).random(3))
     assert not np.array_equal(a, view_rng(1, 6, View(30.0, -45.0, 4.3)).random(3))
+
+
+def test_edge_pixels_are_mixed_between_the_two_surfaces_or_dropped():
+    """Time-of-flight mixing: one straddling pixel per edge, its depth between the surfaces, weighted by light."""
+    from wbsa.sensor.depth_edges import edge_pixels
+
+    z = np.full((60, 40), 4.0)
+    z[:, :20] = 3.0                         # a board 1 m in front of a wall, its edge between columns 19 and 20
+    z[:, 38:] = 0.0                         # no return: nothing to mix with
+    out = edge_pixels(z, np.random.default_rng(1), "mixed")
+    changed = out != z
+    assert (changed.sum(axis=1) == 1).all() and set(np.nonzero(changed)[1]) <= {19, 20}
+    assert ((out[changed] > 3.0) & (out[changed] < 4.0)).all()
+    # a board pixel sees mostly the board, which also sends back (4/3)² more light per area: nearer than the middle
+    assert (out[:, 19][changed[:, 19]] < 3.5).all()
+    assert 10 < changed[:, 19].sum() < 50  # the edge lies in either pixel with probability 1/2
+    dropped = edge_pixels(z, np.random.default_rng(1), "dropped")
+    assert np.array_equal(dropped == 0, changed | (z == 0))  # the same draws: the same pixels, now without return
+    half = edge_pixels(z, np.random.default_rng(2), "mixed", 0.5)
+    assert 10 < (half != z).sum() < 50 and np.array_equal(half, edge_pixels(z, np.random.default_rng(2), "mixed", 0.5))
+    assert np.array_equal(edge_pixels(z, np.random.default_rng(1), "kept"), z)
+    with pytest.raises(ValueError, match="share"):
+        edge_pixels(z, np.random.default_rng(1), "mixed", 1.5)
+    with pytest.raises(ValueError, match="blurred"):
+        edge_pixels(z, np.random.default_rng(1), "blurred")

@@ -36,6 +36,9 @@ RaycastBackend = Literal["auto", "open3d", "warp"]
 #: A named standing posture (:data:`wbsa.bodies.posture.POSTURES` has one entry per name, in this order).
 PostureName = Literal["a-pose", "arms-down", "arms-wide", "hands-on-hips", "elbows-bent", "feet-together",
                       "feet-apart"]
+#: What a camera returns for a pixel straddling a depth edge (:mod:`wbsa.sensor.depth_edges`): the render's
+#: depth, a mix of the two surfaces (time-of-flight), or nothing (the camera's own flying-pixel filter).
+EdgePixels = Literal["kept", "mixed", "dropped"]
 #: A population's ``posture`` setting: a posture name, or ``mixed`` (a random name per subject).
 PostureChoice = Literal[Literal["a-pose", "mixed"], PostureName]
 
@@ -52,3 +55,4 @@ SAMPLINGS: tuple[str, ...] = get_args(Sampling)
 RAYCAST_BACKENDS: tuple[str, ...] = get_args(RaycastBackend)
 POSTURE_NAMES: tuple[str, ...] = get_args(PostureName)
 POSTURE_CHOICES: tuple[str, ...] = get_args(PostureChoice)
+EDGE_PIXELS: tuple[str, ...] = get_args(EdgePixels)

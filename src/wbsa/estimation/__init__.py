@@ -1,5 +1,6 @@
 """estimation stage: WBSA of a person from one depth image, with the view found and the input checked.
 
+``mixed_pixels`` returns between two surfaces at a depth edge, snapped to one (:func:`repair_mixed_pixels`)
 ``segment``      the subject in a room: floor, walls behind, 3-D clusters (:func:`segment_subject`)
 ``measure``      VBSA, stature, size and view cues of the subject's pixels (:func:`measure_subject`)
 ``view``         azimuth (mirror-equivalent) and elevation from the image (:class:`ViewModel`)
@@ -8,7 +9,7 @@
 ``predict``      measures → WBSA with either an estimator model or a ``wbsa fit`` model
 ``checks``       one-line errors and named flags; ``fhir``: the FHIR R4 Observation
 ``single_view``  :func:`estimate`, the entry point (``wbsa.estimate`` calls it)
-``posing``, ``capture``, ``renders``, ``room``  postures, capture conditions, rendered samples, synthetic rooms
+``capture``, ``renders``, ``room``, ``testset``  capture conditions, rendered samples, synthetic rooms, the benchmark
 
 Names are imported lazily.
 """
@@ -20,6 +21,7 @@ from wbsa.lazy import lazy_exports
 _EXPORTS = {
     "Estimate": "wbsa.estimation.single_view",
     "estimate": "wbsa.estimation.single_view",
+    "repair_mixed_pixels": "wbsa.estimation.mixed_pixels",
     "SegmentSettings": "wbsa.estimation.segment",
     "Segmentation": "wbsa.estimation.segment",
     "segment_subject": "wbsa.estimation.segment",

@@ -73,7 +73,7 @@ def mixed_pixels(depth_m: np.ndarray, fx: float) -> np.ndarray:
     return (z > 0) & (agreeing < MIN_AGREEING) & nearer & farther
 
 
-def repair_mixed_pixels(depth_m: np.ndarray, fx: float) -> tuple[np.ndarray, int]:
+def repair_mixed_pixels(depth_m: np.ndarray, fx: float) -> tuple[np.ndarray, np.ndarray]:
     """Snap mixed returns to the depth of the surface they mostly saw (see the module doc).
 
     Parameters
@@ -87,23 +87,22 @@ def repair_mixed_pixels(depth_m: np.ndarray, fx: float) -> tuple[np.ndarray, int
     -------
     depth_m : (h, w) float64
         The repaired image (a new array); mixed returns whose neighbours are all mixed or empty become 0.
-    n_mixed : int
-        Returns found mixed (snapped or dropped).
+    mixed : (h, w) bool
+        The returns found mixed (snapped or dropped).
 
     Examples
     --------
     A wall 1 m behind a flat board, with one return between them on the board's edge:
 
     >>> z = np.full((5, 6), 3.0); z[:, 3:] = 4.0; z[2, 2] = 3.6
-    >>> fixed, n = repair_mixed_pixels(z, fx=365.0)
-    >>> n, float(fixed[2, 2])
+    >>> fixed, mixed = repair_mixed_pixels(z, fx=365.0)
+    >>> int(mixed.sum()), float(fixed[2, 2])
     (1, 4.0)
     """
     z = np.nan_to_num(np.asarray(depth_m, dtype=np.float64), nan=0.0)
     mixed = mixed_pixels(z, fx)
-    n_mixed = int(np.count_nonzero(mixed))
-    if not n_mixed:
-        return z, 0
+    if not mixed.any():
+        return z, mixed
     good = np.where((z > 0) & ~mixed, z, np.nan)
     nearest = np.full(z.shape, np.nan)
     gap = np.full(z.shape, np.inf)
@@ -114,4 +113,4 @@ def repair_mixed_pixels(depth_m: np.ndarray, fx: float) -> tuple[np.ndarray, int
         nearest[closer], gap[closer] = zn[closer], d[closer]
     out = z.copy()
     out[mixed] = np.nan_to_num(nearest[mixed], nan=0.0)
-    return out, n_mixed
+    return out, mixed

@@ -160,7 +160,7 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     intrinsics = resolve_camera(camera)
     depth_m = _depth_array(depth, depth_scale)
     checks.check_image_size(depth_m, intrinsics)
-    depth_m, _ = repair_mixed_pixels(depth_m, intrinsics.fx)
+    depth_m, mixed = repair_mixed_pixels(depth_m, intrinsics.fx)
     mdl = load_any_model(model, show_progress=show_progress)
     flags: dict[str, str] = {}
     if segment is None:
@@ -175,6 +175,7 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
                                        + "; ".join(c.describe() for c in seg.others))
     m = measure_subject(depth_m, mask, intrinsics, floor)
     checks.check_height(m.stature_m)
+    flags.update(checks.mixed_pixel_flags(mixed, mask))
     if m.touches_border:
         flags["cut_off"] = "subject pixels on the image border; step back or re-aim the camera"
     if floor is None:

@@ -17,6 +17,7 @@ import pandas as pd
 
 from wbsa.estimation.capture import CaptureSettings, sample_capture
 from wbsa.errors import WbsaError
+from wbsa.typing import EDGE_PIXELS, EdgePixels
 
 
 @dataclass(frozen=True)
@@ -34,9 +35,11 @@ class RoomTestSettings:
         Sideways offset of the second person (centre to centre), uniform, either side.
     pick : str
         How the estimator chooses among several people (the operator aims the camera at the subject).
-    mixed_pixels : float
-        Share of the depth edges whose straddling pixel returns a mixed depth, as time-of-flight cameras
-        do (:func:`wbsa.sensor.mixed_pixels.mix_edge_pixels`); 0 = none, as in training.
+    edge_pixels : {'kept', 'mixed', 'dropped'}
+        What the camera returns for a pixel straddling a depth edge (:func:`wbsa.sensor.depth_edges.edge_pixels`):
+        the render's depth (as in training), a time-of-flight mix of the two surfaces, or nothing.
+    edge_share : float
+        Share of the depth edges so affected.
     seed : int
     """
 
@@ -45,12 +48,15 @@ class RoomTestSettings:
     second_person: float = 0.3
     side_m: tuple[float, float] = (0.9, 1.6)
     pick: str = "center"
-    mixed_pixels: float = 0.0
+    edge_pixels: EdgePixels = "kept"
+    edge_share: float = 1.0
     seed: int = 1000
 
     def __post_init__(self) -> None:
-        if not 0.0 <= self.mixed_pixels <= 1.0:
-            raise WbsaError(f"mixed_pixels {self.mixed_pixels} must be a share of the depth edges in [0, 1]")
+        if self.edge_pixels not in EDGE_PIXELS:
+            raise WbsaError(f"edge_pixels {self.edge_pixels!r} is unknown; use one of {', '.join(EDGE_PIXELS)}")
+        if not 0.0 <= self.edge_share <= 1.0:
+            raise WbsaError(f"edge_share {self.edge_share} must be a share of the depth edges in [0, 1]")
 
 
 def room_capture_chunk(population: pd.DataFrame, others: pd.DataFrame, first: int, settings: RoomTestSettings,
@@ -67,7 +73,7 @@ def room_capture_chunk(population: pd.DataFrame, others: pd.DataFrame, first: in
     from wbsa.estimation.segment import SegmentSettings
     from wbsa.estimation.single_view import estimate
     from wbsa.estimation.view import fold_azimuth
-    from wbsa.sensor.mixed_pixels import mix_edge_pixels
+    from wbsa.sensor.depth_edges import edge_pixels
     from wbsa.parallel import keep_large_allocations, single_threaded_math
 
     keep_large_allocations()
@@ -94,8 +100,8 @@ def room_capture_chunk(population: pd.DataFrame, others: pd.DataFrame, first: in
                                 others=people)
             frame, depth = capture_room(room, cap, seed=settings.seed, subject_id=index)
             truth = room.is_subject(frame.triangle_id) & (depth > 0)
-            if settings.mixed_pixels > 0:
-                depth = np.round(mix_edge_pixels(depth, edge_rng, settings.mixed_pixels) * 1000.0) / 1000.0
+            if settings.edge_pixels != "kept":
+                depth = np.round(edge_pixels(depth, edge_rng, settings.edge_pixels, settings.edge_share) * 1000.0) / 1000.0
             t = population.iloc[b]
             row = {k: t[k] for k in ("subject_id", "population", "sex", "age_years", "stature_m", "mass_kg", "wbsa_m2")
                    if k in t.index}

@@ -2,7 +2,9 @@
 
 Nguyen et al. 2012 Kinect v1 noise, disparity quantisation, range limits and holes (the paper's
 dropped triangles, random pixel dropout, grazing-angle dropout), all seeded and optional
-(:class:`SensorSettings`, :func:`apply_sensor`); depth PNG I/O lives in :mod:`wbsa.core.depth_image`.
+(:class:`SensorSettings`, :func:`apply_sensor`); what a camera returns at depth edges, on depth images
+(:func:`edge_pixels`: time-of-flight mixed pixels, or none); depth PNG I/O lives in
+:mod:`wbsa.core.depth_image`.
 
 Names are imported lazily, so ``from wbsa.sensor.cli import add_sensor_arguments`` stays cheap
 for the CLI.
@@ -14,6 +16,7 @@ from wbsa.lazy import lazy_exports
 
 _EXPORTS = {
     "apply_sensor": "wbsa.sensor.apply",
+    "edge_pixels": "wbsa.sensor.depth_edges",
     "NOISE_MODELS": "wbsa.typing",
     "SensorSettings": "wbsa.sensor.settings",
     "axial_sigma_m": "wbsa.sensor.nguyen2012",

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from wbsa.errors import WbsaError
+from wbsa.typing import EDGE_PIXELS
 
 #: Cameras of the default training world (presets of :data:`wbsa.camera.intrinsics.PRESETS`).
 CAMERAS: tuple[str, ...] = ("kinect-v1", "kinect-v2", "azure-kinect-nfov", "realsense-d435", "realsense-d455",
@@ -41,6 +42,10 @@ class CaptureSettings:
         Sensor noise (Nguyen et al. 2012), disparity quantisation where the camera has one, grazing dropout.
     max_holes_fraction, max_pixel_dropout : float
         Triangle holes and pixel dropout, each drawn uniformly up to this.
+    edge_pixels : tuple of {'kept', 'mixed', 'dropped'}
+        What the camera returns for pixels straddling a depth edge, drawn uniformly per capture, with the
+        share of edges affected uniform in [0, 1] (:func:`wbsa.sensor.depth_edges.edge_pixels`): cameras
+        differ (time-of-flight mixing, a flying-pixel filter, neither), and the estimator meets them all.
     """
 
     cameras: tuple[str, ...] = CAMERAS
@@ -49,9 +54,13 @@ class CaptureSettings:
     noise: bool = True
     max_holes_fraction: float = 0.03
     max_pixel_dropout: float = 0.02
+    edge_pixels: tuple[str, ...] = EDGE_PIXELS
 
     def __post_init__(self) -> None:
         from wbsa.camera.intrinsics import PRESETS
+
+        if not self.edge_pixels or not set(self.edge_pixels) <= set(EDGE_PIXELS):
+            raise WbsaError(f"edge_pixels {self.edge_pixels} must be some of {', '.join(EDGE_PIXELS)}")
 
         unknown = [c for c in self.cameras if c not in PRESETS]
         if unknown or not self.cameras:
@@ -66,13 +75,16 @@ class CaptureSettings:
 
 @dataclass(frozen=True)
 class Capture:
-    """One drawn capture: the camera, the view (aimed at the subject's centre) and the sensor."""
+    """One drawn capture: the camera, the view (aimed at the subject's centre) and the sensor, with what it
+    returns at depth edges (``edge_pixels`` on ``edge_share`` of them)."""
 
     camera: object
     view: object
     sensor: object
     camera_height_m: float
     fits: bool
+    edge_pixels: str = "kept"
+    edge_share: float = 0.0
 
 
 def sensor_for(camera: str, rng: np.random.Generator, settings: CaptureSettings):
@@ -141,4 +153,5 @@ def sample_capture(vertices: np.ndarray, rng: np.random.Generator, settings: Cap
         if fits or distance >= hi:
             break
         distance = min(hi, distance * 1.08)
-    return Capture(camera, view, sensor, height, fits)
+    edges = settings.edge_pixels[int(rng.integers(len(settings.edge_pixels)))]  # drawn last: earlier draws unchanged
+    return Capture(camera, view, sensor, height, fits, edges, float(rng.uniform(0.0, 1.0)))

@@ -82,24 +82,19 @@ def sensor_range_flags(distance_m: float, camera) -> dict[str, str]:
     return {"out_of_sensor_range": f"subject at {distance_m:.2f} m, camera {camera.name} works {lo:g}–{hi:g} m"}
 
 
-def mixed_pixel_flags(mixed: np.ndarray, subject: np.ndarray) -> dict[str, str]:
-    """``{"mixed_pixels": ...}`` when many returns within 2 pixels of the subject were mixed.
+def mixed_pixel_flags(mixed_share: float) -> dict[str, str]:
+    """``{"mixed_pixels": ...}`` when many returns beside the subject's outline were mixed.
 
     Parameters
     ----------
-    mixed : (h, w) bool
-        Returns found mixed (:func:`wbsa.estimation.mixed_pixels.repair_mixed_pixels`).
-    subject : (h, w) bool
-        The subject's pixels.
+    mixed_share : float
+        Mixed returns within 2 pixels of the subject per pixel of its outline
+        (:func:`wbsa.estimation.mixed_pixels.outline_shares`).
     """
-    from scipy import ndimage
-
-    outline = int(np.count_nonzero(subject & ~ndimage.binary_erosion(subject)))
-    n = int(np.count_nonzero(mixed & ndimage.binary_dilation(subject, iterations=2)))
-    if outline == 0 or n <= MIXED_PER_OUTLINE_PIXEL * outline:
+    if not mixed_share > MIXED_PER_OUTLINE_PIXEL:
         return {}
-    return {"mixed_pixels": f"{n} returns at the subject's outline ({n / outline:.0%} of its length) lay between two "
-                            "surfaces and were snapped to one; the area may read several per cent high; turn on the "
+    return {"mixed_pixels": f"returns at the subject's outline ({mixed_share:.0%} of its length) lay between two "
+                            "surfaces and were snapped to one; the area may be off by several per cent; turn on the "
                             "camera's flying-pixel filter or keep a plain background well behind the subject"}
 
 

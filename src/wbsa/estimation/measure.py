@@ -49,6 +49,9 @@ class SubjectMeasures:
     pitch_m : float
         Pixel pitch at the subject's distance, ``distance / sqrt(fx·fy)``.
     n_pixels : int
+    mixed_share, gap_share : float
+        How the camera treated the subject's outline: mixed returns beside it and one-pixel gaps along
+        it (:func:`wbsa.estimation.mixed_pixels.outline_shares`).
     floor_seen : bool
     touches_border : bool
         Subject pixels on the image border: the subject may be cut off.
@@ -73,6 +76,8 @@ class SubjectMeasures:
     elevation_axis_deg: float
     pitch_m: float
     n_pixels: int
+    mixed_share: float
+    gap_share: float
     floor_seen: bool
     touches_border: bool
     mask: np.ndarray
@@ -85,7 +90,7 @@ class SubjectMeasures:
         """The scalar measures as a dict (for tables and models)."""
         return {k: float(getattr(self, k)) for k in ("vbsa_m2", "stature_m", "silhouette_m2", "width_m", "thickness_m",
                                                     "distance_m", "elevation_deg", "elevation_axis_deg", "pitch_m",
-                                                    "n_pixels")}
+                                                    "n_pixels", "mixed_share", "gap_share")}
 
 
 def clean_low_pixels(mask: np.ndarray, height_m: np.ndarray) -> np.ndarray:
@@ -116,7 +121,8 @@ def _elevation(frame: BodyFrame, points: np.ndarray, floor_seen: bool) -> tuple[
     return stature, mid_lat, distance, elevation
 
 
-def measure_subject(depth_m: np.ndarray, mask: np.ndarray, intrinsics, floor: Plane | None) -> SubjectMeasures:
+def measure_subject(depth_m: np.ndarray, mask: np.ndarray, intrinsics, floor: Plane | None,
+                    mixed: np.ndarray | None = None) -> SubjectMeasures:
     """Measure the subject's pixels of a depth image.
 
     Parameters
@@ -128,6 +134,9 @@ def measure_subject(depth_m: np.ndarray, mask: np.ndarray, intrinsics, floor: Pl
     intrinsics : wbsa.camera.Intrinsics
     floor : Plane or None
         The floor in the camera frame; returns within its noise are cut (feet soles), as in training.
+    mixed : (h, w) bool, optional
+        Returns found mixed before segmentation (:func:`wbsa.estimation.mixed_pixels.repair_mixed_pixels`),
+        for ``mixed_share``.
 
     Returns
     -------
@@ -136,12 +145,15 @@ def measure_subject(depth_m: np.ndarray, mask: np.ndarray, intrinsics, floor: Pl
     from wbsa.core.backproject import frame_from_depth_image, ray_directions
     from wbsa.surface import reconstruct
 
+    from wbsa.estimation.mixed_pixels import outline_shares
+
     depth = np.asarray(depth_m, dtype=np.float64)
     mask = np.asarray(mask, dtype=bool) & np.isfinite(depth) & (depth > 0)
     if not mask.any():
         from wbsa.errors import WbsaError
 
         raise WbsaError("the subject has no depth returns; check the mask and the depth image")
+    mixed_share, gap_share = outline_shares(depth, mask, mixed)
     rs, cs = _crop(mask)
     sub_mask = mask[rs, cs].copy()
     sub_depth = depth[rs, cs]
@@ -170,7 +182,8 @@ def measure_subject(depth_m: np.ndarray, mask: np.ndarray, intrinsics, floor: Pl
         width_m=float(np.quantile(q[:, 0], 0.998) - np.quantile(q[:, 0], 0.002)),
         thickness_m=float(np.quantile(q[:, 2], 0.998) - np.quantile(q[:, 2], 0.002)),
         distance_m=distance, elevation_deg=elevation, elevation_axis_deg=axis_elevation, pitch_m=distance / focal,
-        n_pixels=int(mask.sum()), floor_seen=floor is not None, touches_border=border, mask=mask,
+        n_pixels=int(mask.sum()), mixed_share=mixed_share, gap_share=gap_share, floor_seen=floor is not None,
+        touches_border=border, mask=mask,
         descriptor=view_descriptor(q - np.array([mid_lat, 0.0, 0.0]), stature), shape=shape_bands(q, stature),
         surface=surface, frame=frame)
 

@@ -2,15 +2,16 @@
 
 WBSA is predicted on the log scale from what :func:`~wbsa.estimation.measure.measure_subject` measures and
 the view: a ridge regression of log WBSA on log VBSA, log stature (paper eq. 8), log silhouette area,
-width and thickness, each times a view basis (1, cos ψ, cos 2ψ, cos 3ψ, sin φ), plus distance and pixel
-pitch; boosted trees then correct its residual from the same measures, the body's band widths and
+width and thickness, each times a view basis (1, cos ψ, cos 2ψ, cos 3ψ, sin φ), plus distance, pixel
+pitch and how the camera treated the outline (mixed returns, gaps: the area read through the outline
+moves with them); boosted trees then correct its residual from the same measures, the body's band widths and
 thicknesses and the view's uncertainty. The interval is split-conformal: residuals divided by a fitted
 spread s(x) on held-out calibration renders (never used in fitting) give the quantile of any level, taken
 so that the level is met with at least 90 % confidence over the calibration draw
 (:meth:`EstimatorModel.quantile`).
 
-File layout: one ``.npz`` of numbers (no pickle) with ``meta_json`` (format ``wbsa-estimator``, version 1,
-training settings, feature ranges, held-out metrics).
+File layout: one ``.npz`` of numbers (no pickle) with ``meta_json`` (format ``wbsa-estimator``, version 2,
+training settings, feature ranges, held-out metrics). Version 2 added the outline terms.
 """
 
 from __future__ import annotations
@@ -27,33 +28,37 @@ from wbsa.estimation.trees import TreeEnsemble
 from wbsa.estimation.view import ViewModel
 
 FORMAT = "wbsa-estimator"
-VERSION = 1
+VERSION = 2
 #: Measures whose training range is recorded and checked (flag ``out_of_training_range``).
 RANGE_KEYS = ("vbsa_m2", "stature_m", "distance_m", "elevation_deg")
 #: Probability, over the calibration draw, that an interval covers at least its stated level.
 QUANTILE_CONFIDENCE = 0.9
 _BASE = ("vbsa_m2", "stature_m", "silhouette_m2", "width_m", "thickness_m")
+#: How the camera treated the subject's outline (:func:`wbsa.estimation.mixed_pixels.outline_shares`).
+_OUTLINE = ("mixed_share", "gap_share")
 
 
 def design(features: dict[str, np.ndarray], psi_deg: np.ndarray, elevation_deg: np.ndarray) -> np.ndarray:
-    """Linear design matrix (n, 31): log measures × view basis, view basis, log distance, pitch/stature."""
+    """Linear design matrix (n, 33): log measures × view basis, view basis, log distance, pitch/stature, outline."""
     r = np.radians(np.asarray(psi_deg, dtype=np.float64))
     s_el = np.sin(np.radians(np.asarray(elevation_deg, dtype=np.float64)))
     view = [np.ones_like(r), np.cos(r), np.cos(2 * r), np.cos(3 * r), s_el]
     cols = [np.log(np.asarray(features[k], dtype=np.float64)) * v for k in _BASE for v in view]
     cols += view[1:]
     cols += [np.log(features["distance_m"]), np.asarray(features["pitch_m"]) / np.asarray(features["stature_m"])]
+    cols += [np.asarray(features[k], dtype=np.float64) for k in _OUTLINE]
     return np.column_stack(cols)
 
 
 def tree_features(features: dict[str, np.ndarray], shape: np.ndarray, psi_deg: np.ndarray, psi_sd_deg: np.ndarray,
                   elevation_deg: np.ndarray) -> np.ndarray:
-    """Features of the residual trees (n, 49): log measures, view, its spread, distance, bands / stature."""
+    """Features of the residual trees (n, 51): log measures, view, its spread, distance, bands / stature, outline."""
     st = np.asarray(features["stature_m"], dtype=np.float64)
     cols = [np.log(np.asarray(features[k], dtype=np.float64)) for k in _BASE]
     cols += [np.asarray(psi_deg, dtype=float), np.asarray(psi_sd_deg, dtype=float), np.asarray(elevation_deg, float),
              np.asarray(features["distance_m"], float)]
-    return np.column_stack(cols + [np.asarray(shape, dtype=np.float64) / st[:, None]])
+    return np.column_stack(cols + [np.asarray(shape, dtype=np.float64) / st[:, None]]
+                           + [np.asarray(features[k], dtype=np.float64) for k in _OUTLINE])
 
 
 def spread_design(psi_deg: np.ndarray, psi_sd_deg: np.ndarray, features: dict[str, np.ndarray]) -> np.ndarray:

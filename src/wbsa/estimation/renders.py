@@ -119,7 +119,7 @@ def render_chunk(population: pd.DataFrame, first_sample: int, settings: RenderSe
             truth = population.iloc[b]
             for _ in range(settings.views_per_subject):
                 rng = np.random.default_rng(np.random.SeedSequence([settings.seed, sample]))
-                pose_rng, capture_rng, floor_rng, room_rng = rng.spawn(4)
+                pose_rng, capture_rng, floor_rng, room_rng, edge_rng = rng.spawn(5)
                 vertices, posture = poser(bodies.vertices[b], bodies.bone_heads[b], pose_rng)
                 mesh = model.skin_mesh(vertices)
                 cap = sample_capture(vertices, capture_rng, settings.capture)
@@ -127,9 +127,10 @@ def render_chunk(population: pd.DataFrame, first_sample: int, settings: RenderSe
                 row.update(sample=sample, posture=posture, camera=cap.camera.name, azimuth_deg=cap.view.azimuth_deg,
                            elevation_deg=cap.view.elevation_deg, distance_m=cap.view.distance_m,
                            camera_height_m=cap.camera_height_m, fits=cap.fits,
-                           holes_fraction=cap.sensor.holes_fraction, pixel_dropout=cap.sensor.pixel_dropout)
+                           holes_fraction=cap.sensor.holes_fraction, pixel_dropout=cap.sensor.pixel_dropout,
+                           edge_pixels=cap.edge_pixels, edge_share=cap.edge_share)
                 if settings.room:
-                    depth, mask, floor = _room_capture(mesh, cap, room_rng, settings, sample)
+                    depth, mixed, mask, floor = _room_capture(mesh, cap, room_rng, edge_rng, settings, sample)
                 else:
                     scene = MeshScene(mesh, nthreads=1)
                     sim = simulate_view(scene, cap.camera, cap.view, sensor=cap.sensor, seed=settings.seed,
@@ -138,7 +139,7 @@ def render_chunk(population: pd.DataFrame, first_sample: int, settings: RenderSe
                                          settings.floor_tilt_deg)
                     row.update(vbsa_visible_m2=sim.row["vbsa_visible_m2"],
                                vbsa_recon_grid_m2=sim.row["vbsa_recon_grid_m2"])
-                    depth, _ = repair_mixed_pixels(sim.frame.depth_m, cap.camera.fx)
+                    depth, mixed = repair_mixed_pixels(_edges(sim.frame.depth_m, cap, edge_rng), cap.camera.fx)
                     mask = depth > 0 if np.count_nonzero(depth) >= 200 else None
                 if mask is None:
                     row.update(m_ok=False)
@@ -146,7 +147,7 @@ def render_chunk(population: pd.DataFrame, first_sample: int, settings: RenderSe
                     descriptors.append(None)
                     sample += 1
                     continue
-                m = measure_subject(depth, mask, cap.camera, floor)
+                m = measure_subject(depth, mask, cap.camera, floor, mixed)
                 row.update({f"m_{k}": v for k, v in m.features().items()})
                 row.update(m_ok=True, m_touches_border=m.touches_border)
                 rows.append(row)
@@ -158,8 +159,19 @@ def render_chunk(population: pd.DataFrame, first_sample: int, settings: RenderSe
     return Samples(pd.DataFrame(rows), desc)
 
 
-def _room_capture(mesh, cap, rng: np.random.Generator, settings: RenderSettings, sample: int):
-    """(depth (h, w) float64 in whole millimetres, subject mask or None, detected floor) of ``mesh`` in a room."""
+def _edges(depth: np.ndarray, cap, rng: np.random.Generator) -> np.ndarray:
+    """The capture's camera behaviour at depth edges applied to ``depth`` (in whole millimetres)."""
+    from wbsa.sensor.depth_edges import edge_pixels
+
+    if cap.edge_pixels == "kept":
+        return depth
+    return np.round(edge_pixels(depth, rng, cap.edge_pixels, cap.edge_share) * 1000.0) / 1000.0
+
+
+def _room_capture(mesh, cap, rng: np.random.Generator, edge_rng: np.random.Generator, settings: RenderSettings,
+                  sample: int):
+    """(depth (h, w) float64 in whole millimetres, mixed returns, subject mask or None, detected floor) of
+    ``mesh`` in a room."""
     from wbsa.errors import WbsaError
     from wbsa.estimation.mixed_pixels import repair_mixed_pixels
     from wbsa.estimation.room import capture_room, compose_room
@@ -167,14 +179,14 @@ def _room_capture(mesh, cap, rng: np.random.Generator, settings: RenderSettings,
 
     room = compose_room(mesh, cap.view.azimuth_deg, wall_behind_m=float(rng.uniform(*settings.wall_behind_m)))
     _, depth = capture_room(room, cap, seed=settings.seed, subject_id=sample)
-    depth, _ = repair_mixed_pixels(depth, cap.camera.fx)
+    depth, mixed = repair_mixed_pixels(_edges(depth, cap, edge_rng), cap.camera.fx)
     try:
         seg = segment_subject(depth, cap.camera, SegmentSettings(pick="center"))
     except WbsaError:
-        return depth, None, None
+        return depth, mixed, None, None
     if np.count_nonzero(seg.mask) < 200:
-        return depth, None, None
-    return depth, seg.mask, seg.floor
+        return depth, mixed, None, None
+    return depth, mixed, seg.mask, seg.floor
 
 
 def render_samples(population: pd.DataFrame, settings: RenderSettings = RenderSettings(), *, workers: int = 1,

@@ -173,9 +173,9 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
         if seg.others:
             flags["several_people"] = (f"picked {seg.subject.describe()} ({segment.pick}); others: "
                                        + "; ".join(c.describe() for c in seg.others))
-    m = measure_subject(depth_m, mask, intrinsics, floor)
+    m = measure_subject(depth_m, mask, intrinsics, floor, mixed)
     checks.check_height(m.stature_m)
-    flags.update(checks.mixed_pixel_flags(mixed, mask))
+    flags.update(checks.mixed_pixel_flags(m.mixed_share))
     if m.touches_border:
         flags["cut_off"] = "subject pixels on the image border; step back or re-aim the camera"
     if floor is None:

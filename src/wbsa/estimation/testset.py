@@ -27,6 +27,7 @@ class RoomTestSettings:
     Attributes
     ----------
     capture : CaptureSettings
+        Its ``edge_pixels`` draw is not used: ``edge_pixels`` below applies to every image.
     wall_behind_m : (float, float)
         Gap between the subject and the wall behind, uniform.
     second_person : float
@@ -43,7 +44,7 @@ class RoomTestSettings:
     seed : int
     """
 
-    capture: CaptureSettings = field(default_factory=CaptureSettings)
+    capture: CaptureSettings = field(default_factory=lambda: CaptureSettings(edge_pixels=("kept",)))
     wall_behind_m: tuple[float, float] = (0.5, 1.5)
     second_person: float = 0.3
     side_m: tuple[float, float] = (0.9, 1.6)

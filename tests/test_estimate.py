@@ -95,6 +95,23 @@ def test_mixed_pixels_between_body_and_wall_are_put_back_on_a_surface(room_view)
     assert before > 2000 and after < 0.3 * before, (before, after)  # measured 2,142 -> 453
 
 
+def test_outline_shares_tell_mixed_and_dropped_edges_from_clean_ones(room_view):
+    """The measures see what the camera did at the outline: mixed returns beside it, or one-pixel gaps."""
+    from wbsa.estimation.mixed_pixels import outline_shares, repair_mixed_pixels
+    from wbsa.estimation.segment import SegmentSettings, segment_subject
+    from wbsa.sensor.depth_edges import edge_pixels
+
+    _, camera, frame = room_view
+    shares = {}
+    for effect in ("kept", "mixed", "dropped"):
+        depth, mixed = repair_mixed_pixels(edge_pixels(frame.depth_m, np.random.default_rng(3), effect), camera.fx)
+        subject = segment_subject(depth, camera, SegmentSettings(pick="center")).mask
+        shares[effect] = outline_shares(depth, subject, mixed)
+    (mixed_kept, gap_kept), (mixed_mixed, _), (_, gap_dropped) = shares["kept"], shares["mixed"], shares["dropped"]
+    assert mixed_kept < 0.05 and mixed_mixed > 0.2, shares
+    assert gap_kept < 0.05 and gap_dropped > 0.1, shares
+
+
 def test_side_view_keeps_both_soles_and_no_floor_strip(body_model):
     """Side view, feet apart: the far foot's sole, seen above the near foot, is walked too, and lone
     columns of floor noise under a foot are not taken (with the lowest run walked alone and no strip

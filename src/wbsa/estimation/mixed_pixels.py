@@ -154,7 +154,7 @@ def outline_shares(depth_m: np.ndarray, subject: np.ndarray, mixed: np.ndarray |
         out = subject & ~beside[1] & (beside[0] >= 0)
         steps += np.count_nonzero(out)
         gaps += np.count_nonzero(out & (beside[0] == 0) & (beyond[0] > 1.05 * inside))
-    return n_mixed / outline, gaps / max(steps, 1)
+    return float(n_mixed / outline), float(gaps / max(steps, 1))
 
 
 def _shifted2(z: np.ndarray, subject: np.ndarray, dy: int, dx: int) -> tuple[np.ndarray, np.ndarray]:

@@ -104,6 +104,7 @@ def render_chunk(population: pd.DataFrame, first_sample: int, settings: RenderSe
     from wbsa.camera.scene import MeshScene
     from wbsa.estimation.measure import measure_subject
     from wbsa.estimation.mixed_pixels import repair_mixed_pixels
+    from wbsa.estimation.room import with_edge_pixels
     from wbsa.bodies.posture import RandomPosture
     from wbsa.parallel import keep_large_allocations, single_threaded_math
     from wbsa.simulate import simulate_view
@@ -139,7 +140,8 @@ def render_chunk(population: pd.DataFrame, first_sample: int, settings: RenderSe
                                          settings.floor_tilt_deg)
                     row.update(vbsa_visible_m2=sim.row["vbsa_visible_m2"],
                                vbsa_recon_grid_m2=sim.row["vbsa_recon_grid_m2"])
-                    depth, mixed = repair_mixed_pixels(_edges(sim.frame.depth_m, cap, edge_rng), cap.camera.fx)
+                    depth, mixed = repair_mixed_pixels(
+                        with_edge_pixels(sim.frame.depth_m, cap.edge_pixels, cap.edge_share, edge_rng), cap.camera.fx)
                     mask = depth > 0 if np.count_nonzero(depth) >= 200 else None
                 if mask is None:
                     row.update(m_ok=False)
@@ -159,27 +161,19 @@ def render_chunk(population: pd.DataFrame, first_sample: int, settings: RenderSe
     return Samples(pd.DataFrame(rows), desc)
 
 
-def _edges(depth: np.ndarray, cap, rng: np.random.Generator) -> np.ndarray:
-    """The capture's camera behaviour at depth edges applied to ``depth`` (in whole millimetres)."""
-    from wbsa.sensor.depth_edges import edge_pixels
-
-    if cap.edge_pixels == "kept":
-        return depth
-    return np.round(edge_pixels(depth, rng, cap.edge_pixels, cap.edge_share) * 1000.0) / 1000.0
-
-
 def _room_capture(mesh, cap, rng: np.random.Generator, edge_rng: np.random.Generator, settings: RenderSettings,
                   sample: int):
     """(depth (h, w) float64 in whole millimetres, mixed returns, subject mask or None, detected floor) of
     ``mesh`` in a room."""
     from wbsa.errors import WbsaError
     from wbsa.estimation.mixed_pixels import repair_mixed_pixels
-    from wbsa.estimation.room import capture_room, compose_room
+    from wbsa.estimation.room import capture_room, compose_room, with_edge_pixels
     from wbsa.estimation.segment import SegmentSettings, segment_subject
 
     room = compose_room(mesh, cap.view.azimuth_deg, wall_behind_m=float(rng.uniform(*settings.wall_behind_m)))
     _, depth = capture_room(room, cap, seed=settings.seed, subject_id=sample)
-    depth, mixed = repair_mixed_pixels(_edges(depth, cap, edge_rng), cap.camera.fx)
+    depth, mixed = repair_mixed_pixels(with_edge_pixels(depth, cap.edge_pixels, cap.edge_share, edge_rng),
+                                        cap.camera.fx)
     try:
         seg = segment_subject(depth, cap.camera, SegmentSettings(pick="center"))
     except WbsaError:

@@ -153,3 +153,16 @@ def capture_room(room: RoomScene, capture, *, seed: int, subject_id: int):
     frame = simulate_view(scene, capture.camera, capture.view, sensor=capture.sensor, seed=seed, subject_id=subject_id,
                           keep_frame=True, target=room.subject_center).frame
     return frame, np.round(frame.depth_m.astype(np.float64) * 1000.0) / 1000.0
+
+
+def with_edge_pixels(depth_m: np.ndarray, effect: str, share: float, rng: np.random.Generator) -> np.ndarray:
+    """A captured millimetre depth image with its depth edges as a camera returns them, still in millimetres.
+
+    ``effect`` ``'kept'`` returns ``depth_m`` itself; ``'mixed'`` and ``'dropped'`` apply
+    :func:`wbsa.sensor.depth_edges.edge_pixels` to ``share`` of the edges.
+    """
+    from wbsa.sensor.depth_edges import edge_pixels
+
+    if effect == "kept":
+        return depth_m
+    return np.round(edge_pixels(depth_m, rng, effect, share) * 1000.0) / 1000.0

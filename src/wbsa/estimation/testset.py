@@ -70,11 +70,10 @@ def room_capture_chunk(population: pd.DataFrame, others: pd.DataFrame, first: in
     from wbsa.bodies.body_model import BodyModel
     from wbsa.bodies.posture import RandomPosture
     from wbsa.estimation.predict import load_any_model
-    from wbsa.estimation.room import capture_room, compose_room
+    from wbsa.estimation.room import capture_room, compose_room, with_edge_pixels
     from wbsa.estimation.segment import SegmentSettings
     from wbsa.estimation.single_view import estimate
     from wbsa.estimation.view import fold_azimuth
-    from wbsa.sensor.depth_edges import edge_pixels
     from wbsa.parallel import keep_large_allocations, single_threaded_math
 
     keep_large_allocations()
@@ -101,8 +100,7 @@ def room_capture_chunk(population: pd.DataFrame, others: pd.DataFrame, first: in
                                 others=people)
             frame, depth = capture_room(room, cap, seed=settings.seed, subject_id=index)
             truth = room.is_subject(frame.triangle_id) & (depth > 0)
-            if settings.edge_pixels != "kept":
-                depth = np.round(edge_pixels(depth, edge_rng, settings.edge_pixels, settings.edge_share) * 1000.0) / 1000.0
+            depth = with_edge_pixels(depth, settings.edge_pixels, settings.edge_share, edge_rng)
             t = population.iloc[b]
             row = {k: t[k] for k in ("subject_id", "population", "sex", "age_years", "stature_m", "mass_kg", "wbsa_m2")
                    if k in t.index}

@@ -21,6 +21,8 @@ import time
 import numpy as np
 import pandas as pd
 
+from wbsa.typing import EDGE_PIXELS
+
 TARGETS = {"kept": 0.98, "included": 0.01, "seg_share": 0.99, "az_median": 10.0, "az_p95": 30.0, "mape_all": 2.5,
            "mape_fb": 2.0, "bias": 0.5, "coverage": (0.93, 0.97), "seconds": 5.0}
 
@@ -136,7 +138,7 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--model", default=None, help="estimator model (.npz); default: the cached default model")
     ap.add_argument("--out", default=None, help="write the per-image results here (.csv)")
-    ap.add_argument("--edge-pixels", choices=("kept", "mixed", "dropped"), default="kept",
+    ap.add_argument("--edge-pixels", choices=EDGE_PIXELS, default="kept",
                     help="what the camera returns for pixels straddling a depth edge: the render's depth (default, "
                          "as in training), a time-of-flight mix of the two surfaces, or nothing (a flying-pixel filter)")
     ap.add_argument("--edge-share", type=float, default=1.0, help="share of the depth edges so affected (default 1)")

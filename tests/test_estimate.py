@@ -396,10 +396,13 @@ def test_model_file_round_trip_and_refuses_non_finite_numbers(small_model, tmp_p
 
     m = EstimatorModel.load(small_model)
     feats = {k: np.array([v]) for k, v in dict(vbsa_m2=0.8, stature_m=1.7, silhouette_m2=0.6, width_m=0.7,
-                                               thickness_m=0.4, distance_m=3.0, pitch_m=0.008, n_pixels=9000.0).items()}
+                                               thickness_m=0.4, distance_m=3.0, pitch_m=0.008, n_pixels=9000.0,
+                                               mixed_share=0.0, gap_share=0.03).items()}
     args = (feats, np.full((1, 40), 0.3), np.array([40.0]), np.array([5.0]), np.array([10.0]))
     w, lo, hi = m.predict(*args)
     assert lo[0] < w[0] < hi[0]
+    with pytest.raises(WbsaError, match="gap_share"):  # measures of an older wbsa: one line, not a KeyError
+        m.predict({k: v for k, v in feats.items() if k != "gap_share"}, *args[1:])
     m.save(tmp_path / "again.npz")
     assert EstimatorModel.load(tmp_path / "again.npz").predict(*args)[0][0] == w[0]
     m.coef[0] = np.inf
@@ -483,3 +486,20 @@ def test_benchmark_edge_pixel_settings_are_checked():
         RoomTestSettings(edge_pixels="mixed", edge_share=1.5)
     with pytest.raises(WbsaError, match="edge_pixels"):
         RoomTestSettings(edge_pixels="blurred")
+    from wbsa.estimation.capture import CaptureSettings, sample_capture
+    from wbsa.estimation.room import with_edge_pixels
+
+    for bad in ("mixed", ("mixed", "blurred"), ()):
+        with pytest.raises(WbsaError, match="edge_pixels"):
+            CaptureSettings(edge_pixels=bad)
+    box = np.array([[-0.2, -0.1, 0.0], [0.2, 0.1, 1.7]])
+    drawn = [sample_capture(box, np.random.default_rng(s)) for s in range(60)]
+    assert {c.edge_pixels for c in drawn} == {"kept", "mixed", "dropped"}
+    assert all((c.edge_share == 0.0) == (c.edge_pixels == "kept") for c in drawn)
+    only_kept = sample_capture(box, np.random.default_rng(5), CaptureSettings(edge_pixels=("kept",)))
+    assert (only_kept.camera, only_kept.view) == (drawn[5].camera, drawn[5].view)  # drawn last: nothing else moves
+    z = np.full((4, 6), 3.0)
+    z[:, 3:] = 4.0
+    assert with_edge_pixels(z, "kept", 1.0, np.random.default_rng(0)) is z
+    dropped = with_edge_pixels(z, "dropped", 1.0, np.random.default_rng(0))
+    assert (dropped == 0).sum() == 4 and set(np.unique(dropped)) == {0.0, 3.0, 4.0}

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from wbsa.errors import WbsaError
-from wbsa.typing import EDGE_PIXELS
+from wbsa.typing import EDGE_PIXELS, EdgePixels
 
 #: Cameras of the default training world (presets of :data:`wbsa.camera.intrinsics.PRESETS`).
 CAMERAS: tuple[str, ...] = ("kinect-v1", "kinect-v2", "azure-kinect-nfov", "realsense-d435", "realsense-d455",
@@ -54,13 +54,14 @@ class CaptureSettings:
     noise: bool = True
     max_holes_fraction: float = 0.03
     max_pixel_dropout: float = 0.02
-    edge_pixels: tuple[str, ...] = EDGE_PIXELS
+    edge_pixels: tuple[EdgePixels, ...] = EDGE_PIXELS  # type: ignore[assignment]
 
     def __post_init__(self) -> None:
         from wbsa.camera.intrinsics import PRESETS
 
-        if not self.edge_pixels or not set(self.edge_pixels) <= set(EDGE_PIXELS):
-            raise WbsaError(f"edge_pixels {self.edge_pixels} must be some of {', '.join(EDGE_PIXELS)}")
+        if isinstance(self.edge_pixels, str) or not self.edge_pixels or not set(self.edge_pixels) <= set(EDGE_PIXELS):
+            raise WbsaError(f"edge_pixels {self.edge_pixels!r} must be a tuple of some of {', '.join(EDGE_PIXELS)}, "
+                            "e.g. ('kept',)")
 
         unknown = [c for c in self.cameras if c not in PRESETS]
         if unknown or not self.cameras:
@@ -83,7 +84,7 @@ class Capture:
     sensor: object
     camera_height_m: float
     fits: bool
-    edge_pixels: str = "kept"
+    edge_pixels: EdgePixels = "kept"
     edge_share: float = 0.0
 
 
@@ -154,4 +155,5 @@ def sample_capture(vertices: np.ndarray, rng: np.random.Generator, settings: Cap
             break
         distance = min(hi, distance * 1.08)
     edges = settings.edge_pixels[int(rng.integers(len(settings.edge_pixels)))]  # drawn last: earlier draws unchanged
-    return Capture(camera, view, sensor, height, fits, edges, float(rng.uniform(0.0, 1.0)))
+    share = float(rng.uniform(0.0, 1.0))
+    return Capture(camera, view, sensor, height, fits, edges, share if edges != "kept" else 0.0)

@@ -31,7 +31,8 @@ FLAGS: dict[str, str] = {
 #: Heights from the point cloud outside this range (m) mean a wrong depth scale or units.
 HUMAN_HEIGHT_M = (0.5, 2.5)
 #: Mixed returns beside the subject per pixel of its outline above which the estimate is flagged: on the
-#: benchmark's clean images at most 0.07, with 10 % of the depth edges mixed a median of 0.09, with all 0.5.
+#: benchmark's clean images (edges kept) 1 of 299 is above; with 10 % of the depth edges mixed the median
+#: is about 0.09, with all of them 0.5 (docs/estimate.md, "Depth edges").
 MIXED_PER_OUTLINE_PIXEL = 0.1
 #: A stated view further than this (degrees) from the estimated one is flagged.
 VIEW_TOLERANCE_DEG = 30.0

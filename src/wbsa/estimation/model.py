@@ -38,8 +38,16 @@ _BASE = ("vbsa_m2", "stature_m", "silhouette_m2", "width_m", "thickness_m")
 _OUTLINE = ("mixed_share", "gap_share")
 
 
+def _check_measures(features: dict[str, np.ndarray]) -> None:
+    missing = [k for k in (*_BASE, "distance_m", "pitch_m", *_OUTLINE) if k not in features]
+    if missing:
+        raise WbsaError(f"measures {', '.join(missing)} are missing; measure the image with this wbsa "
+                        "(wbsa.estimation.measure_subject) or re-render the training samples")
+
+
 def design(features: dict[str, np.ndarray], psi_deg: np.ndarray, elevation_deg: np.ndarray) -> np.ndarray:
     """Linear design matrix (n, 33): log measures × view basis, view basis, log distance, pitch/stature, outline."""
+    _check_measures(features)
     r = np.radians(np.asarray(psi_deg, dtype=np.float64))
     s_el = np.sin(np.radians(np.asarray(elevation_deg, dtype=np.float64)))
     view = [np.ones_like(r), np.cos(r), np.cos(2 * r), np.cos(3 * r), s_el]
@@ -53,6 +61,7 @@ def design(features: dict[str, np.ndarray], psi_deg: np.ndarray, elevation_deg: 
 def tree_features(features: dict[str, np.ndarray], shape: np.ndarray, psi_deg: np.ndarray, psi_sd_deg: np.ndarray,
                   elevation_deg: np.ndarray) -> np.ndarray:
     """Features of the residual trees (n, 51): log measures, view, its spread, distance, bands / stature, outline."""
+    _check_measures(features)
     st = np.asarray(features["stature_m"], dtype=np.float64)
     cols = [np.log(np.asarray(features[k], dtype=np.float64)) for k in _BASE]
     cols += [np.asarray(psi_deg, dtype=float), np.asarray(psi_sd_deg, dtype=float), np.asarray(elevation_deg, float),

@@ -15,6 +15,7 @@ import numpy as np
 
 from wbsa.core.mesh import TriangleMesh
 from wbsa.errors import WbsaError
+from wbsa.typing import EdgePixels
 
 
 @dataclass(frozen=True)
@@ -155,7 +156,7 @@ def capture_room(room: RoomScene, capture, *, seed: int, subject_id: int):
     return frame, np.round(frame.depth_m.astype(np.float64) * 1000.0) / 1000.0
 
 
-def with_edge_pixels(depth_m: np.ndarray, effect: str, share: float, rng: np.random.Generator) -> np.ndarray:
+def with_edge_pixels(depth_m: np.ndarray, effect: EdgePixels, share: float, rng: np.random.Generator) -> np.ndarray:
     """A captured millimetre depth image with its depth edges as a camera returns them, still in millimetres.
 
     ``effect`` ``'kept'`` returns ``depth_m`` itself; ``'mixed'`` and ``'dropped'`` apply

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from wbsa.errors import WbsaError
 from wbsa.typing import EDGE_PIXELS, EdgePixels
 
 #: Neighbouring returns whose depths differ by more than this fraction lie on different surfaces.
@@ -44,9 +45,9 @@ def edge_pixels(depth_m: np.ndarray, rng: np.random.Generator, effect: EdgePixel
         A new image; pixels on several edges take the last one's mix (rows' edges, then columns').
     """
     if effect not in EDGE_PIXELS:
-        raise ValueError(f"edge pixel effect {effect!r} is unknown; use one of {', '.join(EDGE_PIXELS)}")
+        raise WbsaError(f"edge pixel effect {effect!r} is unknown; use one of {', '.join(EDGE_PIXELS)}")
     if not 0.0 <= share <= 1.0:
-        raise ValueError(f"share of edges {share} must lie in [0, 1]")
+        raise WbsaError(f"share of edges {share} must lie in [0, 1]")
     z = np.asarray(depth_m, dtype=np.float64)
     out = z.copy()
     if effect == "kept":

@@ -71,10 +71,11 @@ def tree_features(features: dict[str, np.ndarray], shape: np.ndarray, psi_deg: n
 
 
 def spread_design(psi_deg: np.ndarray, psi_sd_deg: np.ndarray, features: dict[str, np.ndarray]) -> np.ndarray:
-    """Design of the log residual spread (n, 5): 1, cos 2ψ, view spread, log pitch, log pixel count."""
+    """Design of the log residual spread (n, 7): 1, cos 2ψ, view spread, log pitch, log pixel count, outline."""
     r = np.radians(np.asarray(psi_deg, dtype=np.float64))
     return np.column_stack([np.ones_like(r), np.cos(2 * r), np.asarray(psi_sd_deg, float) / 30.0,
-                            np.log(features["pitch_m"]), np.log(features["n_pixels"])])
+                            np.log(features["pitch_m"]), np.log(features["n_pixels"])]
+                           + [np.asarray(features[k], dtype=np.float64) for k in _OUTLINE])
 
 
 @dataclass

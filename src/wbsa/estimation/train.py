@@ -227,7 +227,7 @@ def _fit_spread(samples: Samples, psi: np.ndarray, psi_sd: np.ndarray, settings:
     for f in range(settings.folds):
         tr, te = k != f, k == f
         mean, scale, coef, icpt, trees = fit_wbsa(t[tr], shape[tr], psi[tr], psi_sd[tr], seed=settings.seed)
-        m = EstimatorModel(None, mean, scale, coef, icpt, trees, np.zeros(5), np.zeros(2), np.zeros(1))  # type: ignore[arg-type]
+        m = EstimatorModel(None, mean, scale, coef, icpt, trees, np.zeros(7), np.zeros(2), np.zeros(1))  # type: ignore[arg-type]
         feats = _columns(t[te])
         resid[te] = np.log(t["wbsa_m2"].to_numpy()[te]) - m.log_wbsa(feats, shape[te], psi[te], psi_sd[te],
                                                                       feats["elevation_deg"])

@@ -26,7 +26,7 @@ FLAGS: dict[str, str] = {
     "model_mismatch": "the model was fitted for another camera, distance or view",
     "camera_assumed": "no camera was given; the preset of the image's size was assumed",
     "interval_unsure": "the model's calibration has too few subjects to promise the interval's level",
-    "mixed_pixels": "many returns at the subject's outline lay between two surfaces; the area may read high",
+    "mixed_pixels": "many returns at the subject's outline lay between two surfaces; the area may be off",
 }
 #: Heights from the point cloud outside this range (m) mean a wrong depth scale or units.
 HUMAN_HEIGHT_M = (0.5, 2.5)

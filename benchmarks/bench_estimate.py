@@ -153,7 +153,8 @@ def main() -> None:
         model_path = str(default_model_path())
     t0 = time.perf_counter()
     pop = population(args.subjects, args.survey_share, args.seed)
-    res = run_room_tests(pop, RoomTestSettings(seed=args.seed, edge_pixels=args.edge_pixels, edge_share=args.edge_share), model_path, workers=args.workers)
+    settings = RoomTestSettings(seed=args.seed, edge_pixels=args.edge_pixels, edge_share=args.edge_share)
+    res = run_room_tests(pop, settings, model_path, workers=args.workers)
     if args.out:
         res.to_csv(args.out, index=False)
     print(f"model {model_path}; {len(pop)} subjects ({(pop['population'] == 'survey').sum()} survey-matched), "

@@ -140,7 +140,7 @@ def main() -> None:
     ap.add_argument("--out", default=None, help="write the per-image results here (.csv)")
     ap.add_argument("--edge-pixels", choices=EDGE_PIXELS, default="kept",
                     help="what the camera returns for pixels straddling a depth edge: the render's depth (default, "
-                         "as in training), a time-of-flight mix of the two surfaces, or nothing (a flying-pixel filter)")
+                         "the issue's benchmark), a time-of-flight mix of the two surfaces, or nothing (a flying-pixel filter)")
     ap.add_argument("--edge-share", type=float, default=1.0, help="share of the depth edges so affected (default 1)")
     args = ap.parse_args()
 

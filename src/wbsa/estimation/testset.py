@@ -38,7 +38,7 @@ class RoomTestSettings:
         How the estimator chooses among several people (the operator aims the camera at the subject).
     edge_pixels : {'kept', 'mixed', 'dropped'}
         What the camera returns for a pixel straddling a depth edge (:func:`wbsa.sensor.depth_edges.edge_pixels`):
-        the render's depth (as in training), a time-of-flight mix of the two surfaces, or nothing.
+        the render's depth (the issue's benchmark), a time-of-flight mix of the two surfaces, or nothing.
     edge_share : float
         Share of the depth edges so affected.
     seed : int

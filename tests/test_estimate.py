@@ -67,6 +67,41 @@ def test_segmentation_keeps_a_wide_armed_tall_body_and_drops_the_room(room_view)
     assert 1.8 < seg.subject.height_m < 2.0 and len(seg.others) == 1
 
 
+def test_an_arm_is_merged_with_an_upper_body_clear_of_the_floor_but_two_standing_people_are_not():
+    """Bench image 91 (elbows bent, a second person near): the forearm, cut off at the elbow, touched the
+    upper body cut off at the waist; their union's "hips" band was the elbows, 1.0 m wide, so the arm was
+    refused. The footprint is a standing object's: only a union that reaches the floor is held to it.
+    A far hand may step farther than a body's width behind the near side; only a hand, not a box."""
+    from wbsa.estimation.cloud import Plane
+    from wbsa.estimation.clusters import MAX_FOOTPRINT_M, footprint_m, merge_occluding
+
+    def block(rows, cols, x0, x1, y0, y1, z):
+        r, c = np.meshgrid(np.arange(*rows), np.arange(*cols), indexing="ij")
+        x = x0 + (x1 - x0) * (c - cols[0]) / (cols[1] - cols[0] - 1)
+        y = y0 + (y1 - y0) * (r - rows[0]) / (rows[1] - rows[0] - 1)
+        return (r * 200 + c).ravel(), np.stack([x.ravel(), y.ravel(), np.full(x.size, z)], axis=1)
+
+    floor = Plane(np.array([0.0, -1.0, 0.0]), -1.2)  # 1.2 m below the camera (y down)
+    for lift_m, merged in ((0.0, False), (0.6, True)):  # lift_m: both parts' gap to the floor
+        body_pix, body = block((20, 120), (80, 100), -0.15, 0.15, -0.1 - lift_m, 1.2 - lift_m, 2.0)
+        arm_pix, arm = block((90, 120), (100, 150), 0.15, 1.1, 0.75 - lift_m, 1.2 - lift_m, 2.3)
+        pix, points = np.r_[body_pix, arm_pix], np.r_[body, arm]
+        label = np.r_[np.zeros(len(body_pix), int), np.ones(len(arm_pix), int)]
+        assert footprint_m(points, floor.normal) > MAX_FOOTPRINT_M
+        out = merge_occluding(label, pix, points, (200, 200), floor, 2.6, 2.6)
+        assert (len(np.unique(out)) == 1) == merged, lift_m
+    # without a floor every union is held to the footprint
+    assert len(np.unique(merge_occluding(label, pix, points, (200, 200), None, 2.6, 2.6))) == 2
+    # a far hand 0.95 m behind the near side (bench images 19, 118: side views, arms held out) joins the
+    # body; a part as small on the floor at that step (a box behind the feet) does not
+    body_pix, body = block((20, 200), (80, 100), -0.15, 0.15, -0.6, 1.2, 2.0)
+    for hand_y_m, merged in ((0.0, True), (1.1, False)):
+        hand_pix, hand = block((100, 110), (100, 106), 0.2, 0.3, hand_y_m - 0.1, hand_y_m + 0.1, 2.95)
+        label = np.r_[np.zeros(len(body_pix), int), np.ones(len(hand_pix), int)]
+        out = merge_occluding(label, np.r_[body_pix, hand_pix], np.r_[body, hand], (200, 200), floor, 2.6, 2.6)
+        assert (len(np.unique(out)) == 1) == merged, hand_y_m
+
+
 def test_mixed_pixels_between_body_and_wall_are_put_back_on_a_surface(room_view):
     """Time-of-flight mixed pixels at every depth edge: most of those floating in a gap land on a surface."""
     from wbsa.estimation.cloud import depth_noise_m

@@ -4,12 +4,22 @@ from __future__ import annotations
 
 import numpy as np
 
+from wbsa.estimation.cloud import Plane
+
 #: Parts that touch in the image are merged when a fifth of their contact has a depth step under this (m)
 MERGE_DEPTH_GAP_M = 0.8
 #: ... and they share at least this many neighbouring pixel pairs.
 MERGE_MIN_CONTACTS = 5
+#: A part clear of the floor (by :data:`STANDING_M`) and no bigger than an arm (bounding-box diagonal at
+#: most :data:`LIMB_MAX_M`) may step this far (m): seen from the side, the far hand of arms held out from
+#: the body lies 0.6–1.0 m behind the near side (bench images with the A-pose or arms wide, 0.89–0.91 m).
+MERGE_LIMB_GAP_M = 1.1
+LIMB_MAX_M = 0.9
 #: A person's legs and hips (10–40 % of its height) span at most this horizontally (m); two people more.
 MAX_FOOTPRINT_M = 0.9
+#: Only a union reaching this close to the floor (m) has legs and hips to measure: an upper body with its
+#: arm, both clear of the floor, would measure its chest and elbows instead.
+STANDING_M = 0.3
 
 
 def footprint_m(points: np.ndarray, up: np.ndarray) -> float:
@@ -56,14 +66,16 @@ def attach_low(low: np.ndarray, tree, labels: np.ndarray, gap: float) -> np.ndar
 
 
 def merge_occluding(pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarray, shape: tuple[int, int],
-                    up: np.ndarray, max_height_m: float, max_width_m: float) -> np.ndarray:
+                    floor: Plane | None, max_height_m: float, max_width_m: float) -> np.ndarray:
     """Merge clusters that touch in the image across a small depth step, while the union stays person-sized.
 
     Seen from the side, a body's far leg and arm are hidden where they join it, so they form clusters of
     their own; they touch the near side in the image with a depth step of a body's width (or of an arm
-reaching towards the camera, which can hide the waist). Pairs are merged
-    by decreasing contact length when a fifth of the contact steps less than 0.8 m in depth and the union
-    is person-sized: not too tall or wide, and its legs and hips span at most 0.9 m (two people more).
+    reaching towards the camera, which can hide the waist). Pairs are merged by decreasing contact length
+    when a fifth of the contact steps less than 0.8 m in depth (1.1 m for an arm-sized part clear of the
+    floor: the far hand of arms held out) and the union is person-sized: not too tall or wide, and, if it
+    stands on the floor (reaches within :data:`STANDING_M` of it; always without a floor), its legs and
+    hips span at most 0.9 m (two people more).
 
     Parameters
     ----------
@@ -71,8 +83,9 @@ reaching towards the camera, which can hide the waist). Pairs are merged
         Cluster of each return (−1: none); ``pix`` (k,) its flat pixel index, ``points`` (k, 3) its point.
     shape : (int, int)
         Image size (h, w).
-    up : (3,) float
-        The vertical (floor normal) in the camera frame.
+    floor : Plane or None
+        The floor (its normal is the vertical); None: the image's up (−y), and every union is tested as
+        standing.
     max_height_m, max_width_m : float
         Largest person.
 
@@ -82,6 +95,8 @@ reaching towards the camera, which can hide the waist). Pairs are merged
         Labels after merging (merged clusters take the label of the larger part).
     """
     h, w = shape
+    up = floor.normal if floor is not None else np.array([0.0, -1.0, 0.0])
+    floor_up_m = floor.offset if floor is not None else np.inf  # along up; without a floor, all stand
     img = np.full(h * w, -1, dtype=np.int64)
     img[pix] = pixel_label
     rng = np.zeros(h * w)
@@ -120,17 +135,22 @@ reaching towards the camera, which can hide the waist). Pairs are merged
         return c
 
     for i in np.argsort(-counts, kind="stable"):
-        if counts[i] < MERGE_MIN_CONTACTS or near_gap[i] > MERGE_DEPTH_GAP_M:
+        if counts[i] < MERGE_MIN_CONTACTS or near_gap[i] > MERGE_LIMB_GAP_M:
             continue
         a, b = root(int(pairs[i, 0])), root(int(pairs[i, 1]))
         if a == b:
             continue
+        if near_gap[i] > MERGE_DEPTH_GAP_M:
+            part = a if size[a] < size[b] else b
+            if lo[part][0] - floor_up_m < STANDING_M or np.linalg.norm(hi[part] - lo[part]) > LIMB_MAX_M:
+                continue
         new_lo, new_hi = np.minimum(lo[a], lo[b]), np.maximum(hi[a], hi[b])
         ext = new_hi - new_lo
         if ext[0] > max_height_m or np.hypot(ext[1], ext[2]) > max_width_m:
             continue
         union = np.concatenate(members[a] + members[b])
-        if footprint_m(points[union], up) > MAX_FOOTPRINT_M:
+        standing = new_lo[0] - floor_up_m < STANDING_M
+        if standing and footprint_m(points[union], up) > MAX_FOOTPRINT_M:
             continue
         keep, gone = (a, b) if size[a] >= size[b] else (b, a)
         parent[gone] = keep

@@ -249,8 +249,7 @@ def segment_subject(depth_m: np.ndarray, intrinsics, settings: SegmentSettings =
         voxel_label[low] = attach_low(cloud[low], tree, labels, gap)
     pixel_label = voxel_label[voxel_of]
     pixel_label[~keep[voxel_of]] = -1
-    up = floor.normal if floor is not None else np.array([0.0, -1.0, 0.0])
-    pixel_label = merge_occluding(pixel_label, pix, points, (h, w), up, settings.max_person_height_m,
+    pixel_label = merge_occluding(pixel_label, pix, points, (h, w), floor, settings.max_person_height_m,
                                   settings.max_person_width_m)
     clusters = _describe(pixel_label, pix, points, w, floor)
     people = [c for c in clusters if settings.min_person_height_m <= c.height_m <= settings.max_person_height_m

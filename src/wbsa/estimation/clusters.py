@@ -10,11 +10,6 @@ from wbsa.estimation.cloud import Plane
 MERGE_DEPTH_GAP_M = 0.8
 #: ... and they share at least this many neighbouring pixel pairs.
 MERGE_MIN_CONTACTS = 5
-#: A part clear of the floor (by :data:`STANDING_M`) and no bigger than an arm (bounding-box diagonal at
-#: most :data:`LIMB_MAX_M`) may step this far (m): seen from the side, the far hand of arms held out from
-#: the body lies 0.6–1.0 m behind the near side (bench images with the A-pose or arms wide, 0.89–0.91 m).
-MERGE_LIMB_GAP_M = 1.1
-LIMB_MAX_M = 0.9
 #: A person's legs and hips (10–40 % of its height) span at most this horizontally (m); two people more.
 MAX_FOOTPRINT_M = 0.9
 #: Only a union reaching this close to the floor (m) has legs and hips to measure: an upper body with its
@@ -72,10 +67,9 @@ def merge_occluding(pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarray
     Seen from the side, a body's far leg and arm are hidden where they join it, so they form clusters of
     their own; they touch the near side in the image with a depth step of a body's width (or of an arm
     reaching towards the camera, which can hide the waist). Pairs are merged by decreasing contact length
-    when a fifth of the contact steps less than 0.8 m in depth (1.1 m for an arm-sized part clear of the
-    floor: the far hand of arms held out) and the union is person-sized: not too tall or wide, and, if it
-    stands on the floor (reaches within :data:`STANDING_M` of it; always without a floor), its legs and
-    hips span at most 0.9 m (two people more).
+    when a fifth of the contact steps less than 0.8 m in depth and the union is person-sized: not too tall
+    or wide, and, if it stands on the floor (reaches within :data:`STANDING_M` of it; always without a
+    floor), its legs and hips span at most 0.9 m (two people more).
 
     Parameters
     ----------
@@ -135,15 +129,11 @@ def merge_occluding(pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarray
         return c
 
     for i in np.argsort(-counts, kind="stable"):
-        if counts[i] < MERGE_MIN_CONTACTS or near_gap[i] > MERGE_LIMB_GAP_M:
+        if counts[i] < MERGE_MIN_CONTACTS or near_gap[i] > MERGE_DEPTH_GAP_M:
             continue
         a, b = root(int(pairs[i, 0])), root(int(pairs[i, 1]))
         if a == b:
             continue
-        if near_gap[i] > MERGE_DEPTH_GAP_M:
-            part = a if size[a] < size[b] else b
-            if lo[part][0] - floor_up_m < STANDING_M or np.linalg.norm(hi[part] - lo[part]) > LIMB_MAX_M:
-                continue
         new_lo, new_hi = np.minimum(lo[a], lo[b]), np.maximum(hi[a], hi[b])
         ext = new_hi - new_lo
         if ext[0] > max_height_m or np.hypot(ext[1], ext[2]) > max_width_m:

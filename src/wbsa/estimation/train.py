@@ -48,6 +48,10 @@ class TrainSettings:
         (:class:`~wbsa.estimation.renders.RenderSettings`).
     folds : int
         Folds of the out-of-fold view estimates and residuals.
+    tree_iterations, tree_leaves : int
+        Boosting rounds and leaves per tree of the residual trees (learning rate 0.05).
+    tree_l2 : float
+        L2 penalty on the trees' leaf values.
     seed : int
     """
 
@@ -60,6 +64,9 @@ class TrainSettings:
     postures: tuple[str, ...] | None = None
     room: bool = True
     folds: int = 3
+    tree_iterations: int = 800
+    tree_leaves: int = 31
+    tree_l2: float = 0.1
     seed: int = 0
 
     def __post_init__(self) -> None:
@@ -69,6 +76,8 @@ class TrainSettings:
             raise WbsaError(f"calibration_fraction {self.calibration_fraction} must lie in [0.05, 0.5]")
         if self.views_per_subject < 1 or self.folds < 2:
             raise WbsaError("views_per_subject must be >= 1 and folds >= 2")
+        if self.tree_iterations < 1 or self.tree_leaves < 2 or self.tree_l2 < 0:
+            raise WbsaError("tree_iterations must be >= 1, tree_leaves >= 2 and tree_l2 >= 0")
 
 
 def training_population(settings: TrainSettings, show_progress: bool | None = None) -> pd.DataFrame:
@@ -118,8 +127,8 @@ def _oof_view(samples: Samples, folds: int, seed: int) -> tuple[np.ndarray, np.n
     return psi, sd
 
 
-def fit_wbsa(table: pd.DataFrame, shape: np.ndarray, psi: np.ndarray, psi_sd: np.ndarray, *, seed: int = 0,
-             alpha: float = 1e-3) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, object]:
+def fit_wbsa(table: pd.DataFrame, shape: np.ndarray, psi: np.ndarray, psi_sd: np.ndarray, settings: TrainSettings,
+             *, alpha: float = 1e-3) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, object]:
     """Ridge on :func:`design` and residual trees; returns (mean, scale, coef, intercept, trees)."""
     from sklearn.ensemble import HistGradientBoostingRegressor
     from sklearn.linear_model import Ridge
@@ -134,8 +143,10 @@ def fit_wbsa(table: pd.DataFrame, shape: np.ndarray, psi: np.ndarray, psi_sd: np
     scale[scale == 0] = 1.0
     ridge = Ridge(alpha=alpha).fit((X - mean) / scale, y)
     resid = y - ridge.predict((X - mean) / scale)
-    trees = HistGradientBoostingRegressor(max_iter=200, learning_rate=0.05, max_leaf_nodes=15, min_samples_leaf=20,
-                                          l2_regularization=1.0, random_state=seed, early_stopping=False)
+    trees = HistGradientBoostingRegressor(max_iter=settings.tree_iterations, learning_rate=0.05,
+                                          max_leaf_nodes=settings.tree_leaves, min_samples_leaf=20,
+                                          l2_regularization=settings.tree_l2, random_state=settings.seed,
+                                          early_stopping=False)
     trees.fit(tree_features(feats, shape, psi, psi_sd, el), resid)
     return mean, scale, ridge.coef_.astype(np.float64), float(ridge.intercept_), TreeEnsemble.from_sklearn(trees)
 
@@ -182,7 +193,7 @@ def train_model(settings: TrainSettings = TrainSettings(), *, workers: int = 1, 
     view = ViewModel.fit(fit_s.descriptors[:, :_VIEW_DIMS], fit_t["azimuth_deg"].to_numpy(), seed=settings.seed,
                          axis_sd_deg=axis_sd, elevation_sd_deg=el_sd)
     shape = fit_s.descriptors[:, _VIEW_DIMS:]
-    mean, scale, coef, intercept, trees = fit_wbsa(fit_t, shape, psi_oof, sd_oof, seed=settings.seed)
+    mean, scale, coef, intercept, trees = fit_wbsa(fit_t, shape, psi_oof, sd_oof, settings)
     spread = _fit_spread(fit_s, psi_oof, sd_oof, settings)
     z = spread_design(psi_oof, sd_oof, _columns(fit_t)) @ spread
     model = EstimatorModel(view, mean, scale, coef, intercept, trees, spread, np.array([z.min(), z.max()]),
@@ -226,7 +237,7 @@ def _fit_spread(samples: Samples, psi: np.ndarray, psi_sd: np.ndarray, settings:
     resid = np.zeros(len(t))
     for f in range(settings.folds):
         tr, te = k != f, k == f
-        mean, scale, coef, icpt, trees = fit_wbsa(t[tr], shape[tr], psi[tr], psi_sd[tr], seed=settings.seed)
+        mean, scale, coef, icpt, trees = fit_wbsa(t[tr], shape[tr], psi[tr], psi_sd[tr], settings)
         m = EstimatorModel(None, mean, scale, coef, icpt, trees, np.zeros(7), np.zeros(2), np.zeros(1))  # type: ignore[arg-type]
         feats = _columns(t[te])
         resid[te] = np.log(t["wbsa_m2"].to_numpy()[te]) - m.log_wbsa(feats, shape[te], psi[te], psi_sd[te],

@@ -67,10 +67,11 @@ def test_segmentation_keeps_a_wide_armed_tall_body_and_drops_the_room(room_view)
     assert 1.8 < seg.subject.height_m < 2.0 and len(seg.others) == 1
 
 
-def test_an_arm_is_merged_with_an_upper_body_clear_of_the_floor_but_two_standing_people_are_not():
+def test_an_arm_joins_an_upper_body_clear_of_the_floor_but_a_standing_or_torso_sized_union_is_held_to_the_hips():
     """Bench image 91 (elbows bent, a second person near): the forearm, cut off at the elbow, touched the
     upper body cut off at the waist; their union's "hips" band was the elbows, 1.0 m wide, so the arm was
-    refused. The footprint is a standing object's: only a union that reaches the floor is held to it."""
+    refused. The footprint is a standing object's: only an arm-sized part joining an upper body clear of
+    the floor is spared it; the same blocks on the floor, or two torsos, are still held to it."""
     from wbsa.estimation.cloud import Plane
     from wbsa.estimation.clusters import MAX_FOOTPRINT_M, footprint_m, merge_occluding
 
@@ -80,17 +81,19 @@ def test_an_arm_is_merged_with_an_upper_body_clear_of_the_floor_but_two_standing
         y = y0 + (y1 - y0) * (r - rows[0]) / (rows[1] - rows[0] - 1)
         return (r * 200 + c).ravel(), np.stack([x.ravel(), y.ravel(), np.full(x.size, z)], axis=1)
 
-    floor = Plane(np.array([0.0, -1.0, 0.0]), -1.2)  # 1.2 m below the camera (y down)
-    for lift_m, merged in ((0.0, False), (0.6, True)):  # lift_m: both parts' gap to the floor
+    def merged(lift_m, part_x1_m, floor):
         body_pix, body = block((20, 120), (80, 100), -0.15, 0.15, -0.1 - lift_m, 1.2 - lift_m, 2.0)
-        arm_pix, arm = block((90, 120), (100, 150), 0.15, 1.1, 0.75 - lift_m, 1.2 - lift_m, 2.3)
-        pix, points = np.r_[body_pix, arm_pix], np.r_[body, arm]
-        label = np.r_[np.zeros(len(body_pix), int), np.ones(len(arm_pix), int)]
-        assert footprint_m(points, floor.normal) > MAX_FOOTPRINT_M
-        out = merge_occluding(label, pix, points, (200, 200), floor, 2.6, 2.6)
-        assert (len(np.unique(out)) == 1) == merged, lift_m
-    # without a floor every union is held to the footprint
-    assert len(np.unique(merge_occluding(label, pix, points, (200, 200), None, 2.6, 2.6))) == 2
+        part_pix, part = block((90, 120), (100, 150), 0.15, part_x1_m, 0.75 - lift_m, 1.2 - lift_m, 2.3)
+        pix, points = np.r_[body_pix, part_pix], np.r_[body, part]
+        label = np.r_[np.zeros(len(body_pix), int), np.ones(len(part_pix), int)]
+        assert footprint_m(points, np.array([0.0, -1.0, 0.0])) > MAX_FOOTPRINT_M
+        return len(np.unique(merge_occluding(label, pix, points, (200, 200), floor, 2.6, 2.6))) == 1
+
+    floor = Plane(np.array([0.0, -1.0, 0.0]), -1.2)  # 1.2 m below the camera (y down)
+    assert merged(0.6, 0.85, floor)  # an arm (0.70 x 0.45 m) beside an upper body, both 0.6 m clear
+    assert not merged(0.0, 0.85, floor)  # the same on the floor: two things side by side at the hips
+    assert not merged(0.6, 1.3, floor)  # a part bigger than an arm (1.15 m across): another torso
+    assert not merged(2.0, 0.85, None)  # without a floor every union is held to the footprint
 
 
 def test_mixed_pixels_between_body_and_wall_are_put_back_on_a_surface(room_view):

@@ -13,8 +13,11 @@ MERGE_MIN_CONTACTS = 5
 #: A person's legs and hips (10–40 % of its height) span at most this horizontally (m); two people more.
 MAX_FOOTPRINT_M = 0.9
 #: Only a union reaching this close to the floor (m) has legs and hips to measure: an upper body with its
-#: arm, both clear of the floor, would measure its chest and elbows instead.
+#: arm, both clear of the floor, would measure its chest and elbows instead ...
 STANDING_M = 0.3
+#: ... so such a union is spared the footprint test when its smaller part is arm-sized (bounding-box
+#: diagonal at most this, m); two upper bodies are still held to it.
+ARM_MAX_M = 0.9
 
 
 def footprint_m(points: np.ndarray, up: np.ndarray) -> float:
@@ -68,8 +71,9 @@ def merge_occluding(pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarray
     their own; they touch the near side in the image with a depth step of a body's width (or of an arm
     reaching towards the camera, which can hide the waist). Pairs are merged by decreasing contact length
     when a fifth of the contact steps less than 0.8 m in depth and the union is person-sized: not too tall
-    or wide, and, if it stands on the floor (reaches within :data:`STANDING_M` of it; always without a
-    floor), its legs and hips span at most 0.9 m (two people more).
+    or wide, and its legs and hips span at most 0.9 m (two people more). The last test is skipped for an
+    upper body and an arm-sized part (:data:`ARM_MAX_M`) clear of the floor (the union stays over
+    :data:`STANDING_M` above it; there is no such union without a floor): their "hips" are the elbows.
 
     Parameters
     ----------
@@ -78,8 +82,8 @@ def merge_occluding(pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarray
     shape : (int, int)
         Image size (h, w).
     floor : Plane or None
-        The floor (its normal is the vertical); None: the image's up (−y), and every union is tested as
-        standing.
+        The floor (its normal is the vertical); None: the image's up (−y), and every union is held to the
+        footprint.
     max_height_m, max_width_m : float
         Largest person.
 
@@ -90,7 +94,7 @@ def merge_occluding(pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarray
     """
     h, w = shape
     up = floor.normal if floor is not None else np.array([0.0, -1.0, 0.0])
-    floor_up_m = floor.offset if floor is not None else np.inf  # along up; without a floor, all stand
+    floor_up_m = floor.offset if floor is not None else np.inf  # along up; without a floor, nothing is clear
     img = np.full(h * w, -1, dtype=np.int64)
     img[pix] = pixel_label
     rng = np.zeros(h * w)
@@ -139,8 +143,9 @@ def merge_occluding(pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarray
         if ext[0] > max_height_m or np.hypot(ext[1], ext[2]) > max_width_m:
             continue
         union = np.concatenate(members[a] + members[b])
-        standing = new_lo[0] - floor_up_m < STANDING_M
-        if standing and footprint_m(points[union], up) > MAX_FOOTPRINT_M:
+        part = a if size[a] < size[b] else b
+        arm_clear = new_lo[0] - floor_up_m >= STANDING_M and np.linalg.norm(hi[part] - lo[part]) <= ARM_MAX_M
+        if not arm_clear and footprint_m(points[union], up) > MAX_FOOTPRINT_M:
             continue
         keep, gone = (a, b) if size[a] >= size[b] else (b, a)
         parent[gone] = keep

@@ -76,8 +76,10 @@ class TrainSettings:
             raise WbsaError(f"calibration_fraction {self.calibration_fraction} must lie in [0.05, 0.5]")
         if self.views_per_subject < 1 or self.folds < 2:
             raise WbsaError("views_per_subject must be >= 1 and folds >= 2")
-        if self.tree_iterations < 1 or self.tree_leaves < 2 or self.tree_l2 < 0:
-            raise WbsaError("tree_iterations must be >= 1, tree_leaves >= 2 and tree_l2 >= 0")
+        counts_ok = all(isinstance(v, int) for v in (self.tree_iterations, self.tree_leaves))
+        if not (counts_ok and self.tree_iterations >= 1 and self.tree_leaves >= 2 and self.tree_l2 >= 0):
+            raise WbsaError(f"tree_iterations ({self.tree_iterations!r}) must be an integer >= 1, tree_leaves "
+                            f"({self.tree_leaves!r}) an integer >= 2 and tree_l2 ({self.tree_l2!r}) a number >= 0")
 
 
 def training_population(settings: TrainSettings, show_progress: bool | None = None) -> pd.DataFrame:
@@ -129,7 +131,21 @@ def _oof_view(samples: Samples, folds: int, seed: int) -> tuple[np.ndarray, np.n
 
 def fit_wbsa(table: pd.DataFrame, shape: np.ndarray, psi: np.ndarray, psi_sd: np.ndarray, settings: TrainSettings,
              *, alpha: float = 1e-3) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, object]:
-    """Ridge on :func:`design` and residual trees; returns (mean, scale, coef, intercept, trees)."""
+    """Ridge on :func:`design` and residual trees; returns (mean, scale, coef, intercept, trees).
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        Samples (n rows) with the ``m_`` measures of :data:`FEATURES` and the true ``wbsa_m2``.
+    shape : (n, 40) float
+        Band widths and thicknesses of every sample.
+    psi, psi_sd : (n,) float64
+        Estimated azimuth, folded left–right (0–180°), and its spread (degrees).
+    settings : TrainSettings
+        Its ``tree_iterations``, ``tree_leaves``, ``tree_l2`` and ``seed`` shape the trees.
+    alpha : float
+        Ridge penalty on the standardised design.
+    """
     from sklearn.ensemble import HistGradientBoostingRegressor
     from sklearn.linear_model import Ridge
 

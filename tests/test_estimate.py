@@ -532,3 +532,12 @@ def test_benchmark_edge_pixel_settings_are_checked():
     assert with_edge_pixels(z, "kept", 1.0, np.random.default_rng(0)) is z
     dropped = with_edge_pixels(z, "dropped", 1.0, np.random.default_rng(0))
     assert (dropped == 0).sum() == 4 and set(np.unique(dropped)) == {0.0, 3.0, 4.0}
+
+
+def test_residual_tree_settings_are_checked():
+    from wbsa.estimation.train import TrainSettings
+
+    for bad in (dict(tree_l2=float("nan")), dict(tree_iterations=800.5), dict(tree_leaves=1), dict(tree_l2=-0.1)):
+        with pytest.raises(WbsaError, match="tree_iterations .* must be an integer"):
+            TrainSettings(**bad)
+    assert TrainSettings(tree_iterations=10, tree_leaves=2, tree_l2=0.0).tree_iterations == 10

@@ -67,6 +67,37 @@ def formulae(df: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
+#: WHO adult BMI classes (kg/m²); people under 18 are one group, since their BMI classes depend on age and sex.
+BUILD_CLASSES = ((0.0, "adult, underweight (BMI < 18.5)"), (18.5, "adult, normal (18.5–25)"),
+                 (25.0, "adult, overweight (25–30)"), (30.0, "adult, obese I (30–35)"),
+                 (35.0, "adult, obese II–III (≥ 35)"))
+
+
+def build_class(df: pd.DataFrame) -> pd.Series:
+    """Body build of every subject: ``child (<18 y)`` or the adult's WHO BMI class (:data:`BUILD_CLASSES`)."""
+    bmi = df["mass_kg"] / df["stature_m"] ** 2
+    edges = [lo for lo, _ in BUILD_CLASSES]
+    adult = pd.Series(pd.cut(bmi, [*edges, np.inf], right=False, labels=[n for _, n in BUILD_CLASSES]),
+                      index=df.index).astype(str)
+    return adult.where(df["age_years"] >= 18, "child (<18 y)")
+
+
+def by_build(ok: pd.DataFrame) -> pd.DataFrame:
+    """Our error, bias and coverage and Du Bois's (true height and mass) per :func:`build_class`."""
+    from wbsa.formulae.compute import bsa
+
+    dubois = np.asarray(bsa("dubois", ok["stature_m"].to_numpy() * 100, ok["mass_kg"].to_numpy(), check=False))
+    frame = pd.DataFrame({"build": build_class(ok), "err": 100 * (ok["est_wbsa_m2"] / ok["wbsa_m2"] - 1),
+                          "inside": (ok["est_lo_m2"] <= ok["wbsa_m2"]) & (ok["wbsa_m2"] <= ok["est_hi_m2"]),
+                          "dubois": 100 * (dubois / ok["wbsa_m2"].to_numpy() - 1)})
+    order = ["child (<18 y)"] + [n for _, n in BUILD_CLASSES]
+    return (frame.groupby("build").agg(n=("err", "size"), mape_pct=("err", lambda e: np.mean(np.abs(e))),
+                                       bias_pct=("err", "mean"), coverage=("inside", "mean"),
+                                       dubois_mape_pct=("dubois", lambda e: np.mean(np.abs(e))),
+                                       dubois_bias_pct=("dubois", "mean"))
+            .reindex([o for o in order if o in set(frame["build"])]))
+
+
 def summarise(g: pd.DataFrame) -> pd.Series:
     err = 100 * (g["est_wbsa_m2"] / g["wbsa_m2"] - 1)
     inside = (g["est_lo_m2"] <= g["wbsa_m2"]) & (g["wbsa_m2"] <= g["est_hi_m2"])
@@ -122,6 +153,8 @@ def report(res: pd.DataFrame, wall_s: float) -> None:
     for by in ("posture", "camera", "distance band", "population", "age group", "second_person"):
         print(f"\nby {by}:")
         print(ok.groupby(by).apply(summarise, include_groups=False).round(3).to_string())
+    print("\nby build (adults by WHO BMI class; Du Bois given the TRUE height and mass):")
+    print(by_build(ok).round(3).to_string())
     print("\nagainst the height/weight formulae on the same subjects (formulae given the TRUE height and mass):")
     ours = pd.DataFrame([{"method": "wbsa estimate (one depth image)", "n": len(ok), "mape_pct": np.mean(np.abs(err)),
                           "bias_pct": np.mean(err)}])

@@ -434,6 +434,12 @@ def test_model_file_round_trip_and_refuses_non_finite_numbers(small_model, tmp_p
         m.predict({k: v for k, v in feats.items() if k != "gap_share"}, *args[1:])
     m.save(tmp_path / "again.npz")
     assert EstimatorModel.load(tmp_path / "again.npz").predict(*args)[0][0] == w[0]
+    # a file of the format before the spread saw the build (7 spread terms) is refused in one line
+    old = EstimatorModel.load(small_model)
+    old.spread_coef, old.meta["version"] = old.spread_coef[:7], 2
+    old.save(tmp_path / "old.npz")
+    with pytest.raises(WbsaError, match="version 3 file; rebuild it"):
+        EstimatorModel.load(tmp_path / "old.npz")
     m.coef[0] = np.inf
     m.save(tmp_path / "broken.npz")
     with pytest.raises(WbsaError, match="non-finite"):

@@ -10,8 +10,9 @@ spread s(x) on held-out calibration renders (never used in fitting) give the qua
 so that the level is met with at least 90 % confidence over the calibration draw
 (:meth:`EstimatorModel.quantile`).
 
-File layout: one ``.npz`` of numbers (no pickle) with ``meta_json`` (format ``wbsa-estimator``, version 2,
-training settings, feature ranges, held-out metrics). Version 2 added the outline terms.
+File layout: one ``.npz`` of numbers (no pickle) with ``meta_json`` (format ``wbsa-estimator``, version 3,
+training settings, feature ranges, held-out metrics). Version 2 added the outline terms, version 3 the
+apparent build to the spread (:func:`spread_design`).
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ from wbsa.estimation.trees import TreeEnsemble
 from wbsa.estimation.view import ViewModel
 
 FORMAT = "wbsa-estimator"
-VERSION = 2
+VERSION = 3
 #: Measures whose training range is recorded and checked (flag ``out_of_training_range``).
 RANGE_KEYS = ("vbsa_m2", "stature_m", "distance_m", "elevation_deg")
 #: Probability, over the calibration draw, that an interval covers at least its stated level.
@@ -70,12 +71,29 @@ def tree_features(features: dict[str, np.ndarray], shape: np.ndarray, psi_deg: n
                            + [np.asarray(features[k], dtype=np.float64) for k in _OUTLINE])
 
 
-def spread_design(psi_deg: np.ndarray, psi_sd_deg: np.ndarray, features: dict[str, np.ndarray]) -> np.ndarray:
-    """Design of the log residual spread (n, 7): 1, cos 2ψ, view spread, log pitch, log pixel count, outline."""
+def spread_design(psi_deg: np.ndarray, psi_sd_deg: np.ndarray, features: dict[str, np.ndarray],
+                  log_wbsa: np.ndarray) -> np.ndarray:
+    """Design of the log residual spread (n, 9).
+
+    Columns: 1, cos 2ψ, view spread / 30°, log pitch, log pixel count, the two outline shares, and the
+    apparent build b = log(predicted WBSA / stature²) with b². A single view tells a very thin or very heavy
+    body's build only in part, so the prediction is drawn towards the common build there and the interval
+    must widen: without b, bodies with BMI ≥ 35 were covered 0.73 of the time at 95 % (held-out renders).
+
+    Parameters
+    ----------
+    psi_deg, psi_sd_deg : (n,) float64
+        Folded azimuth and its spread (degrees).
+    features : dict of (n,) float64
+        The measures (``pitch_m``, ``n_pixels``, ``stature_m`` and the outline shares are used).
+    log_wbsa : (n,) float64
+        The model's predicted log WBSA (m²).
+    """
     r = np.radians(np.asarray(psi_deg, dtype=np.float64))
+    build = np.asarray(log_wbsa, dtype=np.float64) - 2.0 * np.log(np.asarray(features["stature_m"], dtype=np.float64))
     return np.column_stack([np.ones_like(r), np.cos(2 * r), np.asarray(psi_sd_deg, float) / 30.0,
                             np.log(features["pitch_m"]), np.log(features["n_pixels"])]
-                           + [np.asarray(features[k], dtype=np.float64) for k in _OUTLINE])
+                           + [np.asarray(features[k], dtype=np.float64) for k in _OUTLINE] + [build, build ** 2])
 
 
 @dataclass
@@ -91,7 +109,7 @@ class EstimatorModel:
     intercept : float
     residual : TreeEnsemble or None
         Correction of the ridge prediction (log scale).
-    spread_coef : (5,) float64
+    spread_coef : (9,) float64
         log s(x) = :func:`spread_design` · spread_coef, clipped to ``spread_range``.
     spread_range : (2,) float64
         Range of log s(x) over the training renders (no extrapolation beyond it).
@@ -176,12 +194,12 @@ class EstimatorModel:
                 level: float = 0.95) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """WBSA (n,) and the interval bounds (n,), m²."""
         mu = self.log_wbsa(features, shape, psi_deg, psi_sd_deg, elevation_deg)
-        half = self.quantile(level) * self.spread(features, psi_deg, psi_sd_deg)
+        half = self.quantile(level) * self.spread(features, psi_deg, psi_sd_deg, mu)
         return np.exp(mu), np.exp(mu - half), np.exp(mu + half)
 
-    def spread(self, features: dict[str, np.ndarray], psi_deg, psi_sd_deg) -> np.ndarray:
-        """(n,) fitted residual spread s(x) on the log scale."""
-        z = spread_design(psi_deg, psi_sd_deg, features) @ self.spread_coef
+    def spread(self, features: dict[str, np.ndarray], psi_deg, psi_sd_deg, log_wbsa: np.ndarray) -> np.ndarray:
+        """(n,) fitted residual spread s(x) on the log scale, given the predicted log WBSA (n,)."""
+        z = spread_design(psi_deg, psi_sd_deg, features, log_wbsa) @ self.spread_coef
         return np.exp(np.clip(z, self.spread_range[0], self.spread_range[1]))
 
     # ------------------------------------------------------------------ file

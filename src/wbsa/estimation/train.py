@@ -210,17 +210,15 @@ def train_model(settings: TrainSettings = TrainSettings(), *, workers: int = 1, 
                          axis_sd_deg=axis_sd, elevation_sd_deg=el_sd)
     shape = fit_s.descriptors[:, _VIEW_DIMS:]
     mean, scale, coef, intercept, trees = fit_wbsa(fit_t, shape, psi_oof, sd_oof, settings)
-    spread = _fit_spread(fit_s, psi_oof, sd_oof, settings)
-    z = spread_design(psi_oof, sd_oof, _columns(fit_t)) @ spread
-    model = EstimatorModel(view, mean, scale, coef, intercept, trees, spread, np.array([z.min(), z.max()]),
-                           np.zeros(1), {})
+    spread, spread_range = _fit_spread(fit_s, psi_oof, sd_oof, settings)
+    model = EstimatorModel(view, mean, scale, coef, intercept, trees, spread, spread_range, np.zeros(1), {})
     # calibration: held-out subjects through the finished models
     cal_t = cal_s.table
     psi_c, sd_c, _ = view.predict(cal_s.descriptors[:, :_VIEW_DIMS])
     feats_c = _columns(cal_t)
     mu = model.log_wbsa(feats_c, cal_s.descriptors[:, _VIEW_DIMS:], psi_c, sd_c, feats_c["elevation_deg"])
     resid = np.log(cal_t["wbsa_m2"].to_numpy()) - mu
-    model.scores = np.sort(np.abs(resid) / model.spread(feats_c, psi_c, sd_c))
+    model.scores = np.sort(np.abs(resid) / model.spread(feats_c, psi_c, sd_c, mu))
     err = 100 * (np.exp(-resid) - 1)
     az_err = np.abs(psi_c - fold_azimuth(cal_t["azimuth_deg"].to_numpy()))
     feats_f = _columns(fit_t)
@@ -245,20 +243,23 @@ def _rms(x) -> float:
     return float(np.sqrt(np.mean(np.square(np.asarray(x, dtype=np.float64)))))
 
 
-def _fit_spread(samples: Samples, psi: np.ndarray, psi_sd: np.ndarray, settings: TrainSettings) -> np.ndarray:
-    """Coefficients of log s(x) from out-of-fold absolute log residuals of the WBSA model."""
+def _fit_spread(samples: Samples, psi: np.ndarray, psi_sd: np.ndarray,
+                settings: TrainSettings) -> tuple[np.ndarray, np.ndarray]:
+    """Coefficients (9,) of log s(x) from out-of-fold absolute log residuals of the WBSA model, and the
+    (2,) range of log s(x) over those renders."""
     t = samples.table
     k = _folds(t, settings.folds, settings.seed + 1)
     shape = samples.descriptors[:, _VIEW_DIMS:]
-    resid = np.zeros(len(t))
+    mu = np.zeros(len(t))
     for f in range(settings.folds):
         tr, te = k != f, k == f
         mean, scale, coef, icpt, trees = fit_wbsa(t[tr], shape[tr], psi[tr], psi_sd[tr], settings)
-        m = EstimatorModel(None, mean, scale, coef, icpt, trees, np.zeros(7), np.zeros(2), np.zeros(1))  # type: ignore[arg-type]
+        m = EstimatorModel(None, mean, scale, coef, icpt, trees, np.zeros(9), np.zeros(2), np.zeros(1))  # type: ignore[arg-type]
         feats = _columns(t[te])
-        resid[te] = np.log(t["wbsa_m2"].to_numpy()[te]) - m.log_wbsa(feats, shape[te], psi[te], psi_sd[te],
-                                                                      feats["elevation_deg"])
-    Z = spread_design(psi, psi_sd, _columns(t))
+        mu[te] = m.log_wbsa(feats, shape[te], psi[te], psi_sd[te], feats["elevation_deg"])
+    resid = np.log(t["wbsa_m2"].to_numpy()) - mu
+    Z = spread_design(psi, psi_sd, _columns(t), mu)
     target = np.log(np.maximum(np.abs(resid), 1e-4))
     coef, *_ = np.linalg.lstsq(Z, target, rcond=None)
-    return coef
+    z = Z @ coef
+    return coef, np.array([z.min(), z.max()])

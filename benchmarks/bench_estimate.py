@@ -74,12 +74,14 @@ BUILD_CLASSES = ((0.0, "adult, underweight (BMI < 18.5)"), (18.5, "adult, normal
 
 
 def build_class(df: pd.DataFrame) -> pd.Series:
-    """Body build of every subject: ``child (<18 y)`` or the adult's WHO BMI class (:data:`BUILD_CLASSES`)."""
-    bmi = df["mass_kg"] / df["stature_m"] ** 2
+    """Body build of every subject: ``child (<18 y)``, the adult's WHO BMI class (:data:`BUILD_CLASSES`), or
+    ``unknown`` (age, stature or mass missing)."""
+    bmi = (df["mass_kg"] / df["stature_m"] ** 2).replace([np.inf, -np.inf], np.nan)
     edges = [lo for lo, _ in BUILD_CLASSES]
-    adult = pd.Series(pd.cut(bmi, [*edges, np.inf], right=False, labels=[n for _, n in BUILD_CLASSES]),
-                      index=df.index).astype(str)
-    return adult.where(df["age_years"] >= 18, "child (<18 y)")
+    adult = pd.cut(bmi, [*edges, np.inf], right=False, labels=[n for _, n in BUILD_CLASSES])
+    out = pd.Series(adult.astype(object), index=df.index).where(bmi.notna(), "unknown")
+    out = out.where(~(df["age_years"] < 18), "child (<18 y)")
+    return out.where(df["age_years"].notna(), "unknown").astype(str)
 
 
 def by_build(ok: pd.DataFrame) -> pd.DataFrame:
@@ -90,7 +92,7 @@ def by_build(ok: pd.DataFrame) -> pd.DataFrame:
     frame = pd.DataFrame({"build": build_class(ok), "err": 100 * (ok["est_wbsa_m2"] / ok["wbsa_m2"] - 1),
                           "inside": (ok["est_lo_m2"] <= ok["wbsa_m2"]) & (ok["wbsa_m2"] <= ok["est_hi_m2"]),
                           "dubois": 100 * (dubois / ok["wbsa_m2"].to_numpy() - 1)})
-    order = ["child (<18 y)"] + [n for _, n in BUILD_CLASSES]
+    order = ["child (<18 y)"] + [n for _, n in BUILD_CLASSES] + ["unknown"]
     return (frame.groupby("build").agg(n=("err", "size"), mape_pct=("err", lambda e: np.mean(np.abs(e))),
                                        bias_pct=("err", "mean"), coverage=("inside", "mean"),
                                        dubois_mape_pct=("dubois", lambda e: np.mean(np.abs(e))),

@@ -392,7 +392,7 @@ def test_interval_quantile_meets_its_level_with_the_stated_confidence():
     met, plain = [], []
     for _ in range(1000):
         scores = np.sort(np.sqrt(rng.chisquare(1, size=300)))  # |N(0, 1)|: coverage of q is chi2.cdf(q**2, 1)
-        model = EstimatorModel(None, *(np.zeros(1),) * 3, 0.0, None, np.zeros(5), np.zeros(2), scores,
+        model = EstimatorModel(None, *(np.zeros(1),) * 3, 0.0, None, np.zeros(9), np.zeros(2), scores,
                                {"n_calibration_subjects": 300})
         met.append(chi2.cdf(model.quantile(0.95) ** 2, 1) >= 0.95)
         plain.append(chi2.cdf(scores[int(np.ceil(301 * 0.95)) - 1] ** 2, 1) >= 0.95)
@@ -440,6 +440,10 @@ def test_model_file_round_trip_and_refuses_non_finite_numbers(small_model, tmp_p
     old.save(tmp_path / "old.npz")
     with pytest.raises(WbsaError, match="version 3 file; rebuild it"):
         EstimatorModel.load(tmp_path / "old.npz")
+    old.meta["version"] = 3  # the same terms under the new number: counted, not a numpy shape error later
+    old.save(tmp_path / "mislabelled.npz")
+    with pytest.raises(WbsaError, match="7 spread terms, not 9"):
+        EstimatorModel.load(tmp_path / "mislabelled.npz")
     m.coef[0] = np.inf
     m.save(tmp_path / "broken.npz")
     with pytest.raises(WbsaError, match="non-finite"):

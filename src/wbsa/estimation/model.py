@@ -34,6 +34,8 @@ VERSION = 3
 RANGE_KEYS = ("vbsa_m2", "stature_m", "distance_m", "elevation_deg")
 #: Probability, over the calibration draw, that an interval covers at least its stated level.
 QUANTILE_CONFIDENCE = 0.9
+#: Columns of :func:`spread_design`.
+SPREAD_TERMS = 9
 _BASE = ("vbsa_m2", "stature_m", "silhouette_m2", "width_m", "thickness_m")
 #: How the camera treated the subject's outline (:func:`wbsa.estimation.mixed_pixels.outline_shares`).
 _OUTLINE = ("mixed_share", "gap_share")
@@ -78,7 +80,8 @@ def spread_design(psi_deg: np.ndarray, psi_sd_deg: np.ndarray, features: dict[st
     Columns: 1, cos 2ψ, view spread / 30°, log pitch, log pixel count, the two outline shares, and the
     apparent build b = log(predicted WBSA / stature²) with b². A single view tells a very thin or very heavy
     body's build only in part, so the prediction is drawn towards the common build there and the interval
-    must widen: without b, bodies with BMI ≥ 35 were covered 0.73 of the time at 95 % (held-out renders).
+    must widen: without b, bodies with BMI ≥ 35 were covered 0.73 of the time at 95 %, with b 0.83 (spread
+    and quantile fitted on one half of revision 7's calibration renders, coverage read on the other).
 
     Parameters
     ----------
@@ -88,6 +91,10 @@ def spread_design(psi_deg: np.ndarray, psi_sd_deg: np.ndarray, features: dict[st
         The measures (``pitch_m``, ``n_pixels``, ``stature_m`` and the outline shares are used).
     log_wbsa : (n,) float64
         The model's predicted log WBSA (m²).
+
+    Returns
+    -------
+    (n, 9) float64
     """
     r = np.radians(np.asarray(psi_deg, dtype=np.float64))
     build = np.asarray(log_wbsa, dtype=np.float64) - 2.0 * np.log(np.asarray(features["stature_m"], dtype=np.float64))
@@ -109,10 +116,10 @@ class EstimatorModel:
     intercept : float
     residual : TreeEnsemble or None
         Correction of the ridge prediction (log scale).
-    spread_coef : (9,) float64
+    spread_coef : (SPREAD_TERMS,) float64
         log s(x) = :func:`spread_design` · spread_coef, clipped to ``spread_range``.
     spread_range : (2,) float64
-        Range of log s(x) over the training renders (no extrapolation beyond it).
+        Range of log s(x) over the out-of-fold predictions on the fit renders (no extrapolation beyond it).
     scores : (k,) float64
         Sorted calibration scores |log residual| / s(x).
     meta : dict
@@ -197,8 +204,22 @@ class EstimatorModel:
         half = self.quantile(level) * self.spread(features, psi_deg, psi_sd_deg, mu)
         return np.exp(mu), np.exp(mu - half), np.exp(mu + half)
 
-    def spread(self, features: dict[str, np.ndarray], psi_deg, psi_sd_deg, log_wbsa: np.ndarray) -> np.ndarray:
-        """(n,) fitted residual spread s(x) on the log scale, given the predicted log WBSA (n,)."""
+    def spread(self, features: dict[str, np.ndarray], psi_deg: np.ndarray, psi_sd_deg: np.ndarray,
+               log_wbsa: np.ndarray) -> np.ndarray:
+        """Fitted residual spread s(x) on the log scale.
+
+        Parameters
+        ----------
+        features : dict of (n,) float64
+        psi_deg, psi_sd_deg : (n,) float64
+            Folded azimuth and its spread (degrees).
+        log_wbsa : (n,) float64
+            The predicted log WBSA (:meth:`log_wbsa`).
+
+        Returns
+        -------
+        (n,) float64
+        """
         z = spread_design(psi_deg, psi_sd_deg, features, log_wbsa) @ self.spread_coef
         return np.exp(np.clip(z, self.spread_range[0], self.spread_range[1]))
 
@@ -237,6 +258,9 @@ class EstimatorModel:
         if meta.get("format") != FORMAT or meta.get("version") != VERSION:
             raise WbsaError(f"{path} is not a {FORMAT} version {VERSION} file; rebuild it with this wbsa")
         check_finite_model(arrays, str(path))
+        if arrays["spread_coef"].shape != (SPREAD_TERMS,):
+            raise WbsaError(f"{path} has {arrays['spread_coef'].size} spread terms, not {SPREAD_TERMS}; rebuild it "
+                            "with this wbsa")
         residual = TreeEnsemble.from_arrays(arrays, "residual_") if "residual_roots" in arrays else None
         meta.setdefault("name", path.name)
         return cls(ViewModel.from_arrays(arrays), arrays["mean"], arrays["scale"], arrays["coef"],

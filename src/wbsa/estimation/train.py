@@ -18,7 +18,8 @@ import pandas as pd
 
 from wbsa.errors import WbsaError
 from wbsa.estimation.capture import CaptureSettings
-from wbsa.estimation.model import RANGE_KEYS, EstimatorModel, design, spread_design, tree_features
+from wbsa.estimation.model import (RANGE_KEYS, SPREAD_TERMS, EstimatorModel, design, spread_design,
+                                   tree_features)
 from wbsa.estimation.renders import RenderSettings, Samples, render_samples
 from wbsa.estimation.view import ViewModel, fold_azimuth
 
@@ -245,8 +246,25 @@ def _rms(x) -> float:
 
 def _fit_spread(samples: Samples, psi: np.ndarray, psi_sd: np.ndarray,
                 settings: TrainSettings) -> tuple[np.ndarray, np.ndarray]:
-    """Coefficients (9,) of log s(x) from out-of-fold absolute log residuals of the WBSA model, and the
-    (2,) range of log s(x) over those renders."""
+    """Coefficients of log s(x), fitted on out-of-fold absolute log residuals of the WBSA model, and its range.
+
+    The apparent build in :func:`spread_design` comes here from the fold models' predictions and at run
+    time from the full model's; the calibration scores are taken with the latter, as run time is.
+
+    Parameters
+    ----------
+    samples : Samples
+        The fit renders (n).
+    psi, psi_sd : (n,) float64
+        Out-of-fold folded azimuth and its spread (degrees).
+    settings : TrainSettings
+
+    Returns
+    -------
+    coef : (SPREAD_TERMS,) float64
+    spread_range : (2,) float64
+        Lowest and highest log s(x) over these renders.
+    """
     t = samples.table
     k = _folds(t, settings.folds, settings.seed + 1)
     shape = samples.descriptors[:, _VIEW_DIMS:]
@@ -254,7 +272,8 @@ def _fit_spread(samples: Samples, psi: np.ndarray, psi_sd: np.ndarray,
     for f in range(settings.folds):
         tr, te = k != f, k == f
         mean, scale, coef, icpt, trees = fit_wbsa(t[tr], shape[tr], psi[tr], psi_sd[tr], settings)
-        m = EstimatorModel(None, mean, scale, coef, icpt, trees, np.zeros(9), np.zeros(2), np.zeros(1))  # type: ignore[arg-type]
+        m = EstimatorModel(None, mean, scale, coef, icpt, trees, np.zeros(SPREAD_TERMS), np.zeros(2),
+                           np.zeros(1))  # type: ignore[arg-type]
         feats = _columns(t[te])
         mu[te] = m.log_wbsa(feats, shape[te], psi[te], psi_sd[te], feats["elevation_deg"])
     resid = np.log(t["wbsa_m2"].to_numpy()) - mu

@@ -56,8 +56,8 @@ class TrainSettings:
     seed : int
     """
 
-    n_random: int = 660
-    n_survey: int = 240
+    n_random: int = 900
+    n_survey: int = 480
     views_per_subject: int = 4
     calibration_fraction: float = 0.25
     age_years: tuple[float, float] = (3.0, 80.0)

@@ -54,14 +54,19 @@ def population(n: int, survey_share: float, seed: int) -> pd.DataFrame:
     return pop
 
 
-def formulae(df: pd.DataFrame) -> pd.DataFrame:
-    """Du Bois, Mosteller and Haycock from the true height and mass, errors against the true WBSA (%)."""
+def formula_error_pct(df: pd.DataFrame, key: str) -> np.ndarray:
+    """(n,) error (%) against the true WBSA of formula ``key`` given the true height and mass."""
     from wbsa.formulae.compute import bsa
 
+    pred = np.asarray(bsa(key, df["stature_m"].to_numpy() * 100, df["mass_kg"].to_numpy(), check=False))
+    return 100 * (pred / df["wbsa_m2"].to_numpy() - 1)
+
+
+def formulae(df: pd.DataFrame) -> pd.DataFrame:
+    """Du Bois, Mosteller and Haycock from the true height and mass, errors against the true WBSA (%)."""
     rows = []
     for key in ("dubois", "mosteller", "haycock"):
-        pred = np.asarray(bsa(key, df["stature_m"].to_numpy() * 100, df["mass_kg"].to_numpy(), check=False))
-        err = 100 * (pred / df["wbsa_m2"].to_numpy() - 1)
+        err = formula_error_pct(df, key)
         rows.append({"method": f"{key} (true height, mass)", "n": len(df), "mape_pct": np.mean(np.abs(err)),
                      "bias_pct": np.mean(err)})
     return pd.DataFrame(rows)
@@ -86,12 +91,9 @@ def build_class(df: pd.DataFrame) -> pd.Series:
 
 def by_build(ok: pd.DataFrame) -> pd.DataFrame:
     """Our error, bias and coverage and Du Bois's (true height and mass) per :func:`build_class`."""
-    from wbsa.formulae.compute import bsa
-
-    dubois = np.asarray(bsa("dubois", ok["stature_m"].to_numpy() * 100, ok["mass_kg"].to_numpy(), check=False))
     frame = pd.DataFrame({"build": build_class(ok), "err": 100 * (ok["est_wbsa_m2"] / ok["wbsa_m2"] - 1),
                           "inside": (ok["est_lo_m2"] <= ok["wbsa_m2"]) & (ok["wbsa_m2"] <= ok["est_hi_m2"]),
-                          "dubois": 100 * (dubois / ok["wbsa_m2"].to_numpy() - 1)})
+                          "dubois": formula_error_pct(ok, "dubois")})
     order = ["child (<18 y)"] + [n for _, n in BUILD_CLASSES] + ["unknown"]
     return (frame.groupby("build").agg(n=("err", "size"), mape_pct=("err", lambda e: np.mean(np.abs(e))),
                                        bias_pct=("err", "mean"), coverage=("inside", "mean"),

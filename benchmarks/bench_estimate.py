@@ -90,16 +90,14 @@ def build_class(df: pd.DataFrame) -> pd.Series:
 
 
 def by_build(ok: pd.DataFrame) -> pd.DataFrame:
-    """Our error, bias and coverage and Du Bois's (true height and mass) per :func:`build_class`."""
-    frame = pd.DataFrame({"build": build_class(ok), "err": 100 * (ok["est_wbsa_m2"] / ok["wbsa_m2"] - 1),
-                          "inside": (ok["est_lo_m2"] <= ok["wbsa_m2"]) & (ok["wbsa_m2"] <= ok["est_hi_m2"]),
-                          "dubois": formula_error_pct(ok, "dubois")})
+    """:func:`summarise` per :func:`build_class`, with Du Bois's error given the true height and mass."""
+    build = build_class(ok)
+    dubois = pd.Series(formula_error_pct(ok, "dubois"), index=ok.index).groupby(build)
+    table = (ok.groupby(build).apply(summarise, include_groups=False)
+             .join(pd.DataFrame({"dubois_mape_pct": dubois.agg(lambda e: np.mean(np.abs(e))),
+                                 "dubois_bias_pct": dubois.mean()})))
     order = ["child (<18 y)"] + [n for _, n in BUILD_CLASSES] + ["unknown"]
-    return (frame.groupby("build").agg(n=("err", "size"), mape_pct=("err", lambda e: np.mean(np.abs(e))),
-                                       bias_pct=("err", "mean"), coverage=("inside", "mean"),
-                                       dubois_mape_pct=("dubois", lambda e: np.mean(np.abs(e))),
-                                       dubois_bias_pct=("dubois", "mean"))
-            .reindex([o for o in order if o in set(frame["build"])]))
+    return table.reindex([o for o in order if o in table.index])
 
 
 def summarise(g: pd.DataFrame) -> pd.Series:

@@ -67,6 +67,15 @@ def test_segmentation_keeps_a_wide_armed_tall_body_and_drops_the_room(room_view)
     assert 1.8 < seg.subject.height_m < 2.0 and len(seg.others) == 1
 
 
+def _block(rows, cols, x0, x1, y0, y1, z):
+    """A flat patch of a 200 × 200 depth image: flat pixel indices (k,) and points (k, 3), x and y spread
+    linearly over the pixel ``rows`` and ``cols`` (half-open ranges), depth ``z`` (m)."""
+    r, c = np.meshgrid(np.arange(*rows), np.arange(*cols), indexing="ij")
+    x = x0 + (x1 - x0) * (c - cols[0]) / max(cols[1] - cols[0] - 1, 1)
+    y = y0 + (y1 - y0) * (r - rows[0]) / max(rows[1] - rows[0] - 1, 1)
+    return (r * 200 + c).ravel(), np.stack([x.ravel(), y.ravel(), np.full(x.size, z)], axis=1)
+
+
 def test_an_arm_joins_an_upper_body_clear_of_the_floor_but_a_standing_or_torso_sized_union_is_held_to_the_hips():
     """Bench image 91 (elbows bent, a second person near): the forearm, cut off at the elbow, touched the
     upper body cut off at the waist; their union's "hips" band was the elbows, 1.0 m wide, so the arm was
@@ -75,15 +84,9 @@ def test_an_arm_joins_an_upper_body_clear_of_the_floor_but_a_standing_or_torso_s
     from wbsa.estimation.cloud import Plane
     from wbsa.estimation.clusters import MAX_FOOTPRINT_M, footprint_m, merge_occluding
 
-    def block(rows, cols, x0, x1, y0, y1, z):
-        r, c = np.meshgrid(np.arange(*rows), np.arange(*cols), indexing="ij")
-        x = x0 + (x1 - x0) * (c - cols[0]) / (cols[1] - cols[0] - 1)
-        y = y0 + (y1 - y0) * (r - rows[0]) / (rows[1] - rows[0] - 1)
-        return (r * 200 + c).ravel(), np.stack([x.ravel(), y.ravel(), np.full(x.size, z)], axis=1)
-
     def merged(lift_m, part_x1_m, floor):
-        body_pix, body = block((20, 120), (80, 100), -0.15, 0.15, -0.1 - lift_m, 1.2 - lift_m, 2.0)
-        part_pix, part = block((90, 120), (100, 150), 0.15, part_x1_m, 0.75 - lift_m, 1.2 - lift_m, 2.3)
+        body_pix, body = _block((20, 120), (80, 100), -0.15, 0.15, -0.1 - lift_m, 1.2 - lift_m, 2.0)
+        part_pix, part = _block((90, 120), (100, 150), 0.15, part_x1_m, 0.75 - lift_m, 1.2 - lift_m, 2.3)
         pix, points = np.r_[body_pix, part_pix], np.r_[body, part]
         label = np.r_[np.zeros(len(body_pix), int), np.ones(len(part_pix), int)]
         assert footprint_m(points, np.array([0.0, -1.0, 0.0])) > MAX_FOOTPRINT_M
@@ -94,6 +97,69 @@ def test_an_arm_joins_an_upper_body_clear_of_the_floor_but_a_standing_or_torso_s
     assert not merged(0.0, 0.85, floor)  # the same on the floor: two things side by side at the hips
     assert not merged(0.6, 1.3, floor)  # a part bigger than an arm (1.15 m across): another torso
     assert not merged(2.0, 0.85, None)  # without a floor every union is held to the footprint
+
+
+def test_a_far_arm_seen_past_the_near_side_joins_across_a_metre_but_a_seam_a_head_or_a_near_part_does_not():
+    """Bench images 19, 118 and 209 (side views, arms out): the far hand, seen past the near arm about a
+    metre in front of it, was left out (up to 281 pixels). Only an arm-sized part behind what it touches,
+    clear of the floor, below the shoulders, within reach of the body's axis and with an interior may step
+    up to 1.2 m."""
+    from wbsa.estimation.cloud import Plane
+    from wbsa.estimation.clusters import FAR_ARM_GAP_M, MERGE_DEPTH_GAP_M, merge_occluding
+
+    floor = Plane(np.array([0.0, -1.0, 0.0]), -1.2)  # 1.2 m below the camera (y down)
+
+    def merged(near_z_m=1.6, part_z_m=2.6, part_cols=(100, 130), part_x0_m=0.15, part_y_m=(-0.1, 0.2),
+               with_floor=floor):
+        """A standing body 1.7 m tall (torso at 2.2 m; a near arm 0.8–1.5 m over the floor at ``near_z_m``
+        on its right) and a part touching the near arm in the image."""
+        torso_pix, torso = _block((20, 120), (80, 95), -0.15, 0.1, -0.5, 1.2, 2.2)
+        near_pix, near = _block((32, 74), (95, 100), 0.1, 0.15, -0.3, 0.4, near_z_m)  # 0.8–1.5 m up
+        rows = (20 + int(round((part_y_m[0] + 0.5) / 1.7 * 99)), 21 + int(round((part_y_m[1] + 0.5) / 1.7 * 99)))
+        part_pix, part = _block(rows, part_cols, part_x0_m, part_x0_m + 0.012 * (part_cols[1] - part_cols[0]),
+                               *part_y_m, part_z_m)
+        pix, points = np.r_[torso_pix, near_pix, part_pix], np.r_[torso, near, part]
+        label = np.r_[np.zeros(len(torso_pix) + len(near_pix), int), np.ones(len(part_pix), int)]
+        return len(np.unique(merge_occluding(label, pix, points, (200, 200), with_floor, 2.6, 2.6))) == 1
+
+    assert MERGE_DEPTH_GAP_M < 1.0 < FAR_ARM_GAP_M < 1.4
+    assert merged()  # a hand 1.0–1.3 m over the floor, 1.0 m behind the near arm it is seen past
+    assert not merged(near_z_m=1.2)  # 1.4 m behind what it touches: something else in the room
+    assert not merged(near_z_m=2.8, part_z_m=1.8)  # 1.0 m in front: not hidden by the body, not its far side
+    assert not merged(part_x0_m=0.9)  # 1.1–1.3 m from the body's axis: beyond a hand's reach (an unfound wall)
+    assert not merged(part_cols=(100, 102))  # a strip two pixels wide: mixed returns along a seam
+    assert not merged(part_y_m=(-0.45, -0.15))  # 1.35–1.65 m up, above the shoulders: another person's head
+    assert not merged(with_floor=None)  # without a floor, nothing is known to be clear of it
+
+
+def test_parts_one_dropped_pixel_apart_touch_but_the_wall_seen_through_an_arm_loop_does_not_join():
+    """A camera that drops the pixels straddling depth edges split side views at the waist (13 of 300 bench
+    images lost 30–70 % of the body): the parts never touched. Parts one empty pixel apart now touch; a
+    patch more than 0.65 m behind a body and seen through its loop (hands on hips) is the wall, not the body."""
+    from wbsa.estimation.cloud import Plane
+    from wbsa.estimation.clusters import LOOP_GAP_M, MERGE_DEPTH_GAP_M, merge_occluding
+
+    floor = Plane(np.array([0.0, -1.0, 0.0]), -1.2)  # 1.2 m below the camera (y down)
+
+    def merge(parts):
+        pix = np.concatenate([p for p, _ in parts])
+        points = np.concatenate([q for _, q in parts])
+        label = np.concatenate([np.full(len(p), k) for k, (p, _) in enumerate(parts)])
+        return merge_occluding(label, pix, points, (200, 200), floor, 2.6, 2.6)
+
+    upper = _block((20, 70), (80, 100), -0.15, 0.15, -0.5, 0.35, 2.0)  # 0.85–1.7 m over the floor
+    for gap_rows, joined in ((0, True), (1, True), (2, False)):  # lower body, 0–2 empty rows below the upper
+        lower = _block((70 + gap_rows, 120), (82, 98), -0.12, 0.12, 0.35, 1.2, 2.3)
+        assert (len(np.unique(merge([upper, lower]))) == 1) == joined
+
+    # a ring (an arm on the hip and the torso) with a patch seen through it
+    ring = [_block((40, 45), (80, 110), -0.15, 0.3, -0.2, -0.1, 2.0), _block((75, 80), (80, 110), -0.15, 0.3, 0.4, 0.5, 2.0),
+            _block((45, 75), (80, 85), -0.15, -0.05, -0.1, 0.4, 2.0), _block((45, 75), (105, 110), 0.2, 0.3, -0.1, 0.4, 2.0)]
+    body = (np.concatenate([p for p, _ in ring]), np.concatenate([q for _, q in ring]))
+    assert LOOP_GAP_M < MERGE_DEPTH_GAP_M
+    for behind_m, joined in ((0.3, True), ((LOOP_GAP_M + MERGE_DEPTH_GAP_M) / 2, False)):
+        inside = _block((46, 74), (86, 104), -0.03, 0.18, -0.08, 0.38, 2.0 + behind_m)
+        assert (len(np.unique(merge([body, inside]))) == 1) == joined
 
 
 def test_mixed_pixels_between_body_and_wall_are_put_back_on_a_surface(room_view):

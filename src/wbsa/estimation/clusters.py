@@ -18,6 +18,22 @@ STANDING_M = 0.3
 #: ... so such a union is spared the footprint test when its smaller part is arm-sized (bounding-box
 #: diagonal at most this, m); two upper bodies are still held to it.
 ARM_MAX_M = 0.9
+#: Seen from the side, the far arm of a body with its arms out is seen past the near arm and torso, up to a
+#: metre behind them. An arm-sized part clear of the floor and below the union's shoulders, lying behind
+#: what it touches, may step this far (m) ...
+FAR_ARM_GAP_M = 1.2
+#: ... when it is a surface, not a seam: at least this many of its pixels have all 4 neighbours in it
+#: (mixed-pixel returns left between a body and the wall lie in strips a pixel or two wide).
+FAR_ARM_INTERIOR = 5
+#: A part more than this (m) behind what it touches, and seen through a loop of it, is not the body's far
+#: side (a heavy trunk and an arm are thinner) but the room (the wall seen inside an arm on the hip).
+LOOP_GAP_M = 0.65
+#: Highest a far arm's top reaches, as a share of the union's height over the floor (shoulders; a head
+#: behind the subject, another person's, stays out).
+FAR_ARM_TOP = 0.85
+#: Farthest a far arm reaches from the body's vertical axis (the median of what it joins), as a share of
+#: the union's height: arm span is about stature, so a hand reaches half of it (an unfound wall does not).
+FAR_ARM_REACH = 0.55
 
 
 def footprint_m(points: np.ndarray, up: np.ndarray) -> float:
@@ -67,6 +83,10 @@ def merge_occluding(pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarray
                     floor: Plane | None, max_height_m: float, max_width_m: float) -> np.ndarray:
     """Merge clusters that touch in the image across a small depth step, while the union stays person-sized.
 
+    Clusters touch where their pixels are side by side, or one pixel apart with no return between them: a
+    camera with a flying-pixel filter drops the pixels straddling a depth edge, and a side view seen so fell
+    apart at the waist, hidden by the near arm (13 of 300 bench images with every such pixel dropped).
+
     Seen from the side, a body's far leg and arm are hidden where they join it, so they form clusters of
     their own; they touch the near side in the image with a depth step of a body's width (or of an arm
     reaching towards the camera, which can hide the waist). Pairs are merged by decreasing contact length
@@ -74,6 +94,11 @@ def merge_occluding(pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarray
     or wide, and its legs and hips span at most 0.9 m (two people more). The last test is skipped for an
     upper body and an arm-sized part (:data:`ARM_MAX_M`) clear of the floor (the union stays over
     :data:`STANDING_M` above it; there is no such union without a floor): their "hips" are the elbows.
+    A far arm (:data:`FAR_ARM_GAP_M`) may step farther: an arm-sized part more than :data:`STANDING_M`
+    above the floor, below :data:`FAR_ARM_TOP` of the union's height, within :data:`FAR_ARM_REACH` of it
+    from the body's axis, behind what it touches, with an interior (:data:`FAR_ARM_INTERIOR`). A smaller
+    part more than :data:`LOOP_GAP_M` behind and seen through a loop of the larger (the wall inside an arm
+    on the hip) is never merged.
 
     Parameters
     ----------
@@ -100,20 +125,25 @@ def merge_occluding(pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarray
     rng = np.zeros(h * w)
     rng[pix] = np.linalg.norm(points, axis=1)
     img, rng = img.reshape(h, w), rng.reshape(h, w)
-    la, lb, gap = [], [], []
-    for a, b, ra, rb in ((img[:, :-1], img[:, 1:], rng[:, :-1], rng[:, 1:]), (img[:-1], img[1:], rng[:-1], rng[1:])):
-        sel = (a >= 0) & (b >= 0) & (a != b)
+    la, lb, step = [], [], []
+    touching = ((img[:, :-1], img[:, 1:], rng[:, :-1], rng[:, 1:], True), (img[:-1], img[1:], rng[:-1], rng[1:], True),
+                # across one pixel without a return: cameras that drop the pixels straddling a depth edge
+                (img[:, :-2], img[:, 2:], rng[:, :-2], rng[:, 2:], rng[:, 1:-1] == 0),
+                (img[:-2], img[2:], rng[:-2], rng[2:], rng[1:-1] == 0))
+    for a, b, ra, rb, between in touching:
+        sel = (a >= 0) & (b >= 0) & (a != b) & between
         la.append(np.minimum(a[sel], b[sel]))
         lb.append(np.maximum(a[sel], b[sel]))
-        gap.append(np.abs(ra[sel] - rb[sel]))
-    la, lb, gap = np.concatenate(la), np.concatenate(lb), np.concatenate(gap)
+        step.append(np.where(a[sel] < b[sel], rb[sel] - ra[sel], ra[sel] - rb[sel]))  # range of lb's side − la's
+    la, lb, step = np.concatenate(la), np.concatenate(lb), np.concatenate(step)
     if la.size == 0:
         return pixel_label
     pairs, inverse, counts = np.unique(np.stack([la, lb], 1), axis=0, return_inverse=True, return_counts=True)
     inverse = inverse.ravel()
     order = np.argsort(inverse, kind="stable")
-    splits = np.split(gap[order], np.cumsum(counts)[:-1])
-    near_gap = np.array([np.quantile(g, 0.2) for g in splits])
+    splits = np.split(step[order], np.cumsum(counts)[:-1])
+    near_gap = np.array([np.quantile(np.abs(g), 0.2) for g in splits])
+    behind_b = np.array([np.median(g) > 0 for g in splits])  # the larger label lies behind the smaller
     # extents of every cluster along up and two horizontal axes
     e1 = np.array([1.0, 0.0, 0.0]) - up[0] * up
     e1 /= np.linalg.norm(e1)
@@ -132,8 +162,36 @@ def merge_occluding(pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarray
             c = parent[c]
         return c
 
+    def image_mask(label: int) -> np.ndarray:
+        out = np.zeros(h * w, dtype=bool)
+        out[pix[np.concatenate(members[label])]] = True
+        return out.reshape(h, w)
+
+    def through_loop(back: int, front: int) -> bool:
+        """Whether most of part ``back`` is seen through a loop of ``front`` (the wall inside an arm on
+        the hip)."""
+        from scipy import ndimage
+
+        part = image_mask(back)
+        body = ndimage.binary_closing(image_mask(front), iterations=2)
+        return np.count_nonzero(part & ndimage.binary_fill_holes(body)) > np.count_nonzero(part) // 2
+
+    def far_arm(back: int, front: int, new_lo: np.ndarray, new_hi: np.ndarray) -> bool:
+        """Whether part ``back``, behind ``front``, is a far arm of their union (see the doc above)."""
+        from scipy import ndimage
+
+        back_top, top = hi[back][0] - floor_up_m, new_hi[0] - floor_up_m
+        if not (lo[back][0] - floor_up_m >= STANDING_M and back_top <= FAR_ARM_TOP * top
+                and np.linalg.norm(hi[back] - lo[back]) <= ARM_MAX_M and size[back] < size[front]):
+            return False
+        axis = np.median(proj[np.concatenate(members[front]), 1:], axis=0)
+        reach = np.linalg.norm(proj[np.concatenate(members[back]), 1:] - axis, axis=1)
+        if np.quantile(reach, 0.95) > FAR_ARM_REACH * top:
+            return False
+        return np.count_nonzero(ndimage.binary_erosion(image_mask(back))) >= FAR_ARM_INTERIOR  # 4-neighbour
+
     for i in np.argsort(-counts, kind="stable"):
-        if counts[i] < MERGE_MIN_CONTACTS or near_gap[i] > MERGE_DEPTH_GAP_M:
+        if counts[i] < MERGE_MIN_CONTACTS or near_gap[i] > FAR_ARM_GAP_M:
             continue
         a, b = root(int(pairs[i, 0])), root(int(pairs[i, 1]))
         if a == b:
@@ -141,6 +199,11 @@ def merge_occluding(pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarray
         new_lo, new_hi = np.minimum(lo[a], lo[b]), np.maximum(hi[a], hi[b])
         ext = new_hi - new_lo
         if ext[0] > max_height_m or np.hypot(ext[1], ext[2]) > max_width_m:
+            continue
+        back, front = (b, a) if behind_b[i] else (a, b)
+        if near_gap[i] > MERGE_DEPTH_GAP_M and not far_arm(back, front, new_lo, new_hi):
+            continue
+        if near_gap[i] > LOOP_GAP_M and size[back] < size[front] and through_loop(back, front):
             continue
         union = np.concatenate(members[a] + members[b])
         part = a if size[a] < size[b] else b

@@ -10,12 +10,14 @@
 3. What is left is clustered in 3-D: voxels closer than ``cluster_gap_m`` (or three pixel pitches at that
    depth) are one object. Voxels in a band over the floor (10 cm, or twice the floor's noise) only join the
    object they touch, so stray floor returns cannot chain objects together. Objects that touch in the image
-   with less than 0.8 m between them in depth (a body's near and far sides, an arm in front of the waist)
-   are one object if together they are still person-sized.
+   (or lie one pixel apart with no return between) with less than 0.8 m between them in depth (a body's
+   near and far sides, an arm in front of the waist), or a far arm up to 1.2 m behind, are one object if
+   together they are still person-sized (:func:`~wbsa.estimation.clusters.merge_occluding`).
    The subject's feet are then taken down to the floor (:mod:`wbsa.estimation.feet`).
 4. A cluster is person-sized if it is 0.45–2.6 m tall (along the floor normal, or its long axis) and at
    most 2.6 m wide; with several, ``pick`` chooses (``nearest``, ``largest``, ``center`` of the image, or an
-   ``(x, y)`` pixel), else a :class:`~wbsa.errors.WbsaError` lists them.
+   ``(x, y)`` pixel: the object under that pixel, else the one whose middle pixel is nearest to it), else a
+   :class:`~wbsa.errors.WbsaError` lists them.
 """
 
 from __future__ import annotations
@@ -310,9 +312,9 @@ def _choose(people: list[Cluster], pick, size: tuple[int, int], pixel_label: np.
         return max(people, key=lambda c: c.n_pixels)
     w, h = size
     x, y = ((w - 1) / 2, (h - 1) / 2) if pick == "center" else pick
-    if pick != "center":
-        hit = pixel_label[pix == int(y) * w + int(x)]
-        for c in people:
-            if hit.size and c.label == hit[0]:
-                return c
+    # the object under the pixel (the operator aims at the subject), else the one whose middle is nearest
+    hit = pixel_label[pix == int(round(y)) * w + int(round(x))]
+    for c in people:
+        if hit.size and c.label == hit[0]:
+            return c
     return min(people, key=lambda c: (c.pixel_xy[0] - x) ** 2 + (c.pixel_xy[1] - y) ** 2)

@@ -316,6 +316,22 @@ def test_several_people_are_listed_or_picked(room_view):
     assert not (other.mask & truth).any()
 
 
+def test_pick_center_takes_the_object_under_the_image_centre():
+    """The operator aims at the subject: the object under the centre pixel wins over one whose middle pixel
+    lies nearer the centre (a tall subject's middle is below a short object's behind it; bench image 107)."""
+    from wbsa.estimation.segment import Cluster, _choose
+
+    w, h = 101, 101
+    pix = np.arange(w * h)
+    label = np.full(w * h, -1)
+    label[50 * w + 50] = 0  # the centre pixel is the subject's
+    subject = Cluster(0, 5000, (50, 80), 3.0, 1.8, 0.5, 0.3)
+    behind = Cluster(1, 500, (50, 60), 4.5, 0.7, 0.4, 0.3)
+    assert _choose([behind, subject], "center", (w, h), label, pix) is subject
+    label[50 * w + 50] = -1  # nothing under the centre: the nearest middle
+    assert _choose([behind, subject], "center", (w, h), label, pix) is behind
+
+
 def test_wrong_depth_scale_is_an_error_not_a_number(room_view):
     from wbsa.estimation.segment import segment_subject
 

@@ -25,15 +25,15 @@ FAR_ARM_GAP_M = 1.2
 #: ... when it is a surface, not a seam: at least this many of its pixels have all 4 neighbours in it
 #: (mixed-pixel returns left between a body and the wall lie in strips a pixel or two wide).
 FAR_ARM_INTERIOR = 5
-#: A part more than this (m) behind what it touches, and seen through a loop of it, is not the body's far
-#: side (a heavy trunk and an arm are thinner) but the room (the wall seen inside an arm on the hip).
-LOOP_GAP_M = 0.65
 #: Highest a far arm's top reaches, as a share of the union's height over the floor (shoulders; a head
 #: behind the subject, another person's, stays out).
 FAR_ARM_TOP = 0.85
 #: Farthest a far arm reaches from the body's vertical axis (the median of what it joins), as a share of
 #: the union's height: arm span is about stature, so a hand reaches half of it (an unfound wall does not).
 FAR_ARM_REACH = 0.55
+#: A part more than this (m) behind what it touches, and seen through a loop of it, is not the body's far
+#: side (a heavy trunk and an arm are thinner) but the room (the wall seen inside an arm on the hip).
+LOOP_GAP_M = 0.65
 
 
 def footprint_m(points: np.ndarray, up: np.ndarray) -> float:

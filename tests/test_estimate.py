@@ -460,6 +460,9 @@ def test_trees_predict_like_scikit_learn():
     assert np.allclose(TreeEnsemble.from_sklearn(reg).predict_raw(X), reg.predict(X))
     t = TreeEnsemble.from_arrays(TreeEnsemble.from_sklearn(clf).to_arrays("c_"), "c_")
     assert np.allclose(1 / (1 + np.exp(-t.predict_raw(X))), clf.predict_proba(X)[:, 1])
+    other = HistGradientBoostingRegressor(max_iter=20, max_leaf_nodes=5).fit(X[::2], y[::2])
+    bag = TreeEnsemble.average([TreeEnsemble.from_sklearn(reg), TreeEnsemble.from_sklearn(other)])
+    assert np.allclose(bag.predict_raw(X), (reg.predict(X) + other.predict(X)) / 2)  # a bag predicts the mean
 
 
 def test_interval_quantile_meets_its_level_with_the_stated_confidence():
@@ -629,7 +632,8 @@ def test_benchmark_edge_pixel_settings_are_checked():
 def test_residual_tree_settings_are_checked():
     from wbsa.estimation.train import TrainSettings
 
-    for bad in (dict(tree_l2=float("nan")), dict(tree_iterations=800.5), dict(tree_leaves=1), dict(tree_l2=-0.1)):
+    for bad in (dict(tree_l2=float("nan")), dict(tree_iterations=800.5), dict(tree_leaves=1), dict(tree_l2=-0.1),
+                dict(tree_bags=0), dict(tree_bags=2.5)):
         with pytest.raises(WbsaError, match="tree_iterations .* must be an integer"):
             TrainSettings(**bad)
     assert TrainSettings(tree_iterations=10, tree_leaves=2, tree_l2=0.0).tree_iterations == 10

@@ -27,6 +27,8 @@ from wbsa.estimation.view import ViewModel, fold_azimuth
 FEATURES = ("vbsa_m2", "stature_m", "silhouette_m2", "width_m", "thickness_m", "distance_m", "elevation_deg",
             "elevation_axis_deg", "pitch_m", "n_pixels", "mixed_share", "gap_share")
 _VIEW_DIMS = 160  # view descriptor length; the shape bands follow it in Samples.descriptors
+#: Share of the subjects each bagged tree model is fitted on (:attr:`TrainSettings.tree_bags`).
+BAG_SUBJECT_SHARE = 0.9
 
 
 @dataclass(frozen=True)
@@ -53,6 +55,10 @@ class TrainSettings:
         Boosting rounds and leaves per tree of the residual trees (learning rate 0.05).
     tree_l2 : float
         L2 penalty on the trees' leaf values.
+    tree_bags : int
+        Boosted models averaged, each fitted on a random :data:`BAG_SUBJECT_SHARE` of the subjects (1: one
+        model on all). A refit on slightly different captures moved single-model estimates by about 1.7 %
+        (standard deviation); the average of five cut the calibration MAPE from 2.48 % to 2.36 %.
     seed : int
     """
 
@@ -68,6 +74,7 @@ class TrainSettings:
     tree_iterations: int = 800
     tree_leaves: int = 31
     tree_l2: float = 0.1
+    tree_bags: int = 5
     seed: int = 0
 
     def __post_init__(self) -> None:
@@ -77,10 +84,12 @@ class TrainSettings:
             raise WbsaError(f"calibration_fraction {self.calibration_fraction} must lie in [0.05, 0.5]")
         if self.views_per_subject < 1 or self.folds < 2:
             raise WbsaError("views_per_subject must be >= 1 and folds >= 2")
-        counts_ok = all(isinstance(v, int) for v in (self.tree_iterations, self.tree_leaves))
-        if not (counts_ok and self.tree_iterations >= 1 and self.tree_leaves >= 2 and self.tree_l2 >= 0):
+        counts_ok = all(isinstance(v, int) for v in (self.tree_iterations, self.tree_leaves, self.tree_bags))
+        if not (counts_ok and self.tree_iterations >= 1 and self.tree_leaves >= 2 and self.tree_l2 >= 0
+                and self.tree_bags >= 1):
             raise WbsaError(f"tree_iterations ({self.tree_iterations!r}) must be an integer >= 1, tree_leaves "
-                            f"({self.tree_leaves!r}) an integer >= 2 and tree_l2 ({self.tree_l2!r}) a number >= 0")
+                            f"({self.tree_leaves!r}) an integer >= 2, tree_bags ({self.tree_bags!r}) an integer "
+                            f">= 1 and tree_l2 ({self.tree_l2!r}) a number >= 0")
 
 
 def training_population(settings: TrainSettings, show_progress: bool | None = None) -> pd.DataFrame:
@@ -132,7 +141,8 @@ def _oof_view(samples: Samples, folds: int, seed: int) -> tuple[np.ndarray, np.n
 
 def fit_wbsa(table: pd.DataFrame, shape: np.ndarray, psi: np.ndarray, psi_sd: np.ndarray, settings: TrainSettings,
              *, alpha: float = 1e-3) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, object]:
-    """Ridge on :func:`design` and residual trees; returns (mean, scale, coef, intercept, trees).
+    """Ridge on :func:`design` and residual trees (a bag of ``settings.tree_bags`` boosted models); returns
+    (mean, scale, coef, intercept, trees).
 
     Parameters
     ----------
@@ -160,12 +170,25 @@ def fit_wbsa(table: pd.DataFrame, shape: np.ndarray, psi: np.ndarray, psi_sd: np
     scale[scale == 0] = 1.0
     ridge = Ridge(alpha=alpha).fit((X - mean) / scale, y)
     resid = y - ridge.predict((X - mean) / scale)
-    trees = HistGradientBoostingRegressor(max_iter=settings.tree_iterations, learning_rate=0.05,
-                                          max_leaf_nodes=settings.tree_leaves, min_samples_leaf=20,
-                                          l2_regularization=settings.tree_l2, random_state=settings.seed,
-                                          early_stopping=False)
-    trees.fit(tree_features(feats, shape, psi, psi_sd, el), resid)
-    return mean, scale, ridge.coef_.astype(np.float64), float(ridge.intercept_), TreeEnsemble.from_sklearn(trees)
+    tree_x = tree_features(feats, shape, psi, psi_sd, el)
+    subjects = table["subject_id"].to_numpy()
+    bags = []
+    for k in range(settings.tree_bags):
+        rows = _bag_rows(subjects, settings.seed, k) if settings.tree_bags > 1 else np.ones(len(y), dtype=bool)
+        trees = HistGradientBoostingRegressor(max_iter=settings.tree_iterations, learning_rate=0.05,
+                                              max_leaf_nodes=settings.tree_leaves, min_samples_leaf=20,
+                                              l2_regularization=settings.tree_l2, random_state=settings.seed,
+                                              early_stopping=False)
+        bags.append(TreeEnsemble.from_sklearn(trees.fit(tree_x[rows], resid[rows])))
+    return mean, scale, ridge.coef_.astype(np.float64), float(ridge.intercept_), TreeEnsemble.average(bags)
+
+
+def _bag_rows(subjects: np.ndarray, seed: int, bag: int) -> np.ndarray:
+    """(n,) bool: the samples of a random :data:`BAG_SUBJECT_SHARE` of the subjects, for bag number ``bag``."""
+    unique = np.unique(subjects)
+    rng = np.random.default_rng([seed, 7, bag])
+    chosen = rng.choice(unique, max(1, int(round(BAG_SUBJECT_SHARE * len(unique)))), replace=False)
+    return np.isin(subjects, chosen)
 
 
 def train_model(settings: TrainSettings = TrainSettings(), *, workers: int = 1, show_progress: bool | None = None,

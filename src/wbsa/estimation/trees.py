@@ -67,6 +67,18 @@ class TreeEnsemble:
         return cls(*arrays, roots=np.asarray(roots, dtype=np.int64),
                    baseline=float(np.ravel(model._baseline_prediction)[0]))
 
+    @classmethod
+    def average(cls, ensembles: list["TreeEnsemble"]) -> "TreeEnsemble":
+        """One ensemble predicting the mean of ``ensembles``' raw predictions (a bag of boosted models)."""
+        k = len(ensembles)
+        offsets = np.cumsum([0] + [len(e.value) for e in ensembles[:-1]])
+        cat = {f: np.concatenate([getattr(e, f) for e in ensembles]) for f in _FIELDS}
+        for f in ("left", "right"):
+            cat[f] = np.concatenate([getattr(e, f) + o for e, o in zip(ensembles, offsets)])
+        cat["value"] = cat["value"] / k
+        roots = np.concatenate([e.roots + o for e, o in zip(ensembles, offsets)])
+        return cls(*(cat[f] for f in _FIELDS), roots=roots, baseline=float(np.mean([e.baseline for e in ensembles])))
+
     def predict_raw(self, X: np.ndarray) -> np.ndarray:
         """(n,) float64 raw prediction (a regressor's value; a classifier's log-odds) of (n, d) features."""
         X = np.asarray(X, dtype=np.float64)

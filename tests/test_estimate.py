@@ -151,15 +151,29 @@ def test_parts_one_dropped_pixel_apart_touch_but_the_wall_seen_through_an_arm_lo
     for gap_rows, joined in ((0, True), (1, True), (2, False)):  # lower body, 0–2 empty rows below the upper
         lower = _block((70 + gap_rows, 120), (82, 98), -0.12, 0.12, 0.35, 1.2, 2.3)
         assert (len(np.unique(merge([upper, lower]))) == 1) == joined
+    # the row between them returns the wall behind (a return of no object): not touching
+    lower = _block((71, 120), (82, 98), -0.12, 0.12, 0.35, 1.2, 2.3)
+    wall_row = _block((70, 71), (80, 100), -0.15, 0.15, 0.35, 0.35, 3.5)
+    parts = [upper, lower, wall_row]
+    pix = np.concatenate([p for p, _ in parts])
+    points = np.concatenate([q for _, q in parts])
+    label = np.r_[np.zeros(len(upper[0]), int), np.ones(len(lower[0]), int), np.full(len(wall_row[0]), -1)]
+    assert len(np.unique(merge_occluding(label, pix, points, (200, 200), floor, 2.6, 2.6)[:-len(wall_row[0])])) == 2
 
     # a ring (an arm on the hip and the torso) with a patch seen through it
-    ring = [_block((40, 45), (80, 110), -0.15, 0.3, -0.2, -0.1, 2.0), _block((75, 80), (80, 110), -0.15, 0.3, 0.4, 0.5, 2.0),
-            _block((45, 75), (80, 85), -0.15, -0.05, -0.1, 0.4, 2.0), _block((45, 75), (105, 110), 0.2, 0.3, -0.1, 0.4, 2.0)]
+    ring = [_block((40, 45), (80, 110), -0.15, 0.3, -0.2, -0.1, 2.0),  # top (forearm), bottom (hip)
+            _block((75, 80), (80, 110), -0.15, 0.3, 0.4, 0.5, 2.0),
+            _block((45, 75), (80, 85), -0.15, -0.05, -0.1, 0.4, 2.0),  # left (torso)
+            _block((45, 75), (105, 110), 0.2, 0.3, -0.1, 0.4, 2.0)]  # right (upper arm): the loop's last bar
     body = (np.concatenate([p for p, _ in ring]), np.concatenate([q for _, q in ring]))
     assert LOOP_GAP_M < MERGE_DEPTH_GAP_M
     for behind_m, joined in ((0.3, True), ((LOOP_GAP_M + MERGE_DEPTH_GAP_M) / 2, False)):
         inside = _block((46, 74), (86, 104), -0.03, 0.18, -0.08, 0.38, 2.0 + behind_m)
         assert (len(np.unique(merge([body, inside]))) == 1) == joined
+    # the same patch beside an open U (the ring without its right bar) is no loop: it joins
+    open_u = (np.concatenate([p for p, _ in ring[:3]]), np.concatenate([q for _, q in ring[:3]]))
+    inside = _block((46, 74), (86, 104), -0.03, 0.18, -0.08, 0.38, 2.0 + (LOOP_GAP_M + MERGE_DEPTH_GAP_M) / 2)
+    assert len(np.unique(merge([open_u, inside]))) == 1
 
 
 def test_mixed_pixels_between_body_and_wall_are_put_back_on_a_surface(room_view):
@@ -330,6 +344,8 @@ def test_pick_center_takes_the_object_under_the_image_centre():
     assert _choose([behind, subject], "center", (w, h), label, pix) is subject
     label[50 * w + 50] = -1  # nothing under the centre: the nearest middle
     assert _choose([behind, subject], "center", (w, h), label, pix) is behind
+    with pytest.raises(WbsaError, match=r"pick pixel \(101, 3\) lies outside the 101 x 101 depth image"):
+        _choose([behind, subject], (101, 3), (w, h), label, pix)  # would wrap into the next row
 
 
 def test_wrong_depth_scale_is_an_error_not_a_number(room_view):

@@ -312,6 +312,9 @@ def _choose(people: list[Cluster], pick, size: tuple[int, int], pixel_label: np.
         return max(people, key=lambda c: c.n_pixels)
     w, h = size
     x, y = ((w - 1) / 2, (h - 1) / 2) if pick == "center" else pick
+    if not (0 <= x < w and 0 <= y < h):
+        raise WbsaError(f"pick pixel ({x}, {y}) lies outside the {w} x {h} depth image; "
+                        "give x,y of a pixel on the subject")
     # the object under the pixel (the operator aims at the subject), else the one whose middle is nearest
     hit = pixel_label[pix == int(round(y)) * w + int(round(x))]
     for c in people:

@@ -1,8 +1,9 @@
 """Gradient-boosted trees as plain arrays: fitted with scikit-learn, stored without pickle, evaluated in numpy.
 
 A :class:`TreeEnsemble` holds every tree of a fitted ``HistGradientBoostingRegressor`` (or a binary
-``HistGradientBoostingClassifier``) as concatenated node arrays, so a model file is numbers only (safe to
-load from anywhere) and prediction needs no scikit-learn.
+``HistGradientBoostingClassifier``), or of a bag of them (:meth:`TreeEnsemble.average`), as concatenated
+node arrays, so a model file is numbers only (safe to load from anywhere) and prediction needs no
+scikit-learn.
 """
 
 from __future__ import annotations
@@ -30,7 +31,7 @@ class TreeEnsemble:
     missing_left : (m,) bool
         Where NaN goes.
     value : (m,) float64
-        Leaf values (summed over trees).
+        Leaf values (summed over trees; a bag's are divided by its size).
     roots : (t,) int64
         Root node of each tree.
     baseline : float
@@ -69,8 +70,21 @@ class TreeEnsemble:
 
     @classmethod
     def average(cls, ensembles: list["TreeEnsemble"]) -> "TreeEnsemble":
-        """One ensemble predicting the mean of ``ensembles``' raw predictions (a bag of boosted models)."""
+        """One ensemble predicting the mean of the raw predictions of ``ensembles`` (a bag of boosted models).
+
+        Parameters
+        ----------
+        ensembles : list of TreeEnsemble
+            At least one, over the same features.
+
+        Returns
+        -------
+        TreeEnsemble
+            Their trees together, leaf values divided by ``len(ensembles)``, the mean baseline.
+        """
         k = len(ensembles)
+        if k == 0:
+            raise ValueError("TreeEnsemble.average needs at least one ensemble")
         offsets = np.cumsum([0] + [len(e.value) for e in ensembles[:-1]])
         cat = {f: np.concatenate([getattr(e, f) for e in ensembles]) for f in _FIELDS}
         for f in ("left", "right"):

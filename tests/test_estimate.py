@@ -514,7 +514,7 @@ def small_model(tmp_path_factory):
     from wbsa.estimation.train import TrainSettings, train_model
 
     model = train_model(TrainSettings(n_random=32, n_survey=0, views_per_subject=2, calibration_fraction=0.5,
-                                      seed=5))
+                                      tree_iterations=200, tree_bags=2, seed=5))  # small and quick; still a bag
     path = tmp_path_factory.mktemp("model") / "small.npz"
     model.save(path)
     return path

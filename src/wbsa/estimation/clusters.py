@@ -94,8 +94,8 @@ def merge_occluding(pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarray
     or wide, and its legs and hips span at most 0.9 m (two people more). The last test is skipped for an
     upper body and an arm-sized part (:data:`ARM_MAX_M`) clear of the floor (the union stays over
     :data:`STANDING_M` above it; there is no such union without a floor): their "hips" are the elbows.
-    A far arm (:data:`FAR_ARM_GAP_M`) may step farther: an arm-sized part more than :data:`STANDING_M`
-    above the floor, below :data:`FAR_ARM_TOP` of the union's height, within :data:`FAR_ARM_REACH` of it
+    A far arm (:data:`FAR_ARM_GAP_M`) may step farther: an arm-sized part, smaller than what it joins, at
+    least :data:`STANDING_M` above the floor, below :data:`FAR_ARM_TOP` of the union's height, within :data:`FAR_ARM_REACH` of it
     from the body's axis, behind what it touches, with an interior (:data:`FAR_ARM_INTERIOR`). A smaller
     part more than :data:`LOOP_GAP_M` behind and seen through a loop of the larger (the wall inside an arm
     on the hip) is never merged.

@@ -141,10 +141,12 @@ def test_parts_one_dropped_pixel_apart_touch_but_the_wall_seen_through_an_arm_lo
 
     floor = Plane(np.array([0.0, -1.0, 0.0]), -1.2)  # 1.2 m below the camera (y down)
 
-    def merge(parts):
+    def merge(parts, labels=None):
+        """Labels after merging ``parts`` (pixels, points), labelled 0, 1, ... unless ``labels`` are given."""
         pix = np.concatenate([p for p, _ in parts])
         points = np.concatenate([q for _, q in parts])
-        label = np.concatenate([np.full(len(p), k) for k, (p, _) in enumerate(parts)])
+        labels = range(len(parts)) if labels is None else labels
+        label = np.concatenate([np.full(len(p), k) for k, (p, _) in zip(labels, parts)])
         return merge_occluding(label, pix, points, (200, 200), floor, 2.6, 2.6)
 
     upper = _block((20, 70), (80, 100), -0.15, 0.15, -0.5, 0.35, 2.0)  # 0.85–1.7 m over the floor
@@ -154,11 +156,7 @@ def test_parts_one_dropped_pixel_apart_touch_but_the_wall_seen_through_an_arm_lo
     # the row between them returns the wall behind (a return of no object): not touching
     lower = _block((71, 120), (82, 98), -0.12, 0.12, 0.35, 1.2, 2.3)
     wall_row = _block((70, 71), (80, 100), -0.15, 0.15, 0.35, 0.35, 3.5)
-    parts = [upper, lower, wall_row]
-    pix = np.concatenate([p for p, _ in parts])
-    points = np.concatenate([q for _, q in parts])
-    label = np.r_[np.zeros(len(upper[0]), int), np.ones(len(lower[0]), int), np.full(len(wall_row[0]), -1)]
-    assert len(np.unique(merge_occluding(label, pix, points, (200, 200), floor, 2.6, 2.6)[:-len(wall_row[0])])) == 2
+    assert len(np.unique(merge([upper, lower, wall_row], labels=(0, 1, -1))[:-len(wall_row[0])])) == 2
 
     # a ring (an arm on the hip and the torso) with a patch seen through it
     ring = [_block((40, 45), (80, 110), -0.15, 0.3, -0.2, -0.1, 2.0),  # top (forearm), bottom (hip)

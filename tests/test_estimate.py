@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from wbsa.bodies.anthropometry import reference_adult
@@ -516,6 +517,28 @@ def small_model(tmp_path_factory):
     path = tmp_path_factory.mktemp("model") / "small.npz"
     model.save(path)
     return path
+
+
+def test_out_of_fold_view_spread_is_the_held_out_one():
+    """The WBSA trees and the interval's spread learn on the out-of-fold azimuth spread: it must be the one
+    the finished view model reports at run time (the held-out error), not the fold models' in-sample one,
+    which was about a fifth of it on revision 10's renders and made every run-time view look uncertain."""
+    from wbsa.estimation.renders import Samples
+    from wbsa.estimation.train import _oof_view
+    from wbsa.estimation.view import fold_azimuth
+
+    rng = np.random.default_rng(0)
+    n = 900
+    az = rng.uniform(-180, 180, n)
+    psi = fold_azimuth(az)
+    desc = rng.normal(size=(n, 160))
+    desc[:, 0] = np.minimum(psi, 180 - psi) + rng.normal(0, 6.0, n)   # the angle from the axis, noisy
+    desc[:, 1] = np.where(psi < 90, 1.0, -1.0)                        # front or back, clear
+    table = pd.DataFrame({"subject_id": np.arange(n) // 3, "azimuth_deg": az})
+    psi_oof, sd_oof, axis_sd = _oof_view(Samples(table, desc), 3, 0)
+    held_out = np.sqrt(np.mean((np.minimum(psi_oof, 180 - psi_oof) - np.minimum(psi, 180 - psi)) ** 2))
+    assert axis_sd == pytest.approx(held_out) and axis_sd > 4.0
+    assert np.median(sd_oof) == pytest.approx(held_out, rel=0.1)  # the front is never in doubt here
 
 
 @pytest.mark.slow

@@ -21,7 +21,7 @@ from wbsa.estimation.capture import CaptureSettings
 from wbsa.estimation.model import (RANGE_KEYS, SPREAD_TERMS, EstimatorModel, design, spread_design,
                                    tree_features)
 from wbsa.estimation.renders import RenderSettings, Samples, render_samples
-from wbsa.estimation.view import ViewModel, fold_azimuth
+from wbsa.estimation.view import ViewModel, azimuth_sd_deg, fold_azimuth
 
 #: Columns of :meth:`SubjectMeasures.features` the model reads (``m_`` prefixed in sample tables).
 FEATURES = ("vbsa_m2", "stature_m", "silhouette_m2", "width_m", "thickness_m", "distance_m", "elevation_deg",
@@ -129,15 +129,27 @@ def _folds(table: pd.DataFrame, folds: int, seed: int) -> np.ndarray:
     return np.array([fold_of[s] for s in subjects.tolist()])
 
 
-def _oof_view(samples: Samples, folds: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
-    """Out-of-fold ψ̂ and its spread for every sample (folds by subject)."""
+def _oof_view(samples: Samples, folds: int, seed: int) -> tuple[np.ndarray, np.ndarray, float]:
+    """Out-of-fold view estimates of every sample (folds by subject).
+
+    Returns
+    -------
+    psi_deg, psi_sd_deg : (n,) float64
+        ψ̂ and its spread. The spread is the one the finished view model reports at run time (its
+        ``axis_sd_deg`` is the held-out spread below): the WBSA trees and the interval's spread read it, so
+        they must learn it on that scale. The fold models' own, in-sample spread is about a fifth of it.
+    axis_sd_deg : float
+        Root-mean-square out-of-fold error of ψ' = min(ψ, 180 − ψ).
+    """
     k = _folds(samples.table, folds, seed)
-    psi, sd = np.zeros(len(k)), np.zeros(len(k))
+    psi, p_front = np.zeros(len(k)), np.zeros(len(k))
     az = samples.table["azimuth_deg"].to_numpy()
     for f in range(folds):
         model = ViewModel.fit(samples.descriptors[k != f, :_VIEW_DIMS], az[k != f], seed=seed)
-        psi[k == f], sd[k == f], _ = model.predict(samples.descriptors[k == f, :_VIEW_DIMS])
-    return psi, sd
+        psi[k == f], _, p_front[k == f] = model.predict(samples.descriptors[k == f, :_VIEW_DIMS])
+    true_psi = fold_azimuth(az)
+    axis_sd = float(np.sqrt(np.mean((np.minimum(psi, 180 - psi) - np.minimum(true_psi, 180 - true_psi)) ** 2)))
+    return psi, azimuth_sd_deg(psi, p_front, axis_sd), axis_sd
 
 
 def fit_wbsa(table: pd.DataFrame, shape: np.ndarray, psi: np.ndarray, psi_sd: np.ndarray, settings: TrainSettings,
@@ -227,9 +239,7 @@ def train_model(settings: TrainSettings = TrainSettings(), *, workers: int = 1, 
         raise WbsaError(f"too few usable renders to train ({len(fit_s)} fit, {len(cal_s)} calibration); "
                         "use more subjects")
     fit_t = fit_s.table
-    psi_oof, sd_oof = _oof_view(fit_s, settings.folds, settings.seed)
-    true_psi = fold_azimuth(fit_t["azimuth_deg"].to_numpy())
-    axis_sd = float(np.sqrt(np.mean((np.minimum(psi_oof, 180 - psi_oof) - np.minimum(true_psi, 180 - true_psi)) ** 2)))
+    psi_oof, sd_oof, axis_sd = _oof_view(fit_s, settings.folds, settings.seed)
     el_sd = {"floor": _rms(fit_t["m_elevation_deg"] - fit_t["elevation_deg"]),
              "axis": _rms(fit_t["m_elevation_axis_deg"] - fit_t["elevation_deg"])}
     view = ViewModel.fit(fit_s.descriptors[:, :_VIEW_DIMS], fit_t["azimuth_deg"].to_numpy(), seed=settings.seed,
@@ -256,6 +266,8 @@ def train_model(settings: TrainSettings = TrainSettings(), *, workers: int = 1, 
         "calibration": {"wbsa_mape_pct": float(np.mean(np.abs(err))), "wbsa_bias_pct": float(np.mean(err)),
                         "azimuth_error_median_deg": float(np.median(az_err)),
                         "azimuth_error_p95_deg": float(np.percentile(az_err, 95))},
+        # the view spread the WBSA model learnt on and the one it meets at run time
+        "azimuth_sd_median_deg": {"fit": float(np.median(sd_oof)), "calibration": float(np.median(sd_c))},
     }
     return model
 

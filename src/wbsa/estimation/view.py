@@ -31,6 +31,28 @@ def azimuth_error_deg(estimate_deg, truth_deg) -> np.ndarray:
     return np.abs(fold_azimuth(estimate_deg) - fold_azimuth(truth_deg))
 
 
+def azimuth_sd_deg(psi_deg, p_front, axis_sd_deg: float) -> np.ndarray:
+    """Standard deviation (degrees) of an azimuth estimate ψ̂ of :meth:`ViewModel.predict`.
+
+    That of the two-point mixture (ψ' with probability P(front), 180 − ψ' with 1 − P), ψ' = min(ψ̂, 180 − ψ̂),
+    widened by the spread of ψ' (``axis_sd_deg``, from held-out renders).
+
+    Parameters
+    ----------
+    psi_deg, p_front : (n,) float64
+        Folded azimuth estimate (0–180°) and the probability that the camera is in front.
+    axis_sd_deg : float
+
+    Returns
+    -------
+    (n,) float64
+    """
+    psi = np.asarray(psi_deg, dtype=np.float64)
+    axis_deg = np.minimum(psi, 180.0 - psi)
+    flip = np.minimum(p_front, 1.0 - np.asarray(p_front, dtype=np.float64))
+    return np.sqrt(axis_sd_deg**2 + flip * (1.0 - flip) * (180.0 - 2.0 * axis_deg) ** 2)
+
+
 @dataclass(frozen=True)
 class ViewEstimate:
     """Estimated view, paper convention, with standard deviations (degrees)."""
@@ -91,16 +113,13 @@ class ViewModel:
     def predict(self, descriptors: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """ψ̂ (n,), its standard deviation (n,) and P(front) (n,) of view descriptors (n, d).
 
-        The standard deviation is that of the two-point mixture (ψ' with probability P, 180 − ψ' with
-        1 − P) widened by the spread of ψ'.
+        The standard deviation is :func:`azimuth_sd_deg` with this model's ``axis_sd_deg``.
         """
         X = np.atleast_2d(np.asarray(descriptors, dtype=np.float64))
         axis_deg = np.clip(self.axis.predict_raw(X), 0.0, 90.0)
         p = 1.0 / (1.0 + np.exp(-self.front.predict_raw(X)))
         psi = np.where(p >= 0.5, axis_deg, 180.0 - axis_deg)
-        flip = np.minimum(p, 1.0 - p)
-        sd = np.sqrt(self.axis_sd_deg**2 + flip * (1.0 - flip) * (180.0 - 2.0 * axis_deg) ** 2)
-        return psi, sd, p
+        return psi, azimuth_sd_deg(psi, p, self.axis_sd_deg), p
 
     def to_arrays(self) -> dict[str, np.ndarray]:
         """Named arrays for a model file."""

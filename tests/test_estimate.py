@@ -204,20 +204,24 @@ def test_mixed_pixels_between_body_and_wall_are_put_back_on_a_surface(room_view)
 
 
 def test_outline_shares_tell_mixed_and_dropped_edges_from_clean_ones(room_view):
-    """The measures see what the camera did at the outline: mixed returns beside it, or one-pixel gaps."""
+    """The measures see what the camera did at the outline: mixed returns beside it, or gaps; the share of
+    its depth edges behind a gap grows with the share a filter dropped, to all of them."""
     from wbsa.estimation.mixed_pixels import outline_shares, repair_mixed_pixels
     from wbsa.estimation.segment import SegmentSettings, segment_subject
     from wbsa.sensor.depth_edges import edge_pixels
 
     _, camera, frame = room_view
     shares = {}
-    for effect in ("kept", "mixed", "dropped"):
-        depth, mixed = repair_mixed_pixels(edge_pixels(frame.depth_m, np.random.default_rng(3), effect), camera.fx)
+    for effect, share in (("kept", 1.0), ("mixed", 1.0), ("dropped", 1.0), ("dropped", 0.5)):
+        depth, mixed = repair_mixed_pixels(edge_pixels(frame.depth_m, np.random.default_rng(3), effect, share),
+                                           camera.fx)
         subject = segment_subject(depth, camera, SegmentSettings(pick="center")).mask
-        shares[effect] = outline_shares(depth, subject, mixed)
-    (mixed_kept, gap_kept), (mixed_mixed, _), (_, gap_dropped) = shares["kept"], shares["mixed"], shares["dropped"]
-    assert mixed_kept < 0.05 and mixed_mixed > 0.2, shares
-    assert gap_kept < 0.05 and gap_dropped > 0.1, shares
+        shares[effect, share] = outline_shares(depth, subject, mixed)
+    kept, mixed, dropped, half = (shares[k] for k in (("kept", 1.0), ("mixed", 1.0), ("dropped", 1.0),
+                                                     ("dropped", 0.5)))
+    assert kept[0] < 0.05 and mixed[0] > 0.2, shares
+    assert kept[1] < 0.05 and dropped[1] > 0.1, shares
+    assert kept[2] < 0.3 and 0.5 < half[2] < 0.9 and dropped[2] > 0.95, shares
 
 
 def test_side_view_keeps_both_soles_and_no_floor_strip(body_model):

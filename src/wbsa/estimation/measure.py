@@ -49,9 +49,9 @@ class SubjectMeasures:
     pitch_m : float
         Pixel pitch at the subject's distance, ``distance / sqrt(fx·fy)``.
     n_pixels : int
-    mixed_share, gap_share : float
-        How the camera treated the subject's outline: mixed returns beside it and one-pixel gaps along
-        it (:func:`wbsa.estimation.mixed_pixels.outline_shares`).
+    mixed_share, gap_share, edge_gap_share : float
+        How the camera treated the subject's outline: mixed returns beside it, one-pixel gaps along it and
+        the share of its depth edges behind a gap (:func:`wbsa.estimation.mixed_pixels.outline_shares`).
     floor_seen : bool
     touches_border : bool
         Subject pixels on the image border: the subject may be cut off.
@@ -78,6 +78,7 @@ class SubjectMeasures:
     n_pixels: int
     mixed_share: float
     gap_share: float
+    edge_gap_share: float
     floor_seen: bool
     touches_border: bool
     mask: np.ndarray
@@ -90,7 +91,7 @@ class SubjectMeasures:
         """The scalar measures as a dict (for tables and models)."""
         return {k: float(getattr(self, k)) for k in ("vbsa_m2", "stature_m", "silhouette_m2", "width_m", "thickness_m",
                                                     "distance_m", "elevation_deg", "elevation_axis_deg", "pitch_m",
-                                                    "n_pixels", "mixed_share", "gap_share")}
+                                                    "n_pixels", "mixed_share", "gap_share", "edge_gap_share")}
 
 
 def clean_low_pixels(mask: np.ndarray, height_m: np.ndarray) -> np.ndarray:
@@ -153,7 +154,7 @@ def measure_subject(depth_m: np.ndarray, mask: np.ndarray, intrinsics, floor: Pl
         from wbsa.errors import WbsaError
 
         raise WbsaError("the subject has no depth returns; check the mask and the depth image")
-    mixed_share, gap_share = outline_shares(depth, mask, mixed)
+    mixed_share, gap_share, edge_gap_share = outline_shares(depth, mask, mixed)
     rs, cs = _crop(mask)
     sub_mask = mask[rs, cs].copy()
     sub_depth = depth[rs, cs]
@@ -182,7 +183,8 @@ def measure_subject(depth_m: np.ndarray, mask: np.ndarray, intrinsics, floor: Pl
         width_m=float(np.quantile(q[:, 0], 0.998) - np.quantile(q[:, 0], 0.002)),
         thickness_m=float(np.quantile(q[:, 2], 0.998) - np.quantile(q[:, 2], 0.002)),
         distance_m=distance, elevation_deg=elevation, elevation_axis_deg=axis_elevation, pitch_m=distance / focal,
-        n_pixels=int(mask.sum()), mixed_share=mixed_share, gap_share=gap_share, floor_seen=floor is not None,
+        n_pixels=int(mask.sum()), mixed_share=mixed_share, gap_share=gap_share,
+        edge_gap_share=edge_gap_share, floor_seen=floor is not None,
         touches_border=border, mask=mask,
         descriptor=view_descriptor(q - np.array([mid_lat, 0.0, 0.0]), stature), shape=shape_bands(q, stature),
         surface=surface, frame=frame)

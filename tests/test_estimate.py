@@ -496,7 +496,7 @@ def test_interval_quantile_meets_its_level_with_the_stated_confidence():
     met, plain = [], []
     for _ in range(1000):
         scores = np.sort(np.sqrt(rng.chisquare(1, size=300)))  # |N(0, 1)|: coverage of q is chi2.cdf(q**2, 1)
-        model = EstimatorModel(None, *(np.zeros(1),) * 3, 0.0, None, np.zeros(9), np.zeros(2), scores,
+        model = EstimatorModel(None, *(np.zeros(1),) * 3, 0.0, None, np.zeros(10), np.zeros(2), scores,
                                {"n_calibration_subjects": 300})
         met.append(chi2.cdf(model.quantile(0.95) ** 2, 1) >= 0.95)
         plain.append(chi2.cdf(scores[int(np.ceil(301 * 0.95)) - 1] ** 2, 1) >= 0.95)
@@ -552,7 +552,8 @@ def test_model_file_round_trip_and_refuses_non_finite_numbers(small_model, tmp_p
     m = EstimatorModel.load(small_model)
     feats = {k: np.array([v]) for k, v in dict(vbsa_m2=0.8, stature_m=1.7, silhouette_m2=0.6, width_m=0.7,
                                                thickness_m=0.4, distance_m=3.0, pitch_m=0.008, n_pixels=9000.0,
-                                               mixed_share=0.0, gap_share=0.03).items()}
+                                               mixed_share=0.0, gap_share=0.03,
+                                               edge_gap_share=0.2).items()}
     args = (feats, np.full((1, 40), 0.3), np.array([40.0]), np.array([5.0]), np.array([10.0]))
     w, lo, hi = m.predict(*args)
     assert lo[0] < w[0] < hi[0]
@@ -560,15 +561,19 @@ def test_model_file_round_trip_and_refuses_non_finite_numbers(small_model, tmp_p
         m.predict({k: v for k, v in feats.items() if k != "gap_share"}, *args[1:])
     m.save(tmp_path / "again.npz")
     assert EstimatorModel.load(tmp_path / "again.npz").predict(*args)[0][0] == w[0]
-    # a file of the format before the spread saw the build (7 spread terms) is refused in one line
+    # a file of the format before edge_gap_share (33 regression and 9 spread terms) is refused in one line
     old = EstimatorModel.load(small_model)
-    old.spread_coef, old.meta["version"] = old.spread_coef[:7], 2
+    old.coef, old.spread_coef, old.meta["version"] = old.coef[:33], old.spread_coef[:9], 3
     old.save(tmp_path / "old.npz")
-    with pytest.raises(WbsaError, match="version 3 file; rebuild it"):
+    with pytest.raises(WbsaError, match="version 4 file; rebuild it"):
         EstimatorModel.load(tmp_path / "old.npz")
-    old.meta["version"] = 3  # the same terms under the new number: counted, not a numpy shape error later
+    old.meta["version"] = 4  # the same terms under the new number: counted, not a numpy shape error later
     old.save(tmp_path / "mislabelled.npz")
-    with pytest.raises(WbsaError, match="7 spread terms, not 9"):
+    with pytest.raises(WbsaError, match="33 regression terms, not 34"):
+        EstimatorModel.load(tmp_path / "mislabelled.npz")
+    old.coef = m.coef
+    old.save(tmp_path / "mislabelled.npz")
+    with pytest.raises(WbsaError, match="9 spread terms, not 10"):
         EstimatorModel.load(tmp_path / "mislabelled.npz")
     m.coef[0] = np.inf
     m.save(tmp_path / "broken.npz")

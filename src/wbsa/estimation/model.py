@@ -10,9 +10,10 @@ spread s(x) on held-out calibration renders (never used in fitting) give the qua
 so that the level is met with at least 90 % confidence over the calibration draw
 (:meth:`EstimatorModel.quantile`).
 
-File layout: one ``.npz`` of numbers (no pickle) with ``meta_json`` (format ``wbsa-estimator``, version 3,
+File layout: one ``.npz`` of numbers (no pickle) with ``meta_json`` (format ``wbsa-estimator``, version 4,
 training settings, feature ranges, held-out metrics). Version 2 added the outline terms, version 3 the
-apparent build to the spread (:func:`spread_design`).
+apparent build to the spread (:func:`spread_design`), version 4 the share of the outline's depth edges
+behind a gap (``edge_gap_share``).
 """
 
 from __future__ import annotations
@@ -29,16 +30,18 @@ from wbsa.estimation.trees import TreeEnsemble
 from wbsa.estimation.view import ViewModel
 
 FORMAT = "wbsa-estimator"
-VERSION = 3
+VERSION = 4
 #: Measures whose training range is recorded and checked (flag ``out_of_training_range``).
 RANGE_KEYS = ("vbsa_m2", "stature_m", "distance_m", "elevation_deg")
 #: Probability, over the calibration draw, that an interval covers at least its stated level.
 QUANTILE_CONFIDENCE = 0.9
 #: Columns of :func:`spread_design`.
-SPREAD_TERMS = 9
+SPREAD_TERMS = 10
 _BASE = ("vbsa_m2", "stature_m", "silhouette_m2", "width_m", "thickness_m")
 #: How the camera treated the subject's outline (:func:`wbsa.estimation.mixed_pixels.outline_shares`).
-_OUTLINE = ("mixed_share", "gap_share")
+_OUTLINE = ("mixed_share", "gap_share", "edge_gap_share")
+#: Columns of :func:`design`.
+DESIGN_TERMS = 34
 
 
 def _check_measures(features: dict[str, np.ndarray]) -> None:
@@ -49,7 +52,7 @@ def _check_measures(features: dict[str, np.ndarray]) -> None:
 
 
 def design(features: dict[str, np.ndarray], psi_deg: np.ndarray, elevation_deg: np.ndarray) -> np.ndarray:
-    """Linear design matrix (n, 33): log measures × view basis, view basis, log distance, pitch/stature, outline."""
+    """Linear design matrix (n, 34): log measures × view basis, view basis, log distance, pitch/stature, outline."""
     _check_measures(features)
     r = np.radians(np.asarray(psi_deg, dtype=np.float64))
     s_el = np.sin(np.radians(np.asarray(elevation_deg, dtype=np.float64)))
@@ -63,7 +66,7 @@ def design(features: dict[str, np.ndarray], psi_deg: np.ndarray, elevation_deg: 
 
 def tree_features(features: dict[str, np.ndarray], shape: np.ndarray, psi_deg: np.ndarray, psi_sd_deg: np.ndarray,
                   elevation_deg: np.ndarray) -> np.ndarray:
-    """Features of the residual trees (n, 51): log measures, view, its spread, distance, bands / stature, outline."""
+    """Features of the residual trees (n, 52): log measures, view, its spread, distance, bands / stature, outline."""
     _check_measures(features)
     st = np.asarray(features["stature_m"], dtype=np.float64)
     cols = [np.log(np.asarray(features[k], dtype=np.float64)) for k in _BASE]
@@ -75,9 +78,9 @@ def tree_features(features: dict[str, np.ndarray], shape: np.ndarray, psi_deg: n
 
 def spread_design(psi_deg: np.ndarray, psi_sd_deg: np.ndarray, features: dict[str, np.ndarray],
                   log_wbsa: np.ndarray) -> np.ndarray:
-    """Design of the log residual spread (n, 9).
+    """Design of the log residual spread (n, 10).
 
-    Columns: 1, cos 2ψ, view spread / 30°, log pitch, log pixel count, the two outline shares, and the
+    Columns: 1, cos 2ψ, view spread / 30°, log pitch, log pixel count, the three outline shares, and the
     apparent build b = log(predicted WBSA / stature²) with b². A single view tells a very thin or very heavy
     body's build only in part, so the prediction is drawn towards the common build there and the interval
     must widen: without b, bodies with BMI ≥ 35 were covered 0.73 of the time at 95 %, with b 0.83 (spread
@@ -94,7 +97,7 @@ def spread_design(psi_deg: np.ndarray, psi_sd_deg: np.ndarray, features: dict[st
 
     Returns
     -------
-    (n, 9) float64
+    (n, 10) float64
     """
     r = np.radians(np.asarray(psi_deg, dtype=np.float64))
     build = np.asarray(log_wbsa, dtype=np.float64) - 2.0 * np.log(np.asarray(features["stature_m"], dtype=np.float64))
@@ -258,6 +261,9 @@ class EstimatorModel:
         if meta.get("format") != FORMAT or meta.get("version") != VERSION:
             raise WbsaError(f"{path} is not a {FORMAT} version {VERSION} file; rebuild it with this wbsa")
         check_finite_model(arrays, str(path))
+        if arrays["coef"].shape != (DESIGN_TERMS,):
+            raise WbsaError(f"{path} has {arrays['coef'].size} regression terms, not {DESIGN_TERMS}; rebuild it "
+                            "with this wbsa")
         if arrays["spread_coef"].shape != (SPREAD_TERMS,):
             raise WbsaError(f"{path} has {arrays['spread_coef'].size} spread terms, not {SPREAD_TERMS}; rebuild it "
                             "with this wbsa")

@@ -104,7 +104,8 @@ def predict_wbsa(model, measures, camera, azimuth_deg: float | None, elevation_d
                                    f"with probability {view.p_front:.2f}); give --azimuth if you know it")
     if isinstance(model, EstimatorModel):
         feats = {k: np.array([v]) for k, v in measures.features().items()}
-        az_sd = view.azimuth_sd_deg if azimuth_deg is None else 0.0
+        # a stated view counts as sure as the surest estimated one: the models never saw a smaller spread
+        az_sd = view.azimuth_sd_deg if azimuth_deg is None else model.view.axis_sd_deg
         w, lo, hi = model.predict(feats, measures.shape[None], np.array([az]), np.array([az_sd]), np.array([el]), level)
         flags.update(range_flags({"vbsa_m2": measures.vbsa_m2, "stature_m": measures.stature_m,
                                   "distance_m": measures.distance_m, "elevation_deg": el}, model.ranges))

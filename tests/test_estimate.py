@@ -582,6 +582,24 @@ def test_model_file_round_trip_and_refuses_non_finite_numbers(small_model, tmp_p
 
 
 @pytest.mark.slow
+def test_a_stated_azimuth_enters_the_model_with_the_held_out_spread(room_view, small_model, monkeypatch):
+    """The models were fitted on view spreads no smaller than the held-out one: a stated view takes that."""
+    from wbsa.estimation import SegmentSettings, estimate
+    from wbsa.estimation.model import EstimatorModel
+
+    model = EstimatorModel.load(small_model)
+    seen = []
+    original = EstimatorModel.predict
+    monkeypatch.setattr(EstimatorModel, "predict",
+                        lambda self, f, shape, psi, psi_sd, *a, **k: seen.append(float(psi_sd[0]))
+                        or original(self, f, shape, psi, psi_sd, *a, **k))
+    _, _, frame = room_view
+    for azimuth in (None, 20.0):
+        estimate(frame.depth_m, "kinect-v2", model, azimuth_deg=azimuth, segment=SegmentSettings(pick="center"))
+    assert seen[1] == model.view.axis_sd_deg and seen[0] >= model.view.axis_sd_deg
+
+
+@pytest.mark.slow
 def test_estimate_finds_the_view_flags_and_writes_outputs(room_view, small_model, tmp_path, capsys):
     from wbsa.core import write_depth_png
     from wbsa.estimation import SegmentSettings, estimate

@@ -162,18 +162,32 @@ def merge_occluding(pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarray
             c = parent[c]
         return c
 
-    def image_mask(label: int) -> np.ndarray:
-        out = np.zeros(h * w, dtype=bool)
-        out[pix[np.concatenate(members[label])]] = True
-        return out.reshape(h, w)
+    pix_row, pix_col = np.divmod(pix, w)
+
+    def image_masks(parts: list[int], pad: int) -> list[np.ndarray]:
+        """Image masks of ``parts`` over their joint bounding box widened by ``pad`` pixels (within the
+        image): the morphology below then costs what the parts cover, not the whole image, and gives the
+        same pixels as on the whole image (the box keeps a ring of ``pad`` background pixels)."""
+        rows = [pix_row[np.concatenate(members[c])] for c in parts]
+        cols = [pix_col[np.concatenate(members[c])] for c in parts]
+        r0 = max(min(r.min() for r in rows) - pad, 0)
+        c0 = max(min(c.min() for c in cols) - pad, 0)
+        r1 = min(max(r.max() for r in rows) + pad + 1, h)
+        c1 = min(max(c.max() for c in cols) + pad + 1, w)
+        out = []
+        for r, c in zip(rows, cols):
+            m = np.zeros((r1 - r0, c1 - c0), dtype=bool)
+            m[r - r0, c - c0] = True
+            out.append(m)
+        return out
 
     def through_loop(back: int, front: int) -> bool:
         """Whether most of part ``back`` is seen through a loop of ``front`` (the wall inside an arm on
         the hip)."""
         from scipy import ndimage
 
-        part = image_mask(back)
-        body = ndimage.binary_closing(image_mask(front), iterations=2)
+        part, front_mask = image_masks([back, front], pad=3)  # closing by 2: a ring of 3 stays background
+        body = ndimage.binary_closing(front_mask, iterations=2)
         return np.count_nonzero(part & ndimage.binary_fill_holes(body)) > np.count_nonzero(part) // 2
 
     def far_arm(back: int, front: int, new_lo: np.ndarray, new_hi: np.ndarray) -> bool:
@@ -188,7 +202,7 @@ def merge_occluding(pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarray
         reach = np.linalg.norm(proj[np.concatenate(members[back]), 1:] - axis, axis=1)
         if np.quantile(reach, 0.95) > FAR_ARM_REACH * top:
             return False
-        return np.count_nonzero(ndimage.binary_erosion(image_mask(back))) >= FAR_ARM_INTERIOR  # 4-neighbour
+        return np.count_nonzero(ndimage.binary_erosion(image_masks([back], pad=1)[0])) >= FAR_ARM_INTERIOR  # 4-nbr
 
     for i in np.argsort(-counts, kind="stable"):
         if counts[i] < MERGE_MIN_CONTACTS or near_gap[i] > FAR_ARM_GAP_M:

@@ -144,14 +144,15 @@ def outline_shares(depth_m: np.ndarray, subject: np.ndarray, mixed: np.ndarray |
     gap_share : float
         Share of the outline's outward steps that cross a one-pixel gap without return to a return behind
         the subject, where a camera's flying-pixel filter dropped the pixel on the edge: 0.02–0.05 on clean
-        frames, 0.15–0.3 when a filter drops them. It stops growing once half the edges are dropped: two
+        frames, about 0.14 once a filter drops half of them or more: it stops growing there, as two
         dropped pixels side by side make a gap of two.
     edge_gap_share : float
         Share of the outline's depth edges (outward steps to a return behind the subject, directly or
         across a gap of one or two pixels) that cross such a gap: the share of its edges a filter dropped.
-        On 16 of the benchmark's renders with :data:`~wbsa.sensor.depth_edges.edge_pixels` dropping a
-        share s of the edges it reads 0.20 ± 0.21 at s = 0 (holes and dropout), 0.47 ± 0.17 at 0.25,
-        0.70 ± 0.11 at 0.5 and 1.00 at 1 (mean ± standard deviation over the images).
+        On the benchmark's first 16 images (seed 1000), with
+        :data:`~wbsa.sensor.depth_edges.edge_pixels` dropping a share s of the edges, it reads 0.20 ± 0.21
+        at s = 0 (holes and dropout), 0.47 ± 0.17 at 0.25, 0.70 ± 0.11 at 0.5 and 1.00 at 1 (mean ±
+        standard deviation over the images).
     """
     from scipy import ndimage
 

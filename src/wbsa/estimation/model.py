@@ -40,8 +40,8 @@ SPREAD_TERMS = 10
 _BASE = ("vbsa_m2", "stature_m", "silhouette_m2", "width_m", "thickness_m")
 #: How the camera treated the subject's outline (:func:`wbsa.estimation.mixed_pixels.outline_shares`).
 _OUTLINE = ("mixed_share", "gap_share", "edge_gap_share")
-#: Columns of :func:`design`.
-DESIGN_TERMS = 34
+#: Columns of :func:`design`: the log measures × 5 view terms, 4 view terms, distance, pitch, outline.
+DESIGN_TERMS = 5 * len(_BASE) + 4 + 2 + len(_OUTLINE)
 
 
 def _check_measures(features: dict[str, np.ndarray]) -> None:
@@ -261,9 +261,10 @@ class EstimatorModel:
         if meta.get("format") != FORMAT or meta.get("version") != VERSION:
             raise WbsaError(f"{path} is not a {FORMAT} version {VERSION} file; rebuild it with this wbsa")
         check_finite_model(arrays, str(path))
-        if arrays["coef"].shape != (DESIGN_TERMS,):
-            raise WbsaError(f"{path} has {arrays['coef'].size} regression terms, not {DESIGN_TERMS}; rebuild it "
-                            "with this wbsa")
+        for key in ("coef", "mean", "scale"):
+            if arrays[key].shape != (DESIGN_TERMS,):
+                raise WbsaError(f"{path} has {arrays[key].size} regression terms, not {DESIGN_TERMS}; rebuild it "
+                                "with this wbsa")
         if arrays["spread_coef"].shape != (SPREAD_TERMS,):
             raise WbsaError(f"{path} has {arrays['spread_coef'].size} spread terms, not {SPREAD_TERMS}; rebuild it "
                             "with this wbsa")

@@ -132,6 +132,14 @@ def _folds(table: pd.DataFrame, folds: int, seed: int) -> np.ndarray:
 def _oof_view(samples: Samples, folds: int, seed: int) -> tuple[np.ndarray, np.ndarray, float]:
     """Out-of-fold view estimates of every sample (folds by subject).
 
+    Parameters
+    ----------
+    samples : Samples
+        The fit renders (n): ``subject_id`` and ``azimuth_deg`` columns, view descriptors first.
+    folds : int
+    seed : int
+        Seed of the fold split and of the fold view models.
+
     Returns
     -------
     psi_deg, psi_sd_deg : (n,) float64

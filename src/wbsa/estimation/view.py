@@ -42,6 +42,7 @@ def azimuth_sd_deg(psi_deg, p_front, axis_sd_deg: float) -> np.ndarray:
     psi_deg, p_front : (n,) float64
         Folded azimuth estimate (0–180°) and the probability that the camera is in front.
     axis_sd_deg : float
+        Held-out standard deviation of ψ' (degrees; :attr:`ViewModel.axis_sd_deg`).
 
     Returns
     -------

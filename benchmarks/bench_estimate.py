@@ -177,9 +177,16 @@ def main() -> None:
                     help="what the camera returns for pixels straddling a depth edge: the render's depth (default, "
                          "the issue's benchmark), a time-of-flight mix of the two surfaces, or nothing (a flying-pixel filter)")
     ap.add_argument("--edge-share", type=float, default=1.0, help="share of the depth edges so affected (default 1)")
+    ap.add_argument("--scene", choices=("room", "alone"), default="room",
+                    help="room (default, the issue's benchmark) or the subject alone: no floor, wall or second "
+                         "person, as a render of a 3-D body scan")
+    ap.add_argument("--ideal", action="store_true", help="the same captures with no sensor effects (an ideal render)")
+    ap.add_argument("--noise-scale", type=float, default=1.0,
+                    help="factor on the sensor noise's sigma (default 1, Kinect v1's level)")
     args = ap.parse_args()
 
     from wbsa.estimation.cache import default_model, default_model_path
+    from wbsa.estimation.capture import CaptureSettings
     from wbsa.estimation.testset import RoomTestSettings, run_room_tests
 
     model_path = args.model
@@ -188,13 +195,17 @@ def main() -> None:
         model_path = str(default_model_path())
     t0 = time.perf_counter()
     pop = population(args.subjects, args.survey_share, args.seed)
-    settings = RoomTestSettings(seed=args.seed, edge_pixels=args.edge_pixels, edge_share=args.edge_share)
+    capture = CaptureSettings(edge_pixels=("kept",), noise_scale=(args.noise_scale, args.noise_scale), ideal_share=0.0)
+    settings = RoomTestSettings(capture=capture, seed=args.seed, edge_pixels=args.edge_pixels,
+                                edge_share=args.edge_share, scene=args.scene, ideal=args.ideal)
     res = run_room_tests(pop, settings, model_path, workers=args.workers)
     if args.out:
         res.to_csv(args.out, index=False)
     print(f"model {model_path}; {len(pop)} subjects ({(pop['population'] == 'survey').sum()} survey-matched), "
           f"seed {args.seed}, edge pixels {args.edge_pixels}"
-          + (f" at {args.edge_share:g} of the depth edges" if args.edge_pixels != "kept" else ""))
+          + (f" at {args.edge_share:g} of the depth edges" if args.edge_pixels != "kept" else "")
+          + (f", scene {args.scene}" if args.scene != "room" else "") + (", ideal sensor" if args.ideal else "")
+          + (f", noise x{args.noise_scale:g}" if args.noise_scale != 1.0 and not args.ideal else ""))
     report(res, time.perf_counter() - t0)
 
 

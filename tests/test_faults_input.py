@@ -81,6 +81,15 @@ def test_view_refuses_a_negative_sensor_seed_and_huge_images(tmp_path):
     assert_one_line_error(code, err, "limit of 16.8 megapixels")
 
 
+def test_usage_errors_point_to_the_help_of_the_command_given():
+    code, _, err = run_cli("estimate", "a.png", "extra", "words")
+    assert_one_line_error(code, err, "unrecognized arguments: extra words", "(see wbsa estimate --help)")
+    code, _, err = run_cli("--bogus")
+    assert_one_line_error(code, err, "(see wbsa --help)")
+    code, _, err = run_cli("view", "--noise", "nguyen2012", "--noise-scale", "-1")
+    assert_one_line_error(code, err, "--noise-scale", "(see wbsa view --help)")
+
+
 def test_a_view_that_sees_nothing_has_no_visible_area(tmp_path):
     """Issue 12 item 5: view --distance 1e6 reported 0.288 m² from 0 pixels, then blamed the output folder."""
     from wbsa.core.ply import check_ply

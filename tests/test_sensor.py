@@ -85,6 +85,21 @@ def test_axial_noise_matches_sigma_z_face_on():
     np.testing.assert_allclose(noisy.points_cam[both][:, 2], noisy.depth_m[both], rtol=1e-6)
 
 
+def test_noise_scale_multiplies_both_sigmas_and_is_recorded_only_off_one():
+    frame = plane_frame(2.0, 0.0)
+    both = interior(frame.valid)
+    spread = {}
+    for scale in (1.0, 0.5, 0.0):
+        model = SensorSettings(noise="nguyen2012", lateral_noise=False, noise_scale=scale)
+        noisy = apply_sensor(frame, model, np.random.default_rng(1))
+        spread[scale] = float(np.std((noisy.depth_m - frame.depth_m)[both & noisy.valid]))
+    assert spread[0.5] / spread[1.0] == pytest.approx(0.5, rel=0.01) and spread[0.0] == 0.0
+    ramp = SensorSettings(noise="nguyen2012", noise_scale=0.5)
+    assert ramp.to_dict()["noise_scale"] == 0.5 and "noise_scale" not in SensorSettings(noise="nguyen2012").to_dict()
+    with pytest.raises(WbsaError, match="noise_scale"):
+        SensorSettings(noise="nguyen2012", noise_scale=-0.5)
+
+
 def test_axial_noise_steep_term_at_70_degrees():
     frame = plane_frame(2.0, 70.0, half_size_m=1.5)
     noisy = apply_sensor(frame, SensorSettings(noise="nguyen2012", lateral_noise=False), np.random.default_rng(2))

@@ -33,8 +33,16 @@ COMMAND_MODULES = (
 class _Parser(argparse.ArgumentParser):
     """argparse that reports usage errors as one line with exit status 2."""
 
+    def parse_known_args(self, args=None, namespace=None):  # noqa: D102
+        self._given = list(sys.argv[1:] if args is None else args)
+        return super().parse_known_args(args, namespace)
+
     def error(self, message: str) -> None:  # noqa: D102
-        sys.stderr.write(f"error: {message} (see wbsa {self.prog.split()[-1]} --help)\n")
+        words = self.prog.split()
+        if len(words) == 1:  # the top parser also reports a command's unrecognised arguments: point to it
+            commands = {c for a in self._actions if isinstance(a, argparse._SubParsersAction) for c in a.choices}
+            words += [str(a) for a in getattr(self, "_given", [])[:1] if a in commands]
+        sys.stderr.write(f"error: {message} (see {' '.join(words)} --help)\n")
         sys.exit(2)
 
 
@@ -63,7 +71,10 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``wbsa`` console script; returns the exit status."""
     warnings.formatwarning = _one_line_warning
     parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # usage errors (one line, status 2), --help and --version
+        return exc.code if isinstance(exc.code, int) else 0
     try:
         result = args.func(args)
     except WbsaError as exc:

@@ -39,6 +39,9 @@ PostureName = Literal["a-pose", "arms-down", "arms-wide", "hands-on-hips", "elbo
 #: What a camera returns for a pixel straddling a depth edge (:mod:`wbsa.sensor.depth_edges`): the render's
 #: depth, a mix of the two surfaces (time-of-flight), or nothing (the camera's own flying-pixel filter).
 EdgePixels = Literal["kept", "mixed", "dropped"]
+#: What surrounds the subject in a held-out test capture: a room (floor, wall, maybe a second person), or
+#: nothing (a render of the body alone, as of a 3-D body scan).
+TestScene = Literal["room", "alone"]
 #: A population's ``posture`` setting: a posture name, or ``mixed`` (a random name per subject).
 PostureChoice = Literal[Literal["a-pose", "mixed"], PostureName]
 
@@ -56,3 +59,4 @@ RAYCAST_BACKENDS: tuple[str, ...] = get_args(RaycastBackend)
 POSTURE_NAMES: tuple[str, ...] = get_args(PostureName)
 POSTURE_CHOICES: tuple[str, ...] = get_args(PostureChoice)
 EDGE_PIXELS: tuple[str, ...] = get_args(EdgePixels)
+TEST_SCENES: tuple[str, ...] = get_args(TestScene)

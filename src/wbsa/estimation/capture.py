@@ -40,6 +40,11 @@ class CaptureSettings:
         Height of the camera above the floor.
     noise : bool
         Sensor noise (Nguyen et al. 2012), disparity quantisation where the camera has one, grazing dropout.
+    noise_scale : (float, float)
+        Factor on the noise model's σ, uniform: real cameras are less noisy (time of flight) or noisier
+        (stereo at range) than Kinect v1's model, and the estimator must not depend on its exact level.
+    ideal_share : float
+        Share of captures with no sensor effects at all (an ideal render, as of a 3-D body scan).
     max_holes_fraction, max_pixel_dropout : float
         Triangle holes and pixel dropout, each drawn uniformly up to this.
     edge_pixels : tuple of {'kept', 'mixed', 'dropped'}
@@ -52,6 +57,8 @@ class CaptureSettings:
     distance_m: tuple[float, float] = (1.5, 4.5)
     camera_height_m: tuple[float, float] = (0.8, 2.0)
     noise: bool = True
+    noise_scale: tuple[float, float] = (0.2, 1.5)
+    ideal_share: float = 0.1
     max_holes_fraction: float = 0.03
     max_pixel_dropout: float = 0.02
     edge_pixels: tuple[EdgePixels, ...] = EDGE_PIXELS  # type: ignore[assignment]
@@ -72,6 +79,11 @@ class CaptureSettings:
         lo, hi = self.camera_height_m
         if not 0.0 <= lo <= hi:
             raise WbsaError(f"camera_height_m {self.camera_height_m} must be (low, high) metres with 0 <= low <= high")
+        lo, hi = self.noise_scale
+        if not 0.0 <= lo <= hi <= 10.0:
+            raise WbsaError(f"noise_scale {self.noise_scale} must be (low, high) factors with 0 <= low <= high <= 10")
+        if not 0.0 <= self.ideal_share <= 1.0:
+            raise WbsaError(f"ideal_share {self.ideal_share} must be a share of the captures in [0, 1]")
 
 
 @dataclass(frozen=True)
@@ -156,4 +168,21 @@ def sample_capture(vertices: np.ndarray, rng: np.random.Generator, settings: Cap
         distance = min(hi, distance * 1.08)
     edges = settings.edge_pixels[int(rng.integers(len(settings.edge_pixels)))]  # drawn last: earlier draws unchanged
     share = float(rng.uniform(0.0, 1.0))
-    return Capture(camera, view, sensor, height, fits, edges, share if edges != "kept" else 0.0)
+    return Capture(camera, view, _noise_level(sensor, rng, settings), height, fits, edges,
+                   share if edges != "kept" else 0.0)
+
+
+def _noise_level(sensor, rng: np.random.Generator, settings: CaptureSettings):
+    """``sensor`` made ideal (``ideal_share``) or its noise scaled (``noise_scale``); drawn after every other
+    draw of a capture, and not at all when fixed, so fixed settings keep the captures they drew before."""
+    import dataclasses
+
+    from wbsa.sensor.settings import SensorSettings
+
+    if not settings.noise:
+        return sensor
+    if settings.ideal_share > 0.0 and rng.uniform() < settings.ideal_share:
+        return SensorSettings()
+    lo, hi = settings.noise_scale
+    scale = float(rng.uniform(lo, hi)) if hi > lo else lo
+    return sensor if scale == 1.0 else dataclasses.replace(sensor, noise_scale=scale)

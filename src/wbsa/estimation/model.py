@@ -3,17 +3,17 @@
 WBSA is predicted on the log scale from what :func:`~wbsa.estimation.measure.measure_subject` measures and
 the view: a ridge regression of log WBSA on log VBSA, log stature (paper eq. 8), log silhouette area,
 width and thickness, each times a view basis (1, cos ψ, cos 2ψ, cos 3ψ, sin φ), plus distance, pixel
-pitch and how the camera treated the outline (mixed returns, gaps: the area read through the outline
-moves with them); boosted trees then correct its residual from the same measures, the body's band widths and
+pitch, how the camera treated the outline (mixed returns, gaps: the area read through the outline
+moves with them), the depth noise (a noisy surface reads a different area) and whether a floor was seen; boosted trees then correct its residual from the same measures, the body's band widths and
 thicknesses and the view's uncertainty. The interval is split-conformal: residuals divided by a fitted
 spread s(x) on held-out calibration renders (never used in fitting) give the quantile of any level, taken
 so that the level is met with at least 90 % confidence over the calibration draw
 (:meth:`EstimatorModel.quantile`).
 
-File layout: one ``.npz`` of numbers (no pickle) with ``meta_json`` (format ``wbsa-estimator``, version 4,
+File layout: one ``.npz`` of numbers (no pickle) with ``meta_json`` (format ``wbsa-estimator``, version 5,
 training settings, feature ranges, held-out metrics). Version 2 added the outline terms, version 3 the
 apparent build to the spread (:func:`spread_design`), version 4 the share of the outline's depth edges
-behind a gap (``edge_gap_share``).
+behind a gap (``edge_gap_share``), version 5 the depth noise and the floor (:func:`capture_terms`).
 """
 
 from __future__ import annotations
@@ -30,29 +30,39 @@ from wbsa.estimation.trees import TreeEnsemble
 from wbsa.estimation.view import ViewModel
 
 FORMAT = "wbsa-estimator"
-VERSION = 4
+VERSION = 5
 #: Measures whose training range is recorded and checked (flag ``out_of_training_range``).
 RANGE_KEYS = ("vbsa_m2", "stature_m", "distance_m", "elevation_deg")
 #: Probability, over the calibration draw, that an interval covers at least its stated level.
 QUANTILE_CONFIDENCE = 0.9
-#: Columns of :func:`spread_design`.
-SPREAD_TERMS = 10
 _BASE = ("vbsa_m2", "stature_m", "silhouette_m2", "width_m", "thickness_m")
 #: How the camera treated the subject's outline (:func:`wbsa.estimation.mixed_pixels.outline_shares`).
 _OUTLINE = ("mixed_share", "gap_share", "edge_gap_share")
-#: Columns of :func:`design`: the log measures × 5 view terms, 4 view terms, distance, pitch, outline.
-DESIGN_TERMS = 5 * len(_BASE) + 4 + 2 + len(_OUTLINE)
+#: How the image was taken besides: the depth noise (per pixel pitch) and whether a floor was seen.
+_CAPTURE_TERMS = 2
+#: Columns of :func:`design`: the log measures × 5 view terms, 4 view terms, distance, pitch, capture.
+DESIGN_TERMS = 5 * len(_BASE) + 4 + 2 + len(_OUTLINE) + _CAPTURE_TERMS
+#: Columns of :func:`spread_design`.
+SPREAD_TERMS = 7 + len(_OUTLINE) + _CAPTURE_TERMS
 
 
 def _check_measures(features: dict[str, np.ndarray]) -> None:
-    missing = [k for k in (*_BASE, "distance_m", "pitch_m", *_OUTLINE) if k not in features]
+    missing = [k for k in (*_BASE, "distance_m", "pitch_m", *_OUTLINE, "depth_noise_m", "floor_seen") if k not in features]
     if missing:
         raise WbsaError(f"measures {', '.join(missing)} are missing; measure the image with this wbsa "
                         "(wbsa.estimation.measure_subject) or re-render the training samples")
 
 
+def capture_terms(features: dict[str, np.ndarray]) -> list[np.ndarray]:
+    """How the image was taken: the three outline shares, the depth noise over the pixel pitch (0 on an
+    ideal render, about 1.4 for Kinect v1 at 2.5 m) and whether a floor was seen (1) or not (0); (n,) each."""
+    cols = [np.asarray(features[k], dtype=np.float64) for k in _OUTLINE]
+    return cols + [np.asarray(features["depth_noise_m"], dtype=np.float64) / np.asarray(features["pitch_m"], float),
+                   np.asarray(features["floor_seen"], dtype=np.float64)]
+
+
 def design(features: dict[str, np.ndarray], psi_deg: np.ndarray, elevation_deg: np.ndarray) -> np.ndarray:
-    """Linear design matrix (n, 34): log measures × view basis, view basis, log distance, pitch/stature, outline."""
+    """Linear design matrix (n, 36): log measures × view basis, view basis, log distance, pitch/stature, capture."""
     _check_measures(features)
     r = np.radians(np.asarray(psi_deg, dtype=np.float64))
     s_el = np.sin(np.radians(np.asarray(elevation_deg, dtype=np.float64)))
@@ -60,27 +70,26 @@ def design(features: dict[str, np.ndarray], psi_deg: np.ndarray, elevation_deg: 
     cols = [np.log(np.asarray(features[k], dtype=np.float64)) * v for k in _BASE for v in view]
     cols += view[1:]
     cols += [np.log(features["distance_m"]), np.asarray(features["pitch_m"]) / np.asarray(features["stature_m"])]
-    cols += [np.asarray(features[k], dtype=np.float64) for k in _OUTLINE]
-    return np.column_stack(cols)
+    return np.column_stack(cols + capture_terms(features))
 
 
 def tree_features(features: dict[str, np.ndarray], shape: np.ndarray, psi_deg: np.ndarray, psi_sd_deg: np.ndarray,
                   elevation_deg: np.ndarray) -> np.ndarray:
-    """Features of the residual trees (n, 52): log measures, view, its spread, distance, bands / stature, outline."""
+    """Features of the residual trees (n, 54): log measures, view, its spread, distance, bands / stature, capture."""
     _check_measures(features)
     st = np.asarray(features["stature_m"], dtype=np.float64)
     cols = [np.log(np.asarray(features[k], dtype=np.float64)) for k in _BASE]
     cols += [np.asarray(psi_deg, dtype=float), np.asarray(psi_sd_deg, dtype=float), np.asarray(elevation_deg, float),
              np.asarray(features["distance_m"], float)]
-    return np.column_stack(cols + [np.asarray(shape, dtype=np.float64) / st[:, None]]
-                           + [np.asarray(features[k], dtype=np.float64) for k in _OUTLINE])
+    return np.column_stack(cols + [np.asarray(shape, dtype=np.float64) / st[:, None]] + capture_terms(features))
 
 
 def spread_design(psi_deg: np.ndarray, psi_sd_deg: np.ndarray, features: dict[str, np.ndarray],
                   log_wbsa: np.ndarray) -> np.ndarray:
-    """Design of the log residual spread (n, 10).
+    """Design of the log residual spread (n, 12).
 
-    Columns: 1, cos 2ψ, view spread / 30°, log pitch, log pixel count, the three outline shares, and the
+    Columns: 1, cos 2ψ, view spread / 30°, log pitch, log pixel count, the capture terms
+    (:func:`capture_terms`), and the
     apparent build b = log(predicted WBSA / stature²) with b². A single view tells a very thin or very heavy
     body's build only in part, so the prediction is drawn towards the common build there and the interval
     must widen: without b, bodies with BMI ≥ 35 were covered 0.73 of the time at 95 %, with b 0.83 (spread
@@ -97,13 +106,13 @@ def spread_design(psi_deg: np.ndarray, psi_sd_deg: np.ndarray, features: dict[st
 
     Returns
     -------
-    (n, 10) float64
+    (n, 12) float64
     """
     r = np.radians(np.asarray(psi_deg, dtype=np.float64))
     build = np.asarray(log_wbsa, dtype=np.float64) - 2.0 * np.log(np.asarray(features["stature_m"], dtype=np.float64))
     return np.column_stack([np.ones_like(r), np.cos(2 * r), np.asarray(psi_sd_deg, float) / 30.0,
                             np.log(features["pitch_m"]), np.log(features["n_pixels"])]
-                           + [np.asarray(features[k], dtype=np.float64) for k in _OUTLINE] + [build, build ** 2])
+                           + capture_terms(features) + [build, build ** 2])
 
 
 @dataclass

@@ -43,6 +43,9 @@ class RenderSettings:
         :func:`~wbsa.estimation.segment.segment_subject`: the measures then see what they see in a real
         image (the segmentation's edges, the detected floor). False: the body alone, its own pixels and
         the render's floor.
+    alone_share : float
+        With ``room``: share of captures of the body alone (no floor, no wall), as a render of a 3-D body
+        scan is; the measures then find no floor.
     seed : int
     """
 
@@ -53,7 +56,14 @@ class RenderSettings:
     floor_tilt_deg: float = 0.1
     room: bool = True
     wall_behind_m: tuple[float, float] = (0.5, 1.5)
+    alone_share: float = 0.1
     seed: int = 0
+
+    def __post_init__(self) -> None:
+        from wbsa.errors import WbsaError
+
+        if not 0.0 <= self.alone_share <= 1.0:
+            raise WbsaError(f"alone_share {self.alone_share} must be a share of the captures in [0, 1]")
 
 
 @dataclass(frozen=True)
@@ -164,13 +174,16 @@ def render_chunk(population: pd.DataFrame, first_sample: int, settings: RenderSe
 def _room_capture(mesh, cap, rng: np.random.Generator, edge_rng: np.random.Generator, settings: RenderSettings,
                   sample: int):
     """(depth (h, w) float64 in whole millimetres, mixed returns, subject mask or None, detected floor) of
-    ``mesh`` in a room."""
+    ``mesh`` in a room, or alone (``settings.alone_share``)."""
     from wbsa.errors import WbsaError
     from wbsa.estimation.mixed_pixels import repair_mixed_pixels
     from wbsa.estimation.room import capture_room, compose_room, with_edge_pixels
     from wbsa.estimation.segment import SegmentSettings, segment_subject
 
-    room = compose_room(mesh, cap.view.azimuth_deg, wall_behind_m=float(rng.uniform(*settings.wall_behind_m)))
+    if rng.uniform() < settings.alone_share:
+        room = compose_room(mesh, cap.view.azimuth_deg, wall_behind_m=None, floor=False)
+    else:
+        room = compose_room(mesh, cap.view.azimuth_deg, wall_behind_m=float(rng.uniform(*settings.wall_behind_m)))
     _, depth = capture_room(room, cap, seed=settings.seed, subject_id=sample)
     depth, mixed = repair_mixed_pixels(with_edge_pixels(depth, cap.edge_pixels, cap.edge_share, edge_rng),
                                         cap.camera.fx)

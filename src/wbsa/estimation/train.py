@@ -25,7 +25,8 @@ from wbsa.estimation.view import ViewModel, azimuth_sd_deg, fold_azimuth
 
 #: Columns of :meth:`SubjectMeasures.features` the model reads (``m_`` prefixed in sample tables).
 FEATURES = ("vbsa_m2", "stature_m", "silhouette_m2", "width_m", "thickness_m", "distance_m", "elevation_deg",
-            "elevation_axis_deg", "pitch_m", "n_pixels", "mixed_share", "gap_share", "edge_gap_share")
+            "elevation_axis_deg", "pitch_m", "n_pixels", "mixed_share", "gap_share", "edge_gap_share",
+            "depth_noise_m", "floor_seen")
 _VIEW_DIMS = 160  # view descriptor length; the shape bands follow it in Samples.descriptors
 #: Share of the subjects each bagged tree model is fitted on (:attr:`TrainSettings.tree_bags`).
 BAG_SUBJECT_SHARE = 0.9
@@ -49,6 +50,8 @@ class TrainSettings:
     room : bool
         Capture the bodies in a room and find them by segmentation, as real images are
         (:class:`~wbsa.estimation.renders.RenderSettings`).
+    alone_share : float
+        With ``room``: share of captures of the body alone, with no floor or wall (a rendered body scan).
     folds : int
         Folds of the out-of-fold view estimates and residuals.
     tree_iterations, tree_leaves : int
@@ -71,6 +74,7 @@ class TrainSettings:
     capture: CaptureSettings = field(default_factory=CaptureSettings)
     postures: tuple[str, ...] | None = None
     room: bool = True
+    alone_share: float = 0.1
     folds: int = 3
     tree_iterations: int = 800
     tree_leaves: int = 31
@@ -235,7 +239,8 @@ def train_model(settings: TrainSettings = TrainSettings(), *, workers: int = 1, 
         rng = np.random.default_rng(settings.seed)
         calib = rng.random(len(pop)) < settings.calibration_fraction
         render = RenderSettings(views_per_subject=settings.views_per_subject, capture=settings.capture,
-                                postures=settings.postures, room=settings.room, seed=settings.seed)
+                                postures=settings.postures, room=settings.room, alone_share=settings.alone_share,
+                                seed=settings.seed)
         fit_s = render_samples(pop[~calib].reset_index(drop=True), render, workers=workers,
                                show_progress=show_progress)
         cal_s = render_samples(pop[calib].reset_index(drop=True), replace(render, seed=settings.seed + 7919),
@@ -248,7 +253,9 @@ def train_model(settings: TrainSettings = TrainSettings(), *, workers: int = 1, 
                         "use more subjects")
     fit_t = fit_s.table
     psi_oof, sd_oof, axis_sd = _oof_view(fit_s, settings.folds, settings.seed)
-    el_sd = {"floor": _rms(fit_t["m_elevation_deg"] - fit_t["elevation_deg"]),
+    on_floor = fit_t["m_floor_seen"].to_numpy() > 0.5
+    on_floor = on_floor if on_floor.any() else np.ones(len(fit_t), dtype=bool)
+    el_sd = {"floor": _rms((fit_t["m_elevation_deg"] - fit_t["elevation_deg"])[on_floor]),
              "axis": _rms(fit_t["m_elevation_axis_deg"] - fit_t["elevation_deg"])}
     view = ViewModel.fit(fit_s.descriptors[:, :_VIEW_DIMS], fit_t["azimuth_deg"].to_numpy(), seed=settings.seed,
                          axis_sd_deg=axis_sd, elevation_sd_deg=el_sd)

@@ -29,9 +29,9 @@ def apply_sensor(frame: DepthFrame, sensor: SensorSettings, rng: np.random.Gener
        them, chosen without replacement) and every pixel that hit them (the paper, section 2.4);
     2. grazing dropout: drop returns with angle θ between normal and ray above 90° − ``grazing_dropout_deg``;
     3. lateral noise (``nguyen2012``): each pixel samples the surface at a position moved by
-       N(0, σL(θ)) pixels along each image axis (bilinear depth on one surface, nearest pixel across
+       N(0, ``noise_scale`` · σL(θ)) pixels along each image axis (bilinear depth on one surface, nearest pixel across
        depth jumps and at the silhouette, which therefore both grows and shrinks);
-    4. axial noise (``nguyen2012``): z += N(0, σz(z, θ));
+    4. axial noise (``nguyen2012``): z += N(0, ``noise_scale`` · σz(z, θ));
     5. disparity quantisation: z = f·b / (round(f·b / (z·q)) · q) with q = ``disparity_step_px``;
     6. range limits: drop z outside the camera's ``[min_range_m, max_range_m]``;
     7. pixel dropout: drop each remaining return with probability ``pixel_dropout``.
@@ -103,7 +103,7 @@ def apply_sensor(frame: DepthFrame, sensor: SensorSettings, rng: np.random.Gener
     if sensor.noise == "nguyen2012":
         # 3. lateral noise: resample the image at jittered positions
         if sensor.lateral_noise and min(depth.shape) >= 2:
-            sigma_px = np.where(valid, nguyen2012.lateral_sigma_px(np.where(valid, theta, 0.0)), 0.0)
+            sigma_px = np.where(valid, sensor.noise_scale * nguyen2012.lateral_sigma_px(np.where(valid, theta, 0.0)), 0.0)
             reach = 2 * _LATERAL_REACH_PX + 1
             sigma_px = np.where(valid, sigma_px, ndimage.grey_dilation(sigma_px, size=(reach, reach)))
             dv = lateral_stream.standard_normal(depth.shape) * sigma_px
@@ -111,7 +111,7 @@ def apply_sensor(frame: DepthFrame, sensor: SensorSettings, rng: np.random.Gener
             depth, valid, normals, tri = _resample(depth, valid, normals, tri, dv, du)
             theta = _incidence_rad(normals, rays, valid)
         # 4. axial noise
-        sigma_z = nguyen2012.axial_sigma_m(np.where(valid, depth, 1.0), np.where(valid, theta, 0.0))
+        sigma_z = sensor.noise_scale * nguyen2012.axial_sigma_m(np.where(valid, depth, 1.0), np.where(valid, theta, 0.0))
         depth = depth + axial_stream.standard_normal(depth.shape) * np.where(valid, sigma_z, 0.0)
         valid &= depth > 0
         depth_changed = True

@@ -11,13 +11,14 @@ from wbsa.typing import NOISE_MODELS
 
 _fraction = number_in(0.0, 1.0, what="a fraction")
 _grazing_deg = number_in(0.0, 90.0, high_open=True, what="degrees")
+_noise_scale = number_in(0.0, 10.0, what="a factor")
 
 
 def add_sensor_arguments(parser: argparse.ArgumentParser, *, seed: bool = False) -> None:
     """Add the sensor flags (an argument group "sensor") to ``parser``.
 
     ``--noise {none,nguyen2012}``, ``--holes FRACTION``, ``--pixel-dropout FRACTION``,
-    ``--grazing-dropout DEG``, ``--quantise``, ``--no-lateral-noise``, ``--range-limits`` and, with
+    ``--grazing-dropout DEG``, ``--quantise``, ``--noise-scale FACTOR``, ``--no-lateral-noise``, ``--range-limits`` and, with
     ``seed=True``, ``--sensor-seed N`` (commands that have their own ``--seed`` pass that instead).
     """
     g = parser.add_argument_group("sensor (simulated depth camera; all off by default)")
@@ -31,6 +32,8 @@ def add_sensor_arguments(parser: argparse.ArgumentParser, *, seed: bool = False)
                    help="drop returns within DEG of grazing incidence (default: 8 with --noise nguyen2012, else 0)")
     g.add_argument("--quantise", action="store_true",
                    help="quantise disparity to 1/8 pixel with a 0.075 m baseline (Kinect v1)")
+    g.add_argument("--noise-scale", type=_noise_scale, default=1.0, metavar="FACTOR",
+                   help="with --noise nguyen2012: multiply its sigma by this (default 1 = Kinect v1)")
     g.add_argument("--no-lateral-noise", dest="lateral_noise", action="store_false",
                    help="with --noise nguyen2012: axial noise only")
     g.add_argument("--range-limits", action="store_true",
@@ -57,6 +60,7 @@ def sensor_settings_from_args(args: argparse.Namespace, camera=None) -> SensorSe
     settings = SensorSettings(
         noise=getattr(args, "noise", "none"),
         lateral_noise=getattr(args, "lateral_noise", True),
+        noise_scale=getattr(args, "noise_scale", 1.0),
         quantise=getattr(args, "quantise", False),
         holes_fraction=getattr(args, "holes", 0.0),
         pixel_dropout=getattr(args, "pixel_dropout", 0.0),

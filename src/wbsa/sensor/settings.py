@@ -30,6 +30,9 @@ class SensorSettings:
         Depth noise: Nguyen et al. 2012 Kinect v1 axial σz(z, θ) and lateral σL(θ).
     lateral_noise : bool
         With ``noise='nguyen2012'``: also move each pixel's sample point by the lateral σL.
+    noise_scale : float
+        With ``noise='nguyen2012'``: multiply σz and σL by this. Kinect v1 is 1; time-of-flight cameras
+        (Kinect v2, Azure Kinect) and recent stereo cameras are less noisy at the same range.
     quantise : bool
         Quantise disparity f·b/z to ``disparity_step_px`` (Kinect v1 structured light).
     baseline_m, disparity_step_px : float
@@ -47,6 +50,7 @@ class SensorSettings:
 
     noise: NoiseModel = "none"
     lateral_noise: bool = True
+    noise_scale: float = 1.0
     quantise: bool = False
     baseline_m: float = KINECT_V1_BASELINE_M
     disparity_step_px: float = KINECT_V1_DISPARITY_STEP_PX
@@ -63,6 +67,8 @@ class SensorSettings:
             check_field(0.0 <= value <= 1.0, name, f"must be a fraction in [0, 1], got {value:g}")
         check_field(self.grazing_dropout_deg is None or 0.0 <= self.grazing_dropout_deg < 90.0, "grazing_dropout_deg",
                     f"must be degrees in [0, 90) (or left out: the noise model's default), got {self.grazing_dropout_deg}")
+        check_field(0.0 <= self.noise_scale <= 10.0, "noise_scale",
+                    f"must be a factor on the noise model's sigma in [0, 10], got {self.noise_scale:g}")
         check_field(self.baseline_m > 0 and math.isfinite(self.baseline_m), "baseline_m",
                     f"must be positive metres, got {self.baseline_m}")
         check_field(self.disparity_step_px > 0 and math.isfinite(self.disparity_step_px), "disparity_step_px",
@@ -101,7 +107,13 @@ class SensorSettings:
                 and not self.range_limits)
 
     def to_dict(self) -> dict:
-        """Plain settings for recording in outputs (the grazing dropout resolved)."""
+        """Plain settings for recording in outputs (the grazing dropout resolved).
+
+        ``noise_scale`` is recorded only when it is not 1, so that tables and study fingerprints written
+        before it existed still read the same.
+        """
         d = asdict(self)
         d["grazing_dropout_deg"] = self.effective_grazing_dropout_deg
+        if d["noise_scale"] == 1.0:
+            del d["noise_scale"]
         return d

@@ -90,6 +90,32 @@ def test_usage_errors_point_to_the_help_of_the_command_given():
     assert_one_line_error(code, err, "--noise-scale", "(see wbsa view --help)")
 
 
+def test_a_scan_in_millimetres_or_y_up_is_brought_to_the_body_frame(tmp_path):
+    """A body scan in millimetres, +Y up (glTF, many scanners), renders as the same body in metres, +Z up;
+    read as it is, it gets a warning that names the flag."""
+    import numpy as np
+
+    from wbsa.core.mesh_io import read_mesh, write_mesh
+    from wbsa.core.mesh import TriangleMesh
+
+    body = tmp_path / "body.ply"
+    assert run_cli("body", "--out", body)[0] == 0
+    mesh = read_mesh(body)
+    v = np.asarray(mesh.vertices)
+    scan = tmp_path / "scan.ply"
+    write_mesh(TriangleMesh(1000.0 * np.column_stack([v[:, 0], v[:, 2], -v[:, 1]]), mesh.faces), scan)
+    reference = json.loads(run_cli("view", body, "--json", "--azimuth", "30")[1])
+    code, out, err = run_cli("view", scan, "--units", "mm", "--up", "y", "--json", "--azimuth", "30")
+    assert code == 0 and err == "", err
+    again = json.loads(out)
+    assert again["n_pixels"] == reference["n_pixels"]
+    assert again["vbsa_visible_m2"] == pytest.approx(reference["vbsa_visible_m2"], rel=1e-6)
+    code, _, err = run_cli("view", scan, "--up", "y", "--json")
+    assert code == 0 and "--units mm" in err
+    code, _, err = run_cli("view", scan, "--units", "mm", "--json")
+    assert code == 0 and "--up y" in err and err.count("\n") == 1
+
+
 def test_a_view_that_sees_nothing_has_no_visible_area(tmp_path):
     """Issue 12 item 5: view --distance 1e6 reported 0.288 m² from 0 pixels, then blamed the output folder."""
     from wbsa.core.ply import check_ply

@@ -42,8 +42,9 @@ def quiet_stderr() -> Iterator[None]:
         os.close(saved)
 
 
-def read_mesh(path: str | os.PathLike) -> TriangleMesh:
-    """Read a triangle mesh file (metres) with Open3D.
+def read_mesh(path: str | os.PathLike, metres_per_unit: float = 1.0) -> TriangleMesh:
+    """Read a triangle mesh file with Open3D (vertices as stored; a file over 20 m across at
+    ``metres_per_unit`` gets a warning on stderr: wbsa works in metres).
 
     Raises
     ------
@@ -69,9 +70,9 @@ def read_mesh(path: str | os.PathLike) -> TriangleMesh:
         raise WbsaError(f"{path} has {vertices.shape[0]} vertices but no triangles (a point cloud?); "
                         f"give a triangle mesh")
     size = float(np.max(vertices.max(axis=0) - vertices.min(axis=0))) if np.all(np.isfinite(vertices)) else 0.0
-    if size > _SUSPICIOUS_SIZE_M:
+    if size * metres_per_unit > _SUSPICIOUS_SIZE_M:
         sys.stderr.write(f"warning: {path.name} is {size:g} units across; wbsa expects metres "
-                         f"(scale a millimetre mesh by 0.001)\n")
+                         f"(a millimetre mesh: wbsa view --units mm, or scale it by 0.001)\n")
     return TriangleMesh(vertices, faces.astype(np.int32))
 
 

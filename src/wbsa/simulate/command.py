@@ -24,7 +24,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "pinhole depth camera and print the visible areas: vbsa_hit_m2 (the paper's unique hit "
                     "triangles) and vbsa_visible_m2 (resolution-independent visible area).")
     p.add_argument("mesh", metavar="MESH", nargs="?",
-                   help="triangle mesh file (.ply, .obj, .stl, .off, .gltf, .glb) in metres")
+                   help="triangle mesh file (.ply, .obj, .stl, .off, .gltf, .glb); see --units and --up")
+    p.add_argument("--units", choices=("m", "cm", "mm"), default="m", help="units of MESH (default m)")
+    p.add_argument("--up", choices=("z", "y"), default="z",
+                   help="up axis of MESH (default z, facing -y); y: glTF and many scanners (facing +z)")
     p.add_argument("--population", metavar="FILE", help="look at a subject of this population table instead of MESH")
     p.add_argument("--subject", type=int, default=0, help="subject_id in --population (default 0)")
     add_camera_arguments(p)

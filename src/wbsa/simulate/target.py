@@ -1,10 +1,60 @@
-"""What the camera looks at: a mesh file (PLY, OBJ, STL, OFF, glTF) in metres, in the body model's frame."""
+"""What the camera looks at: a mesh file (PLY, OBJ, STL, OFF, glTF), brought to the body model's frame.
+
+The body model's frame is metres, +Z up, the subject facing −Y. 3-D body scans often come in millimetres
+and with +Y up (glTF's convention, and many scanners', the subject facing +Z): ``--units`` and ``--up``
+bring them over.
+"""
 
 from __future__ import annotations
+
+import sys
+from typing import Literal
+
+import numpy as np
 
 from wbsa.errors import WbsaError
 from wbsa.core.mesh import TriangleMesh
 from wbsa.core.mesh_io import read_mesh
+
+MeshUnits = Literal["m", "cm", "mm"]
+MeshUp = Literal["z", "y"]
+#: Metres per unit of a mesh file.
+UNIT_M = {"m": 1.0, "cm": 0.01, "mm": 0.001}
+
+
+def to_body_frame(mesh: TriangleMesh, units: MeshUnits = "m", up: MeshUp = "z") -> TriangleMesh:
+    """``mesh`` in metres with +Z up.
+
+    Parameters
+    ----------
+    mesh : TriangleMesh
+        Vertices (n, 3) in ``units``.
+    units : {'m', 'cm', 'mm'}
+    up : {'z', 'y'}
+        The mesh's up axis. ``y``: (x, y, z) becomes (x, −z, y), so a subject facing +Z (glTF) faces −Y.
+
+    Returns
+    -------
+    TriangleMesh
+    """
+    if units not in UNIT_M or up not in ("z", "y"):
+        raise WbsaError(f"units {units!r} / up {up!r}: use units m, cm or mm and up z or y")
+    v = np.asarray(mesh.vertices, dtype=np.float64) * UNIT_M[units]
+    if up == "y":
+        v = np.column_stack([v[:, 0], -v[:, 2], v[:, 1]])  # a proper rotation (+90° about x): faces keep their side
+    return TriangleMesh(v, mesh.faces)
+
+
+def lying_warning(mesh: TriangleMesh) -> str | None:
+    """A warning when a body-sized mesh is much longer across than it is tall (a +Y-up file read as +Z-up)."""
+    v = np.asarray(mesh.vertices, dtype=np.float64)
+    extent = v.max(axis=0) - v.min(axis=0)
+    longest = float(extent.max())
+    if 0.5 <= longest <= 2.6 and extent[2] < 0.5 * longest:
+        axis = "xy"[int(np.argmax(extent[:2]))]
+        return (f"the mesh is {extent[2]:.2f} m tall and {longest:.2f} m long along {axis}: a standing body is "
+                f"tallest along z; if the file is y-up (glTF, many scanners), give --up y")
+    return None
 
 
 def load_target(args) -> TriangleMesh:
@@ -13,7 +63,7 @@ def load_target(args) -> TriangleMesh:
     Parameters
     ----------
     args : argparse.Namespace
-        With ``mesh``: path of a mesh file in metres, +Z up, the subject facing −Y; or with
+        With ``mesh``: path of a mesh file (``units``, ``up``: :func:`to_body_frame`); or with
         ``population`` and ``subject``: that subject's skin mesh rebuilt from its phenotypes.
     """
     population = getattr(args, "population", None)
@@ -26,4 +76,9 @@ def load_target(args) -> TriangleMesh:
         return subject_mesh(read_population(population), int(args.subject))
     if getattr(args, "mesh", None) is None:
         raise WbsaError("give a mesh file to look at (wbsa view MESH) or --population FILE --subject ID")
-    return read_mesh(args.mesh)
+    units, up = getattr(args, "units", "m"), getattr(args, "up", "z")
+    mesh = to_body_frame(read_mesh(args.mesh, UNIT_M.get(units, 1.0)), units, up)
+    warning = lying_warning(mesh)
+    if warning:
+        sys.stderr.write(f"warning: {warning}\n")
+    return mesh

@@ -139,9 +139,13 @@ def render_chunk(population: pd.DataFrame, first_sample: int, settings: RenderSe
                            elevation_deg=cap.view.elevation_deg, distance_m=cap.view.distance_m,
                            camera_height_m=cap.camera_height_m, fits=cap.fits,
                            holes_fraction=cap.sensor.holes_fraction, pixel_dropout=cap.sensor.pixel_dropout,
+                           noise_scale=cap.sensor.noise_scale if cap.sensor.noise != "none" else 0.0,
+                           ideal_sensor=cap.sensor.is_ideal,
                            edge_pixels=cap.edge_pixels, edge_share=cap.edge_share)
                 if settings.room:
-                    depth, mixed, mask, floor = _room_capture(mesh, cap, room_rng, edge_rng, settings, sample)
+                    alone = bool(room_rng.uniform() < settings.alone_share)
+                    row.update(alone=alone)
+                    depth, mixed, mask, floor = _room_capture(mesh, cap, alone, room_rng, edge_rng, settings, sample)
                 else:
                     scene = MeshScene(mesh, nthreads=1)
                     sim = simulate_view(scene, cap.camera, cap.view, sensor=cap.sensor, seed=settings.seed,
@@ -171,16 +175,16 @@ def render_chunk(population: pd.DataFrame, first_sample: int, settings: RenderSe
     return Samples(pd.DataFrame(rows), desc)
 
 
-def _room_capture(mesh, cap, rng: np.random.Generator, edge_rng: np.random.Generator, settings: RenderSettings,
-                  sample: int):
+def _room_capture(mesh, cap, alone: bool, rng: np.random.Generator, edge_rng: np.random.Generator,
+                  settings: RenderSettings, sample: int):
     """(depth (h, w) float64 in whole millimetres, mixed returns, subject mask or None, detected floor) of
-    ``mesh`` in a room, or alone (``settings.alone_share``)."""
+    ``mesh`` in a room, or ``alone`` (no floor, no wall)."""
     from wbsa.errors import WbsaError
     from wbsa.estimation.mixed_pixels import repair_mixed_pixels
     from wbsa.estimation.room import capture_room, compose_room, with_edge_pixels
     from wbsa.estimation.segment import SegmentSettings, segment_subject
 
-    if rng.uniform() < settings.alone_share:
+    if alone:
         room = compose_room(mesh, cap.view.azimuth_deg, wall_behind_m=None, floor=False)
     else:
         room = compose_room(mesh, cap.view.azimuth_deg, wall_behind_m=float(rng.uniform(*settings.wall_behind_m)))

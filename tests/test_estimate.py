@@ -376,6 +376,27 @@ def test_measures_use_the_reconstruction_the_simulation_reports(bodies):
     assert m.distance_m == pytest.approx(2.6, abs=0.2) and m.descriptor.shape == (160,) and m.shape.shape == (40,)
 
 
+def test_depth_noise_of_a_body_follows_the_sensor(bodies):
+    """On a rendered body, depth_noise_m reads the sensor's σz at the subject's range (Kinect v1's model
+    at 2.6 m: 10.4 mm), half of it at noise_scale 0.5, and about nothing on an ideal render."""
+    from wbsa.camera import MeshScene, View, preset
+    from wbsa.estimation.measure import measure_subject
+    from wbsa.sensor import axial_sigma_m
+    from wbsa.sensor.settings import SensorSettings
+    from wbsa.simulate import simulate_view
+
+    man, _ = bodies
+    camera, scene = preset("kinect-v2"), MeshScene(man)
+    read = {}
+    for scale in (1.0, 0.5, 0.0):
+        sensor = SensorSettings(noise="nguyen2012", noise_scale=scale) if scale else None
+        frame = simulate_view(scene, camera, View(0.0, 0.0, 2.6), sensor=sensor, keep_frame=True).frame
+        read[scale] = measure_subject(frame.depth_m, frame.depth_m > 0, camera, None).depth_noise_m
+    sigma = float(axial_sigma_m(2.6, 0.0))
+    assert read[1.0] == pytest.approx(sigma, rel=0.25) and read[0.5] == pytest.approx(0.5 * sigma, rel=0.25)
+    assert read[0.0] < 0.1 * sigma
+
+
 def test_floor_gives_stature_and_elevation(bodies):
     from wbsa.camera import MeshScene, View, pose_from_view, preset
     from wbsa.estimation.measure import measure_subject

@@ -4,8 +4,9 @@ WBSA is predicted on the log scale from what :func:`~wbsa.estimation.measure.mea
 the view: a ridge regression of log WBSA on log VBSA, log stature (paper eq. 8), log silhouette area,
 width and thickness, each times a view basis (1, cos ψ, cos 2ψ, cos 3ψ, sin φ), plus distance, pixel
 pitch, how the camera treated the outline (mixed returns, gaps: the area read through the outline
-moves with them), the depth noise (a noisy surface reads a different area) and whether a floor was seen; boosted trees then correct its residual from the same measures, the body's band widths and
-thicknesses and the view's uncertainty. The interval is split-conformal: residuals divided by a fitted
+moves with them), the depth noise (a noisy surface reads a different area) and whether a floor was seen;
+boosted trees then correct its residual from the same measures, the body's band widths and thicknesses and
+the view's uncertainty. The interval is split-conformal: residuals divided by a fitted
 spread s(x) on held-out calibration renders (never used in fitting) give the quantile of any level, taken
 so that the level is met with at least 90 % confidence over the calibration draw
 (:meth:`EstimatorModel.quantile`).
@@ -38,24 +39,25 @@ QUANTILE_CONFIDENCE = 0.9
 _BASE = ("vbsa_m2", "stature_m", "silhouette_m2", "width_m", "thickness_m")
 #: How the camera treated the subject's outline (:func:`wbsa.estimation.mixed_pixels.outline_shares`).
 _OUTLINE = ("mixed_share", "gap_share", "edge_gap_share")
-#: How the image was taken besides: the depth noise (per pixel pitch) and whether a floor was seen.
-_CAPTURE_TERMS = 2
-#: Columns of :func:`design`: the log measures × 5 view terms, 4 view terms, distance, pitch, capture.
-DESIGN_TERMS = 5 * len(_BASE) + 4 + 2 + len(_OUTLINE) + _CAPTURE_TERMS
+#: How the image was taken besides: its depth noise (taken per pixel pitch) and whether a floor was seen.
+_SCENE = ("depth_noise_m", "floor_seen")
+#: Columns of :func:`design`: the log measures × 5 view terms, 4 view terms, distance, pitch, capture terms.
+DESIGN_TERMS = 5 * len(_BASE) + 4 + 2 + len(_OUTLINE) + len(_SCENE)
 #: Columns of :func:`spread_design`.
-SPREAD_TERMS = 7 + len(_OUTLINE) + _CAPTURE_TERMS
+SPREAD_TERMS = 7 + len(_OUTLINE) + len(_SCENE)
 
 
 def _check_measures(features: dict[str, np.ndarray]) -> None:
-    missing = [k for k in (*_BASE, "distance_m", "pitch_m", *_OUTLINE, "depth_noise_m", "floor_seen") if k not in features]
+    missing = [k for k in (*_BASE, "distance_m", "pitch_m", *_OUTLINE, *_SCENE) if k not in features]
     if missing:
         raise WbsaError(f"measures {', '.join(missing)} are missing; measure the image with this wbsa "
                         "(wbsa.estimation.measure_subject) or re-render the training samples")
 
 
 def capture_terms(features: dict[str, np.ndarray]) -> list[np.ndarray]:
-    """How the image was taken: the three outline shares, the depth noise over the pixel pitch (0 on an
-    ideal render, about 1.4 for Kinect v1 at 2.5 m) and whether a floor was seen (1) or not (0); (n,) each."""
+    """How the image was taken (:data:`_OUTLINE`, :data:`_SCENE`), (n,) float64 each: the three outline
+    shares, the depth noise over the pixel pitch (0 on an ideal render; Kinect v1's model at 2.5 m: about
+    2.5 on Kinect v1's pixels, 1.6 on Kinect v2's) and whether a floor was seen (1) or not (0)."""
     cols = [np.asarray(features[k], dtype=np.float64) for k in _OUTLINE]
     return cols + [np.asarray(features["depth_noise_m"], dtype=np.float64) / np.asarray(features["pitch_m"], float),
                    np.asarray(features["floor_seen"], dtype=np.float64)]

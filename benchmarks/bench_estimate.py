@@ -17,11 +17,12 @@ from __future__ import annotations
 
 import argparse
 import time
+from dataclasses import replace
 
 import numpy as np
 import pandas as pd
 
-from wbsa.typing import EDGE_PIXELS
+from wbsa.typing import EDGE_PIXELS, TEST_SCENES
 
 TARGETS = {"kept": 0.98, "included": 0.01, "seg_share": 0.99, "az_median": 10.0, "az_p95": 30.0, "mape_all": 2.5,
            "mape_fb": 2.0, "bias": 0.5, "coverage": (0.93, 0.97), "seconds": 5.0}
@@ -177,7 +178,7 @@ def main() -> None:
                     help="what the camera returns for pixels straddling a depth edge: the render's depth (default, "
                          "the issue's benchmark), a time-of-flight mix of the two surfaces, or nothing (a flying-pixel filter)")
     ap.add_argument("--edge-share", type=float, default=1.0, help="share of the depth edges so affected (default 1)")
-    ap.add_argument("--scene", choices=("room", "alone"), default="room",
+    ap.add_argument("--scene", choices=TEST_SCENES, default="room",
                     help="room (default, the issue's benchmark) or the subject alone: no floor, wall or second "
                          "person, as a render of a 3-D body scan")
     ap.add_argument("--ideal", action="store_true", help="the same captures with no sensor effects (an ideal render)")
@@ -186,7 +187,6 @@ def main() -> None:
     args = ap.parse_args()
 
     from wbsa.estimation.cache import default_model, default_model_path
-    from wbsa.estimation.capture import CaptureSettings
     from wbsa.estimation.testset import RoomTestSettings, run_room_tests
 
     model_path = args.model
@@ -195,9 +195,10 @@ def main() -> None:
         model_path = str(default_model_path())
     t0 = time.perf_counter()
     pop = population(args.subjects, args.survey_share, args.seed)
-    capture = CaptureSettings(edge_pixels=("kept",), noise_scale=(args.noise_scale, args.noise_scale), ideal_share=0.0)
+    capture = replace(RoomTestSettings().capture, noise_scale=(args.noise_scale, args.noise_scale),
+                      ideal_share=1.0 if args.ideal else 0.0)
     settings = RoomTestSettings(capture=capture, seed=args.seed, edge_pixels=args.edge_pixels,
-                                edge_share=args.edge_share, scene=args.scene, ideal=args.ideal)
+                                edge_share=args.edge_share, scene=args.scene)
     res = run_room_tests(pop, settings, model_path, workers=args.workers)
     if args.out:
         res.to_csv(args.out, index=False)

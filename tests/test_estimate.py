@@ -724,7 +724,12 @@ def test_capture_noise_is_scaled_or_ideal_after_every_other_draw():
     assert all(c.sensor.noise == "nguyen2012" and c.sensor.noise_scale == 1.0 for c in drawn)
     varied = [sample_capture(box, np.random.default_rng(s), CaptureSettings(noise_scale=(0.2, 1.5), ideal_share=0.25))
               for s in range(80)]
-    assert [(c.camera, c.view) for c in varied] == [(c.camera, c.view) for c in drawn]
+    def drawn_before(c):  # everything but the noise level
+        return (c.camera, c.view, c.camera_height_m, c.fits, c.edge_pixels, c.edge_share)
+
+    assert [drawn_before(c) for c in varied] == [drawn_before(c) for c in drawn]
+    assert all((c.sensor.holes_fraction, c.sensor.pixel_dropout) == (d.sensor.holes_fraction, d.sensor.pixel_dropout)
+               for c, d in zip(varied, drawn) if not c.sensor.is_ideal)
     ideal = [c.sensor.is_ideal for c in varied]
     assert 8 <= sum(ideal) <= 35
     scales = [c.sensor.noise_scale for c, i in zip(varied, ideal) if not i]
@@ -765,3 +770,5 @@ def test_residual_tree_settings_are_checked():
         with pytest.raises(WbsaError, match="tree_iterations .* must be an integer"):
             TrainSettings(**bad)
     assert TrainSettings(tree_iterations=10, tree_leaves=2, tree_l2=0.0).tree_iterations == 10
+    with pytest.raises(WbsaError, match="alone_share 1.5 must be a share"):
+        TrainSettings(alone_share=1.5)

@@ -110,6 +110,16 @@ def test_a_scan_in_millimetres_or_y_up_is_brought_to_the_body_frame(tmp_path):
     again = json.loads(out)
     assert again["n_pixels"] == reference["n_pixels"]
     assert again["vbsa_visible_m2"] == pytest.approx(reference["vbsa_visible_m2"], rel=1e-6)
+    from wbsa.simulate.target import to_body_frame
+
+    back = to_body_frame(read_mesh(scan), "mm", "y")
+    np.testing.assert_allclose(back.vertices, v, atol=1e-6)  # a rotation back, not a mirror
+
+    def signed_volume(m):
+        p = np.asarray(m.vertices)[np.asarray(m.faces)]
+        return float(np.einsum("ij,ij->i", p[:, 0], np.cross(p[:, 1], p[:, 2])).sum() / 6.0)
+
+    assert signed_volume(back) == pytest.approx(signed_volume(mesh), rel=1e-6)  # same winding, same sign
     code, _, err = run_cli("view", scan, "--up", "y", "--json")
     assert code == 0 and "--units mm" in err
     code, _, err = run_cli("view", scan, "--units", "mm", "--json")

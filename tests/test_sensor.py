@@ -86,14 +86,20 @@ def test_axial_noise_matches_sigma_z_face_on():
 
 
 def test_noise_scale_multiplies_both_sigmas_and_is_recorded_only_off_one():
-    frame = plane_frame(2.0, 0.0)
-    both = interior(frame.valid)
-    spread = {}
+    """On a plane at 45° the lateral jitter moves the depth along the slope: the depth error with both
+    effects, and its lateral part (with minus without the jitter, same streams), halve at 0.5."""
+    frame = plane_frame(2.0, 45.0)
+    inner = interior(frame.valid)
+    whole, lateral = {}, {}
     for scale in (1.0, 0.5, 0.0):
-        model = SensorSettings(noise="nguyen2012", lateral_noise=False, noise_scale=scale)
-        noisy = apply_sensor(frame, model, np.random.default_rng(1))
-        spread[scale] = float(np.std((noisy.depth_m - frame.depth_m)[both & noisy.valid]))
-    assert spread[0.5] / spread[1.0] == pytest.approx(0.5, rel=0.01) and spread[0.0] == 0.0
+        noisy = apply_sensor(frame, SensorSettings(noise="nguyen2012", noise_scale=scale), np.random.default_rng(1))
+        axial = apply_sensor(frame, SensorSettings(noise="nguyen2012", lateral_noise=False, noise_scale=scale),
+                             np.random.default_rng(1))
+        both = inner & noisy.valid & axial.valid
+        whole[scale] = float(np.std((noisy.depth_m - frame.depth_m)[both]))
+        lateral[scale] = float(np.std((noisy.depth_m - axial.depth_m)[both]))
+    assert lateral[1.0] > 0.003 and lateral[0.5] / lateral[1.0] == pytest.approx(0.5, rel=0.01)
+    assert whole[0.5] / whole[1.0] == pytest.approx(0.5, rel=0.01) and whole[0.0] == lateral[0.0] == 0.0
     ramp = SensorSettings(noise="nguyen2012", noise_scale=0.5)
     assert ramp.to_dict()["noise_scale"] == 0.5 and "noise_scale" not in SensorSettings(noise="nguyen2012").to_dict()
     with pytest.raises(WbsaError, match="noise_scale"):

@@ -74,7 +74,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         args = parser.parse_args(argv)
     except SystemExit as exc:  # usage errors (one line, status 2), --help and --version
-        return exc.code if isinstance(exc.code, int) else 0
+        return exc.code if isinstance(exc.code, int) else int(exc.code is not None)
     try:
         result = args.func(args)
     except WbsaError as exc:

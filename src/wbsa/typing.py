@@ -42,6 +42,9 @@ EdgePixels = Literal["kept", "mixed", "dropped"]
 #: What surrounds the subject in a held-out test capture: a room (floor, wall, maybe a second person), or
 #: nothing (a render of the body alone, as of a 3-D body scan).
 TestScene = Literal["room", "alone"]
+#: Units and up axis of a mesh file (:func:`wbsa.simulate.target.to_body_frame`).
+MeshUnits = Literal["m", "cm", "mm"]
+MeshUp = Literal["z", "y"]
 #: A population's ``posture`` setting: a posture name, or ``mixed`` (a random name per subject).
 PostureChoice = Literal[Literal["a-pose", "mixed"], PostureName]
 
@@ -60,3 +63,5 @@ POSTURE_NAMES: tuple[str, ...] = get_args(PostureName)
 POSTURE_CHOICES: tuple[str, ...] = get_args(PostureChoice)
 EDGE_PIXELS: tuple[str, ...] = get_args(EdgePixels)
 TEST_SCENES: tuple[str, ...] = get_args(TestScene)
+MESH_UNITS: tuple[str, ...] = get_args(MeshUnits)
+MESH_UPS: tuple[str, ...] = get_args(MeshUp)

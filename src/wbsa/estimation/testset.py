@@ -9,7 +9,6 @@ Image ``i`` draws from ``SeedSequence([seed, i])``: rows do not depend on chunki
 
 from __future__ import annotations
 
-import dataclasses
 import time
 from dataclasses import dataclass, field
 
@@ -29,7 +28,9 @@ class RoomTestSettings:
     ----------
     capture : CaptureSettings
         Its ``edge_pixels`` draw is not used: ``edge_pixels`` below applies to every image. The default is
-        the issue's benchmark: noise at Kinect v1's level (``noise_scale`` 1), no ideal captures.
+        the issue's benchmark: noise at Kinect v1's level (``noise_scale`` 1), no ideal captures. Both are
+        drawn last, so ``noise_scale=(f, f)`` or ``ideal_share=1`` give the same captures at another noise
+        level or with no sensor effects.
     wall_behind_m : (float, float)
         Gap between the subject and the wall behind, uniform.
     second_person : float
@@ -46,8 +47,6 @@ class RoomTestSettings:
     scene : {'room', 'alone'}
         ``alone``: the same captures of the subject with no floor, wall or second person, as a render of a
         3-D body scan would be.
-    ideal : bool
-        The same captures with no sensor effects (no noise, holes, dropout or quantisation).
     seed : int
     """
 
@@ -60,7 +59,6 @@ class RoomTestSettings:
     edge_pixels: EdgePixels = "kept"
     edge_share: float = 1.0
     scene: TestScene = "room"
-    ideal: bool = False
     seed: int = 1000
 
     def __post_init__(self) -> None:
@@ -87,7 +85,6 @@ def room_capture_chunk(population: pd.DataFrame, others: pd.DataFrame, first: in
     from wbsa.estimation.single_view import estimate
     from wbsa.estimation.view import fold_azimuth
     from wbsa.parallel import keep_large_allocations, single_threaded_math
-    from wbsa.sensor.settings import SensorSettings
 
     keep_large_allocations()
     rows = []
@@ -104,8 +101,6 @@ def room_capture_chunk(population: pd.DataFrame, others: pd.DataFrame, first: in
             vertices, posture = poser(bodies.vertices[b], bodies.bone_heads[b], pose_rng)
             subject = body_model.skin_mesh(vertices)
             cap = sample_capture(vertices, capture_rng, settings.capture)
-            if settings.ideal:
-                cap = dataclasses.replace(cap, sensor=SensorSettings())
             people = ()
             if room_rng.random() < settings.second_person:
                 v2, _ = poser(extra.vertices[b], extra.bone_heads[b], other_rng)
@@ -123,7 +118,9 @@ def room_capture_chunk(population: pd.DataFrame, others: pd.DataFrame, first: in
             t = population.iloc[b]
             row = {k: t[k] for k in ("subject_id", "population", "sex", "age_years", "stature_m", "mass_kg", "wbsa_m2")
                    if k in t.index}
-            row.update(image=index, posture=posture, camera=cap.camera.name, azimuth_deg=cap.view.azimuth_deg,
+            row.update(image=index, posture=posture, camera=cap.camera.name, scene=settings.scene,
+                       noise_scale=cap.sensor.noise_scale if cap.sensor.noise != "none" else 0.0,
+                       ideal_sensor=cap.sensor.is_ideal, azimuth_deg=cap.view.azimuth_deg,
                        elevation_deg=cap.view.elevation_deg, distance_m=cap.view.distance_m,
                        camera_height_m=cap.camera_height_m, fits=cap.fits, second_person=bool(people),
                        subject_pixels=int(truth.sum()))

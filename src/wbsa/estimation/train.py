@@ -87,6 +87,8 @@ class TrainSettings:
             raise WbsaError("n_random + n_survey must be at least 8 subjects")
         if not 0.05 <= self.calibration_fraction <= 0.5:
             raise WbsaError(f"calibration_fraction {self.calibration_fraction} must lie in [0.05, 0.5]")
+        if not 0.0 <= self.alone_share <= 1.0:
+            raise WbsaError(f"alone_share {self.alone_share} must be a share of the captures in [0, 1]")
         if self.views_per_subject < 1 or self.folds < 2:
             raise WbsaError("views_per_subject must be >= 1 and folds >= 2")
         counts_ok = all(isinstance(v, int) for v in (self.tree_iterations, self.tree_leaves, self.tree_bags))

@@ -12,6 +12,7 @@ import sys
 from pathlib import Path
 
 from wbsa.errors import WbsaError
+from wbsa.typing import MESH_UNITS, MESH_UPS
 
 _INTRINSIC_FLAGS = ("width", "height", "fx", "fy", "cx", "cy", "skew")
 
@@ -25,8 +26,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                     "triangles) and vbsa_visible_m2 (resolution-independent visible area).")
     p.add_argument("mesh", metavar="MESH", nargs="?",
                    help="triangle mesh file (.ply, .obj, .stl, .off, .gltf, .glb); see --units and --up")
-    p.add_argument("--units", choices=("m", "cm", "mm"), default="m", help="units of MESH (default m)")
-    p.add_argument("--up", choices=("z", "y"), default="z",
+    p.add_argument("--units", choices=MESH_UNITS, default="m", help="units of MESH (default m)")
+    p.add_argument("--up", choices=MESH_UPS, default="z",
                    help="up axis of MESH (default z, facing -y); y: glTF and many scanners (facing +z)")
     p.add_argument("--population", metavar="FILE", help="look at a subject of this population table instead of MESH")
     p.add_argument("--subject", type=int, default=0, help="subject_id in --population (default 0)")

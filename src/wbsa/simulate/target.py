@@ -8,16 +8,14 @@ bring them over.
 from __future__ import annotations
 
 import sys
-from typing import Literal
 
 import numpy as np
 
 from wbsa.errors import WbsaError
 from wbsa.core.mesh import TriangleMesh
 from wbsa.core.mesh_io import read_mesh
+from wbsa.typing import MESH_UNITS, MESH_UPS, MeshUnits, MeshUp
 
-MeshUnits = Literal["m", "cm", "mm"]
-MeshUp = Literal["z", "y"]
 #: Metres per unit of a mesh file.
 UNIT_M = {"m": 1.0, "cm": 0.01, "mm": 0.001}
 
@@ -37,23 +35,25 @@ def to_body_frame(mesh: TriangleMesh, units: MeshUnits = "m", up: MeshUp = "z") 
     -------
     TriangleMesh
     """
-    if units not in UNIT_M or up not in ("z", "y"):
-        raise WbsaError(f"units {units!r} / up {up!r}: use units m, cm or mm and up z or y")
+    if units not in MESH_UNITS or up not in MESH_UPS:
+        raise WbsaError(f"units {units!r} / up {up!r}: use units {', '.join(MESH_UNITS)} and up {' or '.join(MESH_UPS)}")
     v = np.asarray(mesh.vertices, dtype=np.float64) * UNIT_M[units]
     if up == "y":
         v = np.column_stack([v[:, 0], -v[:, 2], v[:, 1]])  # a proper rotation (+90° about x): faces keep their side
     return TriangleMesh(v, mesh.faces)
 
 
-def lying_warning(mesh: TriangleMesh) -> str | None:
-    """A warning when a body-sized mesh is much longer across than it is tall (a +Y-up file read as +Z-up)."""
+def lying_warning(mesh: TriangleMesh, up: MeshUp = "z") -> str | None:
+    """A warning when a body-sized mesh is much longer across than it is tall (read with the wrong ``up``)."""
     v = np.asarray(mesh.vertices, dtype=np.float64)
     extent = v.max(axis=0) - v.min(axis=0)
     longest = float(extent.max())
     if 0.5 <= longest <= 2.6 and extent[2] < 0.5 * longest:
         axis = "xy"[int(np.argmax(extent[:2]))]
+        hint = ("if the file is y-up (glTF, many scanners), give --up y" if up == "z"
+                else "the file may be z-up after all: leave out --up y")
         return (f"the mesh is {extent[2]:.2f} m tall and {longest:.2f} m long along {axis}: a standing body is "
-                f"tallest along z; if the file is y-up (glTF, many scanners), give --up y")
+                f"tallest along z; {hint}")
     return None
 
 
@@ -78,7 +78,7 @@ def load_target(args) -> TriangleMesh:
         raise WbsaError("give a mesh file to look at (wbsa view MESH) or --population FILE --subject ID")
     units, up = getattr(args, "units", "m"), getattr(args, "up", "z")
     mesh = to_body_frame(read_mesh(args.mesh, UNIT_M.get(units, 1.0)), units, up)
-    warning = lying_warning(mesh)
+    warning = lying_warning(mesh, up)
     if warning:
         sys.stderr.write(f"warning: {warning}\n")
     return mesh

@@ -746,7 +746,7 @@ def test_capture_noise_is_scaled_or_ideal_after_every_other_draw():
 def test_depth_noise_reads_the_noise_of_a_curved_surface():
     """σ of the depth noise from second differences: a smooth body-like curvature reads (nearly) 0, added
     Gaussian noise reads its σ, and the outline's jumps do not count."""
-    from wbsa.estimation.measure import depth_noise
+    from wbsa.estimation.measure import measured_depth_noise as depth_noise
 
     h, w = 200, 160
     yy, xx = np.mgrid[0:h, 0:w]

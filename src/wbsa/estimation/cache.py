@@ -39,8 +39,8 @@ def default_model_path(settings: TrainSettings = TrainSettings()) -> Path:
 def default_model(settings: TrainSettings = TrainSettings(), show_progress: bool | None = None) -> EstimatorModel:
     """The cached default model; trained and written to :func:`default_model_path` if missing.
 
-    Training renders and segments ``(n_random + n_survey) × views_per_subject`` captures in rooms (5,520 by
-    default, at about 3.4 per second on 2 idle cores: some 27 minutes).
+    Training renders and segments ``(n_random + n_survey) × views_per_subject`` captures, most in rooms (5,520
+    by default, at about 3.4 per second on 2 idle cores: some 27 minutes).
     """
     from wbsa.parallel import default_workers
 

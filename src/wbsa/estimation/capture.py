@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from wbsa.errors import WbsaError
+from wbsa.sensor.settings import SensorSettings
 from wbsa.typing import EDGE_PIXELS, EdgePixels
 
 #: Cameras of the default training world (presets of :data:`wbsa.camera.intrinsics.PRESETS`).
@@ -102,7 +103,6 @@ class Capture:
 
 def sensor_for(camera: str, rng: np.random.Generator, settings: CaptureSettings):
     """The :class:`~wbsa.sensor.SensorSettings` of a camera preset with random holes and dropout."""
-    from wbsa.sensor.settings import SensorSettings
 
     if not settings.noise:
         return SensorSettings()
@@ -172,12 +172,10 @@ def sample_capture(vertices: np.ndarray, rng: np.random.Generator, settings: Cap
                    share if edges != "kept" else 0.0)
 
 
-def _noise_level(sensor, rng: np.random.Generator, settings: CaptureSettings):
+def _noise_level(sensor: SensorSettings, rng: np.random.Generator, settings: CaptureSettings) -> SensorSettings:
     """``sensor`` made ideal (``ideal_share``) or its noise scaled (``noise_scale``); drawn after every other
     draw of a capture, and not at all when fixed, so fixed settings keep the captures they drew before."""
     import dataclasses
-
-    from wbsa.sensor.settings import SensorSettings
 
     if not settings.noise:
         return sensor

@@ -20,6 +20,10 @@ PROFILE_HEIGHT = np.linspace(0.0, 1.04, 41)
 PROFILE_STRIP = 0.08
 #: Height bands (stature units) of the shape measures: width and thickness of each band, metres.
 SHAPE_BANDS = np.linspace(0.0, 1.0, 21)
+#: The scalar measures of :class:`SubjectMeasures` (its :meth:`~SubjectMeasures.features`; the models' inputs).
+SCALAR_MEASURES = ("vbsa_m2", "stature_m", "silhouette_m2", "width_m", "thickness_m", "distance_m", "elevation_deg",
+                   "elevation_axis_deg", "pitch_m", "n_pixels", "mixed_share", "gap_share", "edge_gap_share",
+                   "depth_noise_m", "floor_seen")
 #: Low pixels (within this of the floor) with fewer subject neighbours than this in their 5×5 window are
 #: dropped: noisy floor returns that escaped the floor cut next to the feet.
 _LOW_BAND_M = 0.10
@@ -53,7 +57,7 @@ class SubjectMeasures:
         How the camera treated the subject's outline: mixed returns beside it, one-pixel gaps along it and
         the share of its depth edges behind a gap (:func:`wbsa.estimation.mixed_pixels.outline_shares`).
     depth_noise_m : float
-        The depth noise on the subject (:func:`depth_noise`), metres: the VBSA of a noisy image differs
+        The depth noise on the subject (:func:`measured_depth_noise`), metres: the VBSA of a noisy image differs
         from that of a smooth one, and cameras differ in their noise.
     floor_seen : bool
     touches_border : bool
@@ -92,20 +96,20 @@ class SubjectMeasures:
     frame: BodyFrame
 
     def features(self) -> dict[str, float]:
-        """The scalar measures as a dict (for tables and models)."""
-        return {k: float(getattr(self, k)) for k in ("vbsa_m2", "stature_m", "silhouette_m2", "width_m", "thickness_m",
-                                                    "distance_m", "elevation_deg", "elevation_axis_deg", "pitch_m",
-                                                    "n_pixels", "mixed_share", "gap_share", "edge_gap_share",
-                                                    "depth_noise_m", "floor_seen")}
+        """The scalar measures (:data:`SCALAR_MEASURES`) as a dict (for tables and models)."""
+        return {k: float(getattr(self, k)) for k in SCALAR_MEASURES}
 
 
-def depth_noise(depth_m: np.ndarray, mask: np.ndarray) -> float:
+def measured_depth_noise(depth_m: np.ndarray, mask: np.ndarray) -> float:
     """Standard deviation of the depth noise on the subject's inner pixels (m), robust to its outline.
 
     Three pixels in a row (or a column) of a smooth surface have a second difference z₋ − 2z + z₊ near 0
-    (a body's curvature gives well under a millimetre at these pitches); independent noise of σ gives it
-    a standard deviation of √6 σ. σ is read from the median absolute second difference (× 1.4826) over
-    the triples inside the mask eroded by two pixels, rows and columns together.
+    (a torso's curvature gives about 0.1 mm at Kinect pitches, a limb's a few millimetres on a phone
+    LiDAR's 2 cm pixels); independent noise of σ gives it a standard deviation of √6 σ. σ is read from the
+    median absolute second difference (× 1.4826) over the triples inside the mask eroded by two pixels,
+    rows and columns together. On depth in whole millimetres that median moves in half-millimetre steps,
+    so the result does in steps of 0.6 mm (an ideal render reads 0.6 mm, quantised disparity often 0).
+    (Not :func:`wbsa.estimation.cloud.depth_noise_m`, the noise envelope assumed for plane fits.)
 
     Parameters
     ----------
@@ -219,7 +223,7 @@ def measure_subject(depth_m: np.ndarray, mask: np.ndarray, intrinsics, floor: Pl
         thickness_m=float(np.quantile(q[:, 2], 0.998) - np.quantile(q[:, 2], 0.002)),
         distance_m=distance, elevation_deg=elevation, elevation_axis_deg=axis_elevation, pitch_m=distance / focal,
         n_pixels=int(mask.sum()), mixed_share=mixed_share, gap_share=gap_share,
-        edge_gap_share=edge_gap_share, depth_noise_m=depth_noise(depth, mask), floor_seen=floor is not None,
+        edge_gap_share=edge_gap_share, depth_noise_m=measured_depth_noise(depth, mask), floor_seen=floor is not None,
         touches_border=border, mask=mask,
         descriptor=view_descriptor(q - np.array([mid_lat, 0.0, 0.0]), stature), shape=shape_bands(q, stature),
         surface=surface, frame=frame)

@@ -74,7 +74,8 @@ class Samples:
     ----------
     table : pandas.DataFrame
         One row per capture: :data:`TRUTH_COLUMNS`, ``posture, camera, azimuth_deg, elevation_deg,
-        distance_m, camera_height_m, fits``, without a room the render's ``vbsa_visible_m2`` and
+        distance_m, camera_height_m, fits, holes_fraction, pixel_dropout, noise_scale`` (0 without noise),
+        ``ideal_sensor, edge_pixels, edge_share``, in a room ``alone`` (no floor or wall), without a room the render's ``vbsa_visible_m2`` and
         ``vbsa_recon_grid_m2``, and the measures (``m_`` + :meth:`SubjectMeasures.features`,
         ``m_touches_border``; ``m_ok`` False where the render had almost no returns or no subject was found).
     descriptors : (n, d) float32
@@ -143,7 +144,7 @@ def render_chunk(population: pd.DataFrame, first_sample: int, settings: RenderSe
                            ideal_sensor=cap.sensor.is_ideal,
                            edge_pixels=cap.edge_pixels, edge_share=cap.edge_share)
                 if settings.room:
-                    alone = bool(room_rng.uniform() < settings.alone_share)
+                    alone = settings.alone_share > 0 and bool(room_rng.uniform() < settings.alone_share)
                     row.update(alone=alone)
                     depth, mixed, mask, floor = _room_capture(mesh, cap, alone, room_rng, edge_rng, settings, sample)
                 else:

@@ -18,15 +18,14 @@ import pandas as pd
 
 from wbsa.errors import WbsaError
 from wbsa.estimation.capture import CaptureSettings
+from wbsa.estimation.measure import SCALAR_MEASURES
 from wbsa.estimation.model import (RANGE_KEYS, SPREAD_TERMS, EstimatorModel, design, spread_design,
                                    tree_features)
 from wbsa.estimation.renders import RenderSettings, Samples, render_samples
 from wbsa.estimation.view import ViewModel, azimuth_sd_deg, fold_azimuth
 
 #: Columns of :meth:`SubjectMeasures.features` the model reads (``m_`` prefixed in sample tables).
-FEATURES = ("vbsa_m2", "stature_m", "silhouette_m2", "width_m", "thickness_m", "distance_m", "elevation_deg",
-            "elevation_axis_deg", "pitch_m", "n_pixels", "mixed_share", "gap_share", "edge_gap_share",
-            "depth_noise_m", "floor_seen")
+FEATURES = SCALAR_MEASURES
 _VIEW_DIMS = 160  # view descriptor length; the shape bands follow it in Samples.descriptors
 #: Share of the subjects each bagged tree model is fitted on (:attr:`TrainSettings.tree_bags`).
 BAG_SUBJECT_SHARE = 0.9

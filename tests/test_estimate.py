@@ -621,6 +621,26 @@ def test_a_stated_azimuth_enters_the_model_with_the_held_out_spread(room_view, s
 
 
 @pytest.mark.slow
+def test_a_camera_noisier_than_any_trained_on_is_flagged(room_view, small_model, monkeypatch):
+    """The training range of the depth noise per pixel pitch goes from ideal renders to 1.5 × Kinect v1's
+    noise; an image beyond it (here its measured noise made three times the trained maximum) is flagged."""
+    import wbsa.estimation.measure as measure
+    from wbsa.estimation import SegmentSettings, estimate
+    from wbsa.estimation.model import EstimatorModel
+
+    model = EstimatorModel.load(small_model)
+    lo, hi = model.ranges["depth_noise_px"]
+    assert lo < 0.3 and hi > 2.0
+    _, camera, frame = room_view
+    clean = estimate(frame.depth_m, "kinect-v2", model, segment=SegmentSettings(pick="center"))
+    assert "depth_noise_px" not in clean.flags.get("out_of_training_range", "")
+    pitch_m = clean.distance_m / camera.fx
+    monkeypatch.setattr(measure, "measured_depth_noise", lambda depth, mask: 3.0 * hi * pitch_m)
+    noisy = estimate(frame.depth_m, "kinect-v2", model, segment=SegmentSettings(pick="center"))
+    assert "depth_noise_px" in noisy.flags["out_of_training_range"]
+
+
+@pytest.mark.slow
 def test_estimate_finds_the_view_flags_and_writes_outputs(room_view, small_model, tmp_path, capsys):
     from wbsa.core import write_depth_png
     from wbsa.estimation import SegmentSettings, estimate

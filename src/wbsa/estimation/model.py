@@ -32,8 +32,8 @@ from wbsa.estimation.view import ViewModel
 
 FORMAT = "wbsa-estimator"
 VERSION = 5
-#: Measures whose training range is recorded and checked (flag ``out_of_training_range``).
-RANGE_KEYS = ("vbsa_m2", "stature_m", "distance_m", "elevation_deg")
+#: Values whose training range is recorded and checked (flag ``out_of_training_range``; :func:`range_values`).
+RANGE_KEYS = ("vbsa_m2", "stature_m", "distance_m", "elevation_deg", "depth_noise_px")
 #: Probability, over the calibration draw, that an interval covers at least its stated level.
 QUANTILE_CONFIDENCE = 0.9
 _BASE = ("vbsa_m2", "stature_m", "silhouette_m2", "width_m", "thickness_m")
@@ -52,6 +52,15 @@ def _check_measures(features: dict[str, np.ndarray]) -> None:
     if missing:
         raise WbsaError(f"measures {', '.join(missing)} are missing; measure the image with this wbsa "
                         "(wbsa.estimation.measure_subject) or re-render the training samples")
+
+
+def range_values(features: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """The values of :data:`RANGE_KEYS`, (n,) float64 each: four measures and the depth noise over the pixel
+    pitch (``depth_noise_px``: a camera noisier than any the model was trained on is flagged)."""
+    out = {k: np.asarray(features[k], dtype=np.float64) for k in RANGE_KEYS if k != "depth_noise_px"}
+    out["depth_noise_px"] = (np.asarray(features["depth_noise_m"], dtype=np.float64)
+                             / np.asarray(features["pitch_m"], dtype=np.float64))
+    return out
 
 
 def capture_terms(features: dict[str, np.ndarray]) -> list[np.ndarray]:

@@ -93,7 +93,7 @@ def predict_wbsa(model, measures, camera, azimuth_deg: float | None, elevation_d
                  level: float) -> Prediction:
     """Predict WBSA from measures with either kind of model (see the module doc)."""
     from wbsa.estimation.checks import range_flags
-    from wbsa.estimation.model import QUANTILE_CONFIDENCE, EstimatorModel
+    from wbsa.estimation.model import QUANTILE_CONFIDENCE, EstimatorModel, range_values
 
     view = _view(model, measures, azimuth_deg)
     az = view.azimuth_deg if azimuth_deg is None else float(fold_azimuth(azimuth_deg))
@@ -107,8 +107,8 @@ def predict_wbsa(model, measures, camera, azimuth_deg: float | None, elevation_d
         # a stated view counts as sure as the surest estimated one: the models never saw a smaller spread
         az_sd = view.azimuth_sd_deg if azimuth_deg is None else model.view.axis_sd_deg
         w, lo, hi = model.predict(feats, measures.shape[None], np.array([az]), np.array([az_sd]), np.array([el]), level)
-        flags.update(range_flags({"vbsa_m2": measures.vbsa_m2, "stature_m": measures.stature_m,
-                                  "distance_m": measures.distance_m, "elevation_deg": el}, model.ranges))
+        values = range_values({**feats, "elevation_deg": np.array([el])})
+        flags.update(range_flags({k: float(v[0]) for k, v in values.items()}, model.ranges))
         if not model.quantile_is_sure(level):
             flags["interval_unsure"] = (f"the model was calibrated on {model.n_calibration_subjects} "
                                         f"subjects, too few to promise {100 * level:g} % with "

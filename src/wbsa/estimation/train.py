@@ -19,7 +19,7 @@ import pandas as pd
 from wbsa.errors import WbsaError
 from wbsa.estimation.capture import CaptureSettings
 from wbsa.estimation.measure import SCALAR_MEASURES
-from wbsa.estimation.model import (RANGE_KEYS, SPREAD_TERMS, EstimatorModel, design, spread_design,
+from wbsa.estimation.model import (SPREAD_TERMS, EstimatorModel, design, range_values, spread_design,
                                    tree_features)
 from wbsa.estimation.renders import RenderSettings, Samples, render_samples
 from wbsa.estimation.view import ViewModel, azimuth_sd_deg, fold_azimuth
@@ -276,7 +276,7 @@ def train_model(settings: TrainSettings = TrainSettings(), *, workers: int = 1, 
     feats_f = _columns(fit_t)
     model.meta = {
         "name": "estimator", "settings": asdict(settings),
-        "ranges": {k: [float(np.min(feats_f[k])), float(np.max(feats_f[k]))] for k in RANGE_KEYS},
+        "ranges": {k: [float(np.min(v)), float(np.max(v))] for k, v in range_values(feats_f).items()},
         "n_fit": len(fit_s), "n_calibration": len(cal_s),
         "n_calibration_subjects": int(cal_t["subject_id"].nunique()),
         "calibration": {"wbsa_mape_pct": float(np.mean(np.abs(err))), "wbsa_bias_pct": float(np.mean(err)),

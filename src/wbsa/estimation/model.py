@@ -58,9 +58,13 @@ def range_values(features: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     """The values of :data:`RANGE_KEYS`, (n,) float64 each: four measures and the depth noise over the pixel
     pitch (``depth_noise_px``: a camera noisier than any the model was trained on is flagged)."""
     out = {k: np.asarray(features[k], dtype=np.float64) for k in RANGE_KEYS if k != "depth_noise_px"}
-    out["depth_noise_px"] = (np.asarray(features["depth_noise_m"], dtype=np.float64)
-                             / np.asarray(features["pitch_m"], dtype=np.float64))
+    out["depth_noise_px"] = _depth_noise_px(features)
     return out
+
+
+def _depth_noise_px(features: dict[str, np.ndarray]) -> np.ndarray:
+    """(n,) float64: the measured depth noise over the pixel pitch."""
+    return np.asarray(features["depth_noise_m"], dtype=np.float64) / np.asarray(features["pitch_m"], dtype=np.float64)
 
 
 def capture_terms(features: dict[str, np.ndarray]) -> list[np.ndarray]:
@@ -69,8 +73,7 @@ def capture_terms(features: dict[str, np.ndarray]) -> list[np.ndarray]:
     about 2.5 on Kinect v1's pixels, 1.6 on Kinect v2's; an ideal render in whole millimetres reads about
     0.6 mm) and whether a floor was seen (1) or not (0)."""
     cols = [np.asarray(features[k], dtype=np.float64) for k in _OUTLINE]
-    return cols + [np.asarray(features["depth_noise_m"], dtype=np.float64) / np.asarray(features["pitch_m"], float),
-                   np.asarray(features["floor_seen"], dtype=np.float64)]
+    return cols + [_depth_noise_px(features), np.asarray(features["floor_seen"], dtype=np.float64)]
 
 
 def design(features: dict[str, np.ndarray], psi_deg: np.ndarray, elevation_deg: np.ndarray) -> np.ndarray:

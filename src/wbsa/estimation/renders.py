@@ -75,7 +75,8 @@ class Samples:
     table : pandas.DataFrame
         One row per capture: :data:`TRUTH_COLUMNS`, ``posture, camera, azimuth_deg, elevation_deg,
         distance_m, camera_height_m, fits, holes_fraction, pixel_dropout, noise_scale`` (0 without noise),
-        ``ideal_sensor, edge_pixels, edge_share``, in a room ``alone`` (no floor or wall), without a room the render's ``vbsa_visible_m2`` and
+        ``ideal_sensor, edge_pixels, edge_share``, in a room ``alone`` (no floor or wall), without a room
+        the render's ``vbsa_visible_m2`` and
         ``vbsa_recon_grid_m2``, and the measures (``m_`` + :meth:`SubjectMeasures.features`,
         ``m_touches_border``; ``m_ok`` False where the render had almost no returns or no subject was found).
     descriptors : (n, d) float32
@@ -140,7 +141,7 @@ def render_chunk(population: pd.DataFrame, first_sample: int, settings: RenderSe
                            elevation_deg=cap.view.elevation_deg, distance_m=cap.view.distance_m,
                            camera_height_m=cap.camera_height_m, fits=cap.fits,
                            holes_fraction=cap.sensor.holes_fraction, pixel_dropout=cap.sensor.pixel_dropout,
-                           noise_scale=cap.sensor.noise_scale if cap.sensor.noise != "none" else 0.0,
+                           noise_scale=cap.sensor.effective_noise_scale,
                            ideal_sensor=cap.sensor.is_ideal,
                            edge_pixels=cap.edge_pixels, edge_share=cap.edge_share)
                 if settings.room:

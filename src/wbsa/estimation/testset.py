@@ -119,7 +119,7 @@ def room_capture_chunk(population: pd.DataFrame, others: pd.DataFrame, first: in
             row = {k: t[k] for k in ("subject_id", "population", "sex", "age_years", "stature_m", "mass_kg", "wbsa_m2")
                    if k in t.index}
             row.update(image=index, posture=posture, camera=cap.camera.name, scene=settings.scene,
-                       noise_scale=cap.sensor.noise_scale if cap.sensor.noise != "none" else 0.0,
+                       noise_scale=cap.sensor.effective_noise_scale,
                        ideal_sensor=cap.sensor.is_ideal, azimuth_deg=cap.view.azimuth_deg,
                        elevation_deg=cap.view.elevation_deg, distance_m=cap.view.distance_m,
                        camera_height_m=cap.camera_height_m, fits=cap.fits, second_person=bool(people),

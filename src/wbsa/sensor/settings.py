@@ -100,6 +100,11 @@ class SensorSettings:
         return NGUYEN_GRAZING_DROPOUT_DEG if self.noise == "nguyen2012" else 0.0
 
     @property
+    def effective_noise_scale(self) -> float:
+        """The factor on the noise model's σ actually applied (0 without a noise model)."""
+        return float(self.noise_scale) if self.noise != "none" else 0.0
+
+    @property
     def is_ideal(self) -> bool:
         """True when the sensor changes nothing."""
         return (self.noise == "none" and not self.quantise and self.holes_fraction == 0.0

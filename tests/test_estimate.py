@@ -68,6 +68,25 @@ def test_segmentation_keeps_a_wide_armed_tall_body_and_drops_the_room(room_view)
     assert 1.8 < seg.subject.height_m < 2.0 and len(seg.others) == 1
 
 
+def test_the_feet_contact_strip_is_the_soles_and_the_floor_beside_them(room_view):
+    """The benchmark's "void" band: surfaces under 2 cm next to the subject, all at its feet."""
+    from wbsa.estimation.testset import CONTACT_REACH_PX, contact_strip
+
+    room, camera, frame = room_view
+    height = room.surface_height_m(frame.triangle_id)
+    truth = room.is_subject(frame.triangle_id)
+    floor = ~truth & (frame.triangle_id >= 0) & (np.abs(height) < 1e-9)
+    assert floor.sum() > truth.sum() and np.isnan(height[frame.triangle_id < 0]).all()
+    assert 1.8 < np.nanmax(height[truth]) < 2.0 and np.nanmin(height[truth]) < 0.01  # the tall man, soles to crown
+    strip = contact_strip(truth, height)
+    rows = np.flatnonzero(truth.any(axis=1))
+    feet_top = rows[-1] - (rows[-1] - rows[0]) // 10  # the lowest tenth of the body in the image
+    assert (strip & truth).sum() > 20 and (strip & floor).sum() > 20
+    assert np.flatnonzero(strip.any(axis=1)).min() >= feet_top
+    assert np.flatnonzero(strip.any(axis=1)).max() <= rows[-1] + CONTACT_REACH_PX
+    assert (strip & truth).sum() < 0.05 * truth.sum()
+
+
 def _block(rows, cols, x0, x1, y0, y1, z):
     """A flat patch of a 200 × 200 depth image: flat pixel indices (k,) and points (k, 3), x and y spread
     linearly over the pixel ``rows`` and ``cols`` (half-open ranges), depth ``z`` (m)."""

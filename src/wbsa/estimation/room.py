@@ -41,6 +41,22 @@ class RoomScene:
         t = np.asarray(triangle_id)
         return (t >= 0) & (t < self.n_subject_faces)
 
+    def surface_height_m(self, triangle_id: np.ndarray) -> np.ndarray:
+        """Height over the floor (z = 0) of the triangles seen, by their centroids; NaN where no return.
+
+        Parameters
+        ----------
+        triangle_id : (h, w) int
+            Triangle of every pixel (−1 = no return), as in :attr:`wbsa.core.DepthFrame.triangle_id`.
+
+        Returns
+        -------
+        (h, w) float64
+        """
+        t = np.asarray(triangle_id)
+        centroid_z = self.mesh.vertices[self.mesh.faces].mean(axis=1)[:, 2]
+        return np.where(t >= 0, centroid_z[np.maximum(t, 0)], np.nan)
+
 
 def tiled_rectangle(origin: np.ndarray, edge_u: np.ndarray, edge_v: np.ndarray, tile_m: float = 0.25) -> TriangleMesh:
     """A rectangle ``origin + s·edge_u + t·edge_v`` (s, t in [0, 1]) tiled into squares of about ``tile_m``.

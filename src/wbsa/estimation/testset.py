@@ -70,12 +70,43 @@ class RoomTestSettings:
             raise WbsaError(f"scene {self.scene!r} is unknown; use one of {', '.join(TEST_SCENES)}")
 
 
+#: Pixels this close (in the image) to the subject's make up the contact strip with the floor ...
+CONTACT_REACH_PX = 3
+
+
+def contact_strip(truth: np.ndarray, surface_height_m: np.ndarray) -> np.ndarray:
+    """(h, w) bool: the feet's contact strip, pixels no depth image tells between the subject and the floor.
+
+    The pixels that see a surface lower than :data:`~wbsa.estimation.cloud.FLOOR_CUT_M` over the floor (the
+    subject's soles and toes, the floor) within :data:`CONTACT_REACH_PX` of such a pixel of the subject. The
+    measures cut at least this strip from the subject, in training and at run time, so the VBSA is measured
+    without it. Segmentation
+    benchmarks leave such a band out as "void" (the object boundaries of PASCAL VOC); the issue's figures
+    count it, and both are reported.
+
+    Parameters
+    ----------
+    truth : (h, w) bool
+        The subject's pixels.
+    surface_height_m : (h, w) float64
+        Height over the floor of the surface each pixel sees, NaN where none (:meth:`RoomScene.surface_height_m`).
+    """
+    from scipy import ndimage
+
+    from wbsa.estimation.cloud import FLOOR_CUT_M
+
+    low = np.nan_to_num(surface_height_m, nan=np.inf) < FLOOR_CUT_M
+    return low & ndimage.binary_dilation(truth & low, iterations=CONTACT_REACH_PX)
+
+
 def room_capture_chunk(population: pd.DataFrame, others: pd.DataFrame, first: int, settings: RoomTestSettings,
                        model_path: str | None) -> pd.DataFrame:
     """Capture and estimate every subject of ``population`` (``others``: the same number of possible second people).
 
-    Returns one row per subject: truth, capture, segmentation (``seg_kept``, ``seg_included``), the estimate
-    (``est_*``, ``flags``; ``error`` when it raised) and the estimate's wall time.
+    Returns one row per subject: truth, capture, segmentation (``seg_kept``, ``seg_included``; and the same
+    outside the feet's contact strip, ``seg_kept_off_strip``, ``seg_included_off_strip``: see
+    :func:`contact_strip`), the estimate (``est_*``, ``flags``; ``error`` when it raised) and the estimate's
+    wall time.
     """
     from wbsa.bodies.body_model import BodyModel
     from wbsa.bodies.posture import RandomPosture
@@ -114,6 +145,7 @@ def room_capture_chunk(population: pd.DataFrame, others: pd.DataFrame, first: in
                 room = compose_room(subject, cap.view.azimuth_deg, wall_behind_m=wall_m, others=people)
             frame, depth = capture_room(room, cap, seed=settings.seed, subject_id=index)
             truth = room.is_subject(frame.triangle_id) & (depth > 0)
+            strip = contact_strip(truth, room.surface_height_m(frame.triangle_id))
             depth = with_edge_pixels(depth, settings.edge_pixels, settings.edge_share, edge_rng)
             t = population.iloc[b]
             row = {k: t[k] for k in ("subject_id", "population", "sex", "age_years", "stature_m", "mass_kg", "wbsa_m2")
@@ -139,6 +171,8 @@ def room_capture_chunk(population: pd.DataFrame, others: pd.DataFrame, first: in
                        est_stature_m=est.stature_m, est_vbsa_m2=est.vbsa_m2, flags=",".join(est.flags),
                        seg_kept=float((mask & truth).sum() / max(truth.sum(), 1)),
                        seg_included=float((mask & ~truth).sum() / max(mask.sum(), 1)),
+                       seg_kept_off_strip=float((mask & truth & ~strip).sum() / max((truth & ~strip).sum(), 1)),
+                       seg_included_off_strip=float((mask & ~truth & ~strip).sum() / max((mask & ~strip).sum(), 1)),
                        azimuth_error_deg=float(abs(est.view.azimuth_deg - fold_azimuth(cap.view.azimuth_deg))))
             rows.append(row)
     return pd.DataFrame(rows)

@@ -301,6 +301,69 @@ def test_toes_across_the_image_are_found_by_their_raised_neighbourhood(body_mode
     assert np.array_equal(with_rule, without)
 
 
+def test_the_wall_seen_between_the_legs_is_never_the_subject(body_model, monkeypatch):
+    """Aimed between the legs (``pick`` at a pixel of the wall there) and the wall not found as a plane (as
+    behind two people in the benchmark's image 49 of seed 2000), the subject is still chosen: the wall piece
+    is person-sized but seen past the body (without that rule it was taken, 0 % of the subject kept)."""
+    import wbsa.estimation.segment as segment
+    from wbsa.camera import MeshScene, View, preset
+    from wbsa.estimation.room import compose_room
+    from wbsa.sensor.settings import SensorSettings
+    from wbsa.simulate import simulate_view
+
+    man = body_model.rest_bodies(reference_adult(0.0))
+    room = compose_room(body_model.skin_mesh(_posed(body_model, man, "feet-apart")), 0.0, wall_behind_m=0.8)
+    camera = preset("kinect-v2")
+    frame = simulate_view(MeshScene(room.mesh, surroundings=True), camera, View(0.0, 5.0, 2.5),
+                          sensor=SensorSettings(noise="nguyen2012"), seed=4, keep_frame=True,
+                          target=room.subject_center).frame
+    truth = room.is_subject(frame.triangle_id)
+    rows = np.flatnonzero(truth.any(axis=1))
+    y = int(rows[-1] - 0.25 * (rows[-1] - rows[0]))  # a quarter of the way up: the shins
+    legs = np.flatnonzero(truth[y])
+    gap = np.flatnonzero(np.diff(legs) > 5)
+    assert len(gap) == 1  # two legs, apart
+    x = int((legs[gap[0]] + legs[gap[0] + 1]) // 2)
+    assert not truth[y, x] and frame.depth_m[y, x] > 0  # the wall, between the shins
+    settings = segment.SegmentSettings(pick=(x, y))
+    find_room = segment.find_room
+    monkeypatch.setattr(segment, "find_room", lambda *args: (find_room(*args)[0], []))  # the floor only
+    seg = segment.segment_subject(frame.depth_m, camera, settings)
+    assert (seg.mask & truth).sum() / truth.sum() > 0.98 and (seg.mask & ~truth).sum() / seg.mask.sum() < 0.01
+    monkeypatch.setattr(segment, "seen_past", lambda clusters: set())
+    assert (segment.segment_subject(frame.depth_m, camera, settings).mask & truth).sum() == 0
+
+
+def test_people_touching_are_refused_with_a_message_that_says_so(bodies):
+    """The wide-armed man with the woman 0.8 m to his side, his hand on her: one object 1-2 m wide at the
+    hips, no person, and an error that names it."""
+    from wbsa.camera import MeshScene, View, preset
+    from wbsa.estimation.room import compose_room
+    from wbsa.estimation.segment import SegmentSettings, segment_subject
+    from wbsa.sensor.settings import SensorSettings
+    from wbsa.simulate import simulate_view
+
+    man, woman = bodies
+    room = compose_room(man, 0.0, wall_behind_m=0.8, others=((woman, 0.8),))
+    camera = preset("kinect-v2")
+    frame = simulate_view(MeshScene(room.mesh, surroundings=True), camera, View(0.0, 10.0, 3.5),
+                          sensor=SensorSettings(noise="nguyen2012"), seed=4, keep_frame=True,
+                          target=room.subject_center).frame
+    with pytest.raises(WbsaError, match=r"tall at pixel .* is 1\.\d m wide at the hips: people touching"):
+        segment_subject(frame.depth_m, camera, SegmentSettings(pick="center"))
+
+
+def test_seen_past_needs_a_larger_nearer_object_around_it():
+    from wbsa.estimation.segment import Cluster, seen_past
+
+    body = Cluster(1, 20_000, (320, 200), 2.5, 1.8, 0.6, 0.4, (280, 40, 360, 400))
+    wall_between_legs = Cluster(2, 900, (320, 330), 3.3, 0.8, 0.2, 0.2, (312, 260, 328, 395))
+    other_person = Cluster(3, 18_000, (480, 200), 3.3, 1.7, 0.6, 0.4, (440, 50, 520, 400))
+    child_in_front = Cluster(4, 5_000, (320, 330), 1.9, 0.9, 0.4, 0.3, (300, 260, 340, 395))
+    assert seen_past([body, wall_between_legs, other_person, child_in_front]) == {2}
+    assert seen_past([body, Cluster(2, 900, (320, 330), 2.7, 0.8, 0.2, 0.2, (312, 260, 328, 395))]) == set()
+
+
 def test_a_steep_view_keeps_its_floor(bodies):
     """A camera 55° above the subject (mounted high, close): the floor's normal is 55° from the image's up
     and is still the floor (with the former 50° limit: no floor, elevation from the body's axis)."""
@@ -524,29 +587,28 @@ def test_trees_predict_like_scikit_learn():
     assert np.allclose(bag.predict_raw(X), (reg.predict(X) + other.predict(X)) / 2)  # a bag predicts the mean
 
 
-def test_interval_quantile_meets_its_level_with_the_stated_confidence():
-    """Over many calibration draws of 300 independent scores, the interval's multiplier covers 95 % of new
-    scores in at least 90 % of the draws (QUANTILE_CONFIDENCE; 93 % with whole ranks); the plain conformal
-    one in about half."""
+def test_interval_quantile_covers_its_level_on_average_over_calibration_draws():
+    """Over many calibration draws of 300 independent scores, the interval's multiplier covers 95.0 % of
+    new scores on average (split conformal: the 286th of 300 covers 286 / 301 in expectation), and it is
+    the same score as the plain conformal rank ⌈(n + 1) L⌉."""
     from scipy.stats import chi2
 
-    from wbsa.estimation.model import QUANTILE_CONFIDENCE, EstimatorModel
+    from wbsa.estimation.model import EstimatorModel
 
     rng = np.random.default_rng(0)
-    met, plain = [], []
-    for _ in range(1000):
+    covered = []
+    for _ in range(2000):
         scores = np.sort(np.sqrt(rng.chisquare(1, size=300)))  # |N(0, 1)|: coverage of q is chi2.cdf(q**2, 1)
         model = EstimatorModel(None, *(np.zeros(1),) * 3, 0.0, None, np.zeros(10), np.zeros(2), scores,
                                {"n_calibration_subjects": 300})
-        met.append(chi2.cdf(model.quantile(0.95) ** 2, 1) >= 0.95)
-        plain.append(chi2.cdf(scores[int(np.ceil(301 * 0.95)) - 1] ** 2, 1) >= 0.95)
-    assert QUANTILE_CONFIDENCE - 0.02 < np.mean(met) < 0.96, np.mean(met)
-    assert 0.4 < np.mean(plain) < 0.65, np.mean(plain)
+        assert model.quantile(0.95) == scores[int(np.ceil(301 * 0.95)) - 1]
+        covered.append(chi2.cdf(model.quantile(0.95) ** 2, 1))
+    assert 0.949 < np.mean(covered) < 0.952, np.mean(covered)
     # the captures of one body count once: 300 scores from 75 subjects give a wider interval
     independent = model.quantile(0.95)
     model.meta["n_calibration_subjects"] = 75
     assert model.quantile(0.95) > independent and model.quantile_is_sure(0.95)
-    assert not model.quantile_is_sure(0.99)  # the 75th of 75 scores covers 99 % with probability 0.53
+    assert not model.quantile_is_sure(0.99)  # ⌈76 × 0.99⌉ = 76 > 75 subjects
     with pytest.raises(WbsaError, match="level"):
         model.quantile(1.5)
 
@@ -667,7 +729,7 @@ def test_estimate_finds_the_view_flags_and_writes_outputs(room_view, small_model
     room, camera, frame = room_view
     est = estimate(frame.depth_m, "kinect-v2", small_model, segment=SegmentSettings(pick="center"))
     assert est.wbsa_lo_m2 < est.wbsa_m2 < est.wbsa_hi_m2 and "several_people" in est.flags
-    assert "interval_unsure" in est.flags  # 16 calibration subjects cannot promise 95 % with 90 % confidence
+    assert "interval_unsure" in est.flags  # 16 calibration subjects cannot promise 95 %: ⌈17 × 0.95⌉ = 17 > 16
     assert "interval_unsure" not in estimate(frame.depth_m, "kinect-v2", small_model, level=0.8,
                                              segment=SegmentSettings(pick="center")).flags
     assert est.view.elevation_deg == pytest.approx(12.0, abs=2.0) and 0 <= est.view.azimuth_deg <= 180

@@ -7,9 +7,8 @@ pitch, how the camera treated the outline (mixed returns, gaps: the area read th
 moves with them), the depth noise (a noisy surface reads a different area) and whether a floor was seen;
 boosted trees then correct its residual from the same measures, the body's band widths and thicknesses and
 the view's uncertainty. The interval is split-conformal: residuals divided by a fitted
-spread s(x) on held-out calibration renders (never used in fitting) give the quantile of any level, taken
-so that the level is met with at least 90 % confidence over the calibration draw
-(:meth:`EstimatorModel.quantile`).
+spread s(x) on held-out calibration renders (never used in fitting) give the quantile of any level, its
+rank counted in calibration subjects (:meth:`EstimatorModel.quantile`).
 
 File layout: one ``.npz`` of numbers (no pickle) with ``meta_json`` (format ``wbsa-estimator``, version 5,
 training settings, feature ranges, held-out metrics). Version 2 added the outline terms, version 3 the
@@ -34,8 +33,6 @@ FORMAT = "wbsa-estimator"
 VERSION = 5
 #: Values whose training range is recorded and checked (flag ``out_of_training_range``; :func:`range_values`).
 RANGE_KEYS = ("vbsa_m2", "stature_m", "distance_m", "elevation_deg", "depth_noise_px")
-#: Probability, over the calibration draw, that an interval covers at least its stated level.
-QUANTILE_CONFIDENCE = 0.9
 _BASE = ("vbsa_m2", "stature_m", "silhouette_m2", "width_m", "thickness_m")
 #: How the camera treated the subject's outline (:func:`wbsa.estimation.mixed_pixels.outline_shares`).
 _OUTLINE = ("mixed_share", "gap_share", "edge_gap_share")
@@ -184,19 +181,17 @@ class EstimatorModel:
         return out
 
     def quantile(self, level: float) -> float:
-        """Calibrated multiplier of s(x) for a two-sided interval of ``level`` (split conformal).
+        """Calibrated multiplier of s(x) for a two-sided interval of ``level`` (split conformal, by subject).
 
-        The plain split-conformal quantile, the ⌈(n + 1) L⌉-th of n scores, covers ``level`` on average over
-        calibration draws; from a few hundred subjects it falls short about half the time. The one taken
-        here covers ``level`` with probability at least :data:`QUANTILE_CONFIDENCE` over the calibration
-        draw, counting each calibration subject once, since its captures share one body: with m subjects,
-        the smallest k with P(Binomial(m, L) ≤ k − 1) ≥ confidence (the k-th of m independent scores then
-        covers L with that probability) sets the level L′ = k / (m + 1), and the ⌈(n + 1) L′⌉-th score is
-        taken. ``meta["n_calibration_subjects"]`` gives m (for older files, n over the captures per
-        subject). When k > m, no score can promise it; the largest is taken and :meth:`quantile_is_sure`
-        is False.
+        Split conformal takes the ⌈(m + 1) L⌉-th smallest of m exchangeable calibration scores: a new
+        score falls below it with probability at least L (Vovk et al. 2005; Lei et al. 2018). A body's
+        captures share that body and are not exchangeable one by one, so the rank is counted in calibration
+        *subjects*: with m subjects (``meta["n_calibration_subjects"]``; older files: n over the captures
+        per subject) the level L′ = ⌈(m + 1) L⌉ / (m + 1) is taken, and the ⌈(n + 1) L′⌉-th of the n
+        capture scores. When ⌈(m + 1) L⌉ > m, no score promises L; the largest is taken and
+        :meth:`quantile_is_sure` is False.
         """
-        return float(self.scores[min(self._sure_rank(level), len(self.scores)) - 1])
+        return float(self.scores[min(self._rank(level), len(self.scores)) - 1])
 
     @property
     def n_calibration_subjects(self) -> int:
@@ -205,13 +200,11 @@ class EstimatorModel:
         return max(int(self.meta.get("n_calibration_subjects", round(len(self.scores) / per_subject))), 1)
 
     def quantile_is_sure(self, level: float) -> bool:
-        """Whether the calibration has enough subjects for :meth:`quantile`'s confidence at ``level``."""
-        return self._sure_rank(level) <= len(self.scores)
+        """Whether the calibration has enough subjects for :meth:`quantile` to promise ``level``."""
+        return self._rank(level) <= len(self.scores)
 
-    def _sure_rank(self, level: float) -> int:
+    def _rank(self, level: float) -> int:
         """1-based rank of the score :meth:`quantile` takes (more than the number of scores: not sure)."""
-        from scipy.stats import binom
-
         n = len(self.scores)
         if not 0.0 < level < 1.0:
             raise WbsaError(f"interval level {level} must lie in (0, 1), e.g. 0.95")
@@ -219,7 +212,7 @@ class EstimatorModel:
             raise WbsaError(f"the model was calibrated on {n} renders, too few for a {100 * level:g} % interval; "
                             f"use a lower level")
         m = self.n_calibration_subjects
-        k = int(binom.ppf(QUANTILE_CONFIDENCE, m, level)) + 1
+        k = int(np.ceil((m + 1) * level))
         if k > m:
             return n + 1
         return int(np.ceil((n + 1) * k / (m + 1)))

@@ -93,7 +93,7 @@ def predict_wbsa(model, measures, camera, azimuth_deg: float | None, elevation_d
                  level: float) -> Prediction:
     """Predict WBSA from measures with either kind of model (see the module doc)."""
     from wbsa.estimation.checks import range_flags
-    from wbsa.estimation.model import QUANTILE_CONFIDENCE, EstimatorModel, range_values
+    from wbsa.estimation.model import EstimatorModel, range_values
 
     view = _view(model, measures, azimuth_deg)
     az = view.azimuth_deg if azimuth_deg is None else float(fold_azimuth(azimuth_deg))
@@ -111,8 +111,8 @@ def predict_wbsa(model, measures, camera, azimuth_deg: float | None, elevation_d
         flags.update(range_flags({k: float(v[0]) for k, v in values.items()}, model.ranges))
         if not model.quantile_is_sure(level):
             flags["interval_unsure"] = (f"the model was calibrated on {model.n_calibration_subjects} "
-                                        f"subjects, too few to promise {100 * level:g} % with "
-                                        f"{100 * QUANTILE_CONFIDENCE:g} % confidence; its widest score is used")
+                                        f"subjects, too few to promise {100 * level:g} %; its widest score "
+                                        "is used")
         return Prediction(float(w[0]), float(lo[0]), float(hi[0]), view, (az, el), model.name, flags)
     return _predict_legacy(model, measures, camera, view, az, el, level, flags)
 

@@ -14,10 +14,13 @@
    near and far sides, an arm in front of the waist), or a far arm up to 1.2 m behind, are one object if
    together they are still person-sized (:func:`~wbsa.estimation.clusters.merge_occluding`).
    The subject's feet are then taken down to the floor (:mod:`wbsa.estimation.feet`).
-4. A cluster is person-sized if it is 0.45–2.6 m tall (along the floor normal, or its long axis) and at
-   most 2.6 m wide; with several, ``pick`` chooses (``nearest``, ``largest``, ``center`` of the image, or an
-   ``(x, y)`` pixel: the object under that pixel, else the one whose middle pixel is nearest to it), else a
-   :class:`~wbsa.errors.WbsaError` lists them.
+4. A cluster is person-sized if it is 0.45–2.6 m tall (along the floor normal, or its long axis), at
+   most 2.6 m wide and 0.9 m at the hips, and not seen past a nearer object (inside its bounding box in the
+   image and 0.4 m or more behind it: the wall between the legs; :func:`seen_past`); with several,
+   ``pick`` chooses (``nearest``, ``largest``, ``center`` of the image, or an ``(x, y)`` pixel: the object
+   under that pixel, else the one whose middle pixel is nearest to it), else a
+   :class:`~wbsa.errors.WbsaError` lists them. With none, people side by side and touching (up to 2.5 m
+   at the hips) get an error that says so.
 """
 
 from __future__ import annotations
@@ -40,6 +43,13 @@ BORDER_PX = 3
 #: a wall behind the subject 90° + ε and a side wall 90° (plus the camera's roll); at 50° a camera 2 m up
 #: and 1.5 m from a child lost the floor.
 FLOOR_MAX_TILT_DEG = 75.0
+#: An object inside a nearer one's bounding box in the image and this much farther (m) is seen past it.
+#: The wall stands 0.5 m or more behind a subject's back; a body's own parts join it within 0.8 m of depth
+#: when they touch in the image (:func:`~wbsa.estimation.clusters.merge_occluding`) and are larger.
+SEEN_PAST_M = 0.4
+#: People standing side by side and touching span at most this at the hips (m; one person at most
+#: :data:`~wbsa.estimation.clusters.MAX_FOOTPRINT_M`); a wall spans more.
+TOUCHING_FOOTPRINT_M = 2.5
 
 
 @dataclass(frozen=True)
@@ -109,6 +119,7 @@ class Cluster:
     height_m: float
     width_m: float
     footprint_m: float = 0.0
+    bbox_px: tuple[int, int, int, int] = (0, 0, 0, 0)
 
     def describe(self) -> str:
         """``1.72 m tall at pixel (312, 240), 2.9 m away`` for messages."""
@@ -254,13 +265,18 @@ def segment_subject(depth_m: np.ndarray, intrinsics, settings: SegmentSettings =
     pixel_label = merge_occluding(pixel_label, pix, points, (h, w), floor, settings.max_person_height_m,
                                   settings.max_person_width_m)
     clusters = _describe(pixel_label, pix, points, w, floor)
+    behind = seen_past(clusters)
+    clusters = [c for c in clusters if c.label not in behind]
     people = [c for c in clusters if settings.min_person_height_m <= c.height_m <= settings.max_person_height_m
               and c.width_m <= settings.max_person_width_m and c.footprint_m <= MAX_FOOTPRINT_M]
     if not people:
-        big = max(clusters, key=lambda c: c.n_pixels) if clusters else None
-        if big is not None and big.footprint_m > MAX_FOOTPRINT_M and big.height_m <= settings.max_person_height_m:
+        touching = [c for c in clusters if settings.min_person_height_m <= c.height_m <= settings.max_person_height_m
+                    and MAX_FOOTPRINT_M < c.footprint_m <= TOUCHING_FOOTPRINT_M]
+        if touching:
+            big = max(touching, key=lambda c: c.n_pixels)
             raise WbsaError(f"the largest object, {big.describe()}, is {big.footprint_m:.1f} m wide at the hips: "
                             "people touching each other? capture the subject standing apart")
+        big = max(clusters, key=lambda c: c.n_pixels) if clusters else None
         what = f"the largest object is {big.describe()}" if big else "no object is left after the floor and walls"
         raise WbsaError(f"no person-sized object ({settings.min_person_height_m:g}–{settings.max_person_height_m:g} m "
                         f"tall) in the depth image; {what}: check the depth scale (units per metre) and the camera")
@@ -295,7 +311,27 @@ def _describe(pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarray, widt
         rows, cols = np.divmod(pix[sel], width)
         out.append(Cluster(int(lab), int(n), (int(np.median(cols)), int(np.median(rows))),
                            float(np.median(np.linalg.norm(p, axis=1))), height, width_m,
-                           footprint_m(p, up if up @ np.array([0.0, -1.0, 0.0]) >= 0 else -up)))
+                           footprint_m(p, up if up @ np.array([0.0, -1.0, 0.0]) >= 0 else -up),
+                           (int(cols.min()), int(rows.min()), int(cols.max()), int(rows.max()))))
+    return out
+
+
+def seen_past(clusters: list[Cluster]) -> set[int]:
+    """Labels of the clusters seen past a nearer, larger object: inside its bounding box in the image and at
+    least :data:`SEEN_PAST_M` farther away (the wall between a subject's legs or inside a bent arm).
+
+    Such a piece can be person-sized, and lie under the image's centre, where the operator aimed at the
+    subject; it is never the subject.
+    """
+    out = set()
+    for c in clusters:
+        x0, y0, x1, y1 = c.bbox_px
+        for o in clusters:
+            ox0, oy0, ox1, oy1 = o.bbox_px
+            if (o.n_pixels > c.n_pixels and c.distance_m > o.distance_m + SEEN_PAST_M
+                    and ox0 <= x0 and x1 <= ox1 and oy0 <= y0 and y1 <= oy1):
+                out.add(c.label)
+                break
     return out
 
 

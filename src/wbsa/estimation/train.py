@@ -218,6 +218,40 @@ def _bag_rows(subjects: np.ndarray, seed: int, bag: int) -> np.ndarray:
     return np.isin(subjects, chosen)
 
 
+def training_renders(settings: TrainSettings = TrainSettings(), parts: tuple[str, ...] = ("fit", "calibration"), *,
+                     workers: int = 1, show_progress: bool | None = None) -> dict[str, Samples]:
+    """Render the training captures: the fit subjects' and the calibration subjects' (steps 1–3).
+
+    Parameters
+    ----------
+    settings : TrainSettings
+    parts : tuple of {'fit', 'calibration'}
+        Which to render (the calibration captures alone re-create a model's calibration scores).
+    workers : int
+        Local worker processes (the renders do not depend on it).
+
+    Returns
+    -------
+    dict of str to Samples
+        One entry per part.
+    """
+    pop = training_population(settings, show_progress)
+    rng = np.random.default_rng(settings.seed)
+    calib = rng.random(len(pop)) < settings.calibration_fraction
+    render = RenderSettings(views_per_subject=settings.views_per_subject, capture=settings.capture,
+                            postures=settings.postures, room=settings.room, alone_share=settings.alone_share,
+                            seed=settings.seed)
+    chosen = {"fit": (~calib, render), "calibration": (calib, replace(render, seed=settings.seed + 7919))}
+    out = {}
+    for part in parts:
+        if part not in chosen:
+            raise WbsaError(f"training part {part!r} is unknown; use fit or calibration")
+        rows, part_render = chosen[part]
+        out[part] = render_samples(pop[rows].reset_index(drop=True), part_render, workers=workers,
+                                   show_progress=show_progress)
+    return out
+
+
 def train_model(settings: TrainSettings = TrainSettings(), *, workers: int = 1, show_progress: bool | None = None,
                 samples: tuple[Samples, Samples] | None = None) -> EstimatorModel:
     """Train an estimator model (see the module doc).
@@ -236,19 +270,11 @@ def train_model(settings: TrainSettings = TrainSettings(), *, workers: int = 1, 
         ``meta`` holds the settings, the training ranges and held-out calibration metrics.
     """
     if samples is None:
-        pop = training_population(settings, show_progress)
-        rng = np.random.default_rng(settings.seed)
-        calib = rng.random(len(pop)) < settings.calibration_fraction
-        render = RenderSettings(views_per_subject=settings.views_per_subject, capture=settings.capture,
-                                postures=settings.postures, room=settings.room, alone_share=settings.alone_share,
-                                seed=settings.seed)
-        fit_s = render_samples(pop[~calib].reset_index(drop=True), render, workers=workers,
-                               show_progress=show_progress)
-        cal_s = render_samples(pop[calib].reset_index(drop=True), replace(render, seed=settings.seed + 7919),
-                               workers=workers, show_progress=show_progress)
+        parts = training_renders(settings, workers=workers, show_progress=show_progress)
+        fit_s, cal_s = parts["fit"], parts["calibration"]
     else:
         fit_s, cal_s = samples
-    fit_s, cal_s = (_usable(s) for s in (fit_s, cal_s))
+    fit_s, cal_s = (usable(s) for s in (fit_s, cal_s))
     if len(fit_s) < 20 or len(cal_s) < 20:
         raise WbsaError(f"too few usable renders to train ({len(fit_s)} fit, {len(cal_s)} calibration); "
                         "use more subjects")
@@ -266,11 +292,8 @@ def train_model(settings: TrainSettings = TrainSettings(), *, workers: int = 1, 
     model = EstimatorModel(view, mean, scale, coef, intercept, trees, spread, spread_range, np.zeros(1), {})
     # calibration: held-out subjects through the finished models
     cal_t = cal_s.table
-    psi_c, sd_c, _ = view.predict(cal_s.descriptors[:, :_VIEW_DIMS])
-    feats_c = _columns(cal_t)
-    mu = model.log_wbsa(feats_c, cal_s.descriptors[:, _VIEW_DIMS:], psi_c, sd_c, feats_c["elevation_deg"])
-    resid = np.log(cal_t["wbsa_m2"].to_numpy()) - mu
-    model.scores = np.sort(np.abs(resid) / model.spread(feats_c, psi_c, sd_c, mu))
+    resid, scores, psi_c, sd_c = calibration_scores(model, cal_s)
+    model.scores = np.sort(scores)
     err = 100 * (np.exp(-resid) - 1)
     az_err = np.abs(psi_c - fold_azimuth(cal_t["azimuth_deg"].to_numpy()))
     feats_f = _columns(fit_t)
@@ -288,7 +311,33 @@ def train_model(settings: TrainSettings = TrainSettings(), *, workers: int = 1, 
     return model
 
 
-def _usable(s: Samples) -> Samples:
+def calibration_scores(model: EstimatorModel, samples: Samples) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """A model's residuals and conformal scores on held-out renders.
+
+    Parameters
+    ----------
+    model : EstimatorModel
+    samples : Samples
+        Usable renders of subjects the model was not fitted on (n rows).
+
+    Returns
+    -------
+    residual : (n,) float64
+        log true WBSA − log predicted WBSA.
+    score : (n,) float64
+        |residual| / s(x), the scores whose quantile sizes the interval (:meth:`EstimatorModel.quantile`).
+    psi_deg, psi_sd_deg : (n,) float64
+        The folded azimuth the view model estimated and its s.d.
+    """
+    psi, psi_sd, _ = model.view.predict(samples.descriptors[:, :_VIEW_DIMS])
+    feats = _columns(samples.table)
+    mu = model.log_wbsa(feats, samples.descriptors[:, _VIEW_DIMS:], psi, psi_sd, feats["elevation_deg"])
+    resid = np.log(samples.table["wbsa_m2"].to_numpy()) - mu
+    return resid, np.abs(resid) / model.spread(feats, psi, psi_sd, mu), psi, psi_sd
+
+
+def usable(s: Samples) -> Samples:
+    """The renders whose measures succeeded (``m_ok``)."""
     ok = s.table["m_ok"].to_numpy(dtype=bool)
     return Samples(s.table[ok].reset_index(drop=True), s.descriptors[ok])
 

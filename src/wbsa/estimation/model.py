@@ -186,7 +186,7 @@ class EstimatorModel:
         Split conformal takes the ⌈(m + 1) L⌉-th smallest of m exchangeable calibration scores: a new
         score falls below it with probability at least L (Vovk et al. 2005; Lei et al. 2018). A body's
         captures share that body and are not exchangeable one by one, so the rank is counted in calibration
-        *subjects*: with m subjects (``meta["n_calibration_subjects"]``; older files: n over the captures
+        *subjects* (an approximation: the guarantee is for one score per subject): with m subjects (``meta["n_calibration_subjects"]``; older files: n over the captures
         per subject) the level L′ = ⌈(m + 1) L⌉ / (m + 1) is taken, and the ⌈(n + 1) L′⌉-th of the n
         capture scores. When ⌈(m + 1) L⌉ > m, no score promises L; the largest is taken and
         :meth:`quantile_is_sure` is False.

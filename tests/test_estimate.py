@@ -32,6 +32,16 @@ def bodies(body_model):
     return body_model.skin_mesh(wide), body_model.skin_mesh(down)
 
 
+def _room_frame(room, camera, view):
+    """A room as a camera with Kinect v1's noise sees it (seed 4), aimed at the subject: its DepthFrame."""
+    from wbsa.camera import MeshScene
+    from wbsa.sensor.settings import SensorSettings
+    from wbsa.simulate import simulate_view
+
+    return simulate_view(MeshScene(room.mesh, surroundings=True), camera, view, sensor=SensorSettings(noise="nguyen2012"),
+                         seed=4, keep_frame=True, target=room.subject_center).frame
+
+
 @pytest.fixture(scope="module")
 def room_view(bodies):
     """A noisy Kinect v2 view at azimuth 20° of the tall man, a wall 0.8 m behind and the woman beside him."""
@@ -247,19 +257,15 @@ def test_side_view_keeps_both_soles_and_no_floor_strip(body_model):
     """Side view, feet apart: the far foot's sole, seen above the near foot, is walked too, and lone
     columns of floor noise under a foot are not taken (with the lowest run walked alone and no strip
     rule: soles 75 %, floor 0.50 % of the mask; now 86 % and 0.32 %)."""
-    from wbsa.camera import MeshScene, View, preset
+    from wbsa.camera import View, preset
     from wbsa.core.backproject import backproject_depth
     from wbsa.estimation.room import compose_room
     from wbsa.estimation.segment import SegmentSettings, segment_subject
-    from wbsa.sensor.settings import SensorSettings
-    from wbsa.simulate import simulate_view
 
     man = body_model.rest_bodies(reference_adult(0.0))
     room = compose_room(body_model.skin_mesh(_posed(body_model, man, "feet-apart")), 80.0, wall_behind_m=0.8)
     camera = preset("kinect-v2")
-    frame = simulate_view(MeshScene(room.mesh, surroundings=True), camera, View(80.0, 15.0, 2.8),
-                          sensor=SensorSettings(noise="nguyen2012"), seed=4, keep_frame=True,
-                          target=room.subject_center).frame
+    frame = _room_frame(room, camera, View(80.0, 15.0, 2.8))
     truth = room.is_subject(frame.triangle_id)
     seg = segment_subject(frame.depth_m, camera, SegmentSettings(pick="center"))
     soles = truth & (seg.floor.height(backproject_depth(frame.depth_m, camera)) < 0.05)
@@ -272,20 +278,16 @@ def test_toes_across_the_image_are_found_by_their_raised_neighbourhood(body_mode
     are missed without the windowed median (2.8 % of her pixels), kept with it; the phone LiDAR's coarse
     pixels take no window at all."""
     import wbsa.estimation.feet as feet
-    from wbsa.camera import MeshScene, View, preset
+    from wbsa.camera import View, preset
     from wbsa.estimation.room import compose_room
     from wbsa.estimation.segment import SegmentSettings, segment_subject
-    from wbsa.sensor.settings import SensorSettings
-    from wbsa.simulate import simulate_view
 
     woman = body_model.rest_bodies(reference_adult(1.0))
     room = compose_room(body_model.skin_mesh(_posed(body_model, woman, "a-pose")), 90.0, wall_behind_m=0.8)
 
     def masks(camera_name: str):
         camera = preset(camera_name)
-        frame = simulate_view(MeshScene(room.mesh, surroundings=True), camera, View(90.0, 28.0, 3.0),
-                              sensor=SensorSettings(noise="nguyen2012"), seed=4, keep_frame=True,
-                              target=room.subject_center).frame
+        frame = _room_frame(room, camera, View(90.0, 28.0, 3.0))
         truth = room.is_subject(frame.triangle_id)
         with_rule = segment_subject(frame.depth_m, camera, SegmentSettings(pick="center")).mask
         with monkeypatch.context() as m:
@@ -306,17 +308,13 @@ def test_the_wall_seen_between_the_legs_is_never_the_subject(body_model, monkeyp
     behind two people in the benchmark's image 49 of seed 2000), the subject is still chosen: the wall piece
     is person-sized but seen past the body (without that rule it was taken, 0 % of the subject kept)."""
     import wbsa.estimation.segment as segment
-    from wbsa.camera import MeshScene, View, preset
+    from wbsa.camera import View, preset
     from wbsa.estimation.room import compose_room
-    from wbsa.sensor.settings import SensorSettings
-    from wbsa.simulate import simulate_view
 
     man = body_model.rest_bodies(reference_adult(0.0))
     room = compose_room(body_model.skin_mesh(_posed(body_model, man, "feet-apart")), 0.0, wall_behind_m=0.8)
     camera = preset("kinect-v2")
-    frame = simulate_view(MeshScene(room.mesh, surroundings=True), camera, View(0.0, 5.0, 2.5),
-                          sensor=SensorSettings(noise="nguyen2012"), seed=4, keep_frame=True,
-                          target=room.subject_center).frame
+    frame = _room_frame(room, camera, View(0.0, 5.0, 2.5))
     truth = room.is_subject(frame.triangle_id)
     rows = np.flatnonzero(truth.any(axis=1))
     y = int(rows[-1] - 0.25 * (rows[-1] - rows[0]))  # a quarter of the way up: the shins
@@ -337,18 +335,14 @@ def test_the_wall_seen_between_the_legs_is_never_the_subject(body_model, monkeyp
 def test_people_touching_are_refused_with_a_message_that_says_so(bodies):
     """The wide-armed man with the woman 0.8 m to his side, his hand on her: one object 1-2 m wide at the
     hips, no person, and an error that names it."""
-    from wbsa.camera import MeshScene, View, preset
+    from wbsa.camera import View, preset
     from wbsa.estimation.room import compose_room
     from wbsa.estimation.segment import SegmentSettings, segment_subject
-    from wbsa.sensor.settings import SensorSettings
-    from wbsa.simulate import simulate_view
 
     man, woman = bodies
     room = compose_room(man, 0.0, wall_behind_m=0.8, others=((woman, 0.8),))
     camera = preset("kinect-v2")
-    frame = simulate_view(MeshScene(room.mesh, surroundings=True), camera, View(0.0, 10.0, 3.5),
-                          sensor=SensorSettings(noise="nguyen2012"), seed=4, keep_frame=True,
-                          target=room.subject_center).frame
+    frame = _room_frame(room, camera, View(0.0, 10.0, 3.5))
     with pytest.raises(WbsaError, match=r"tall at pixel .* is 1\.\d m wide at the hips: people touching"):
         segment_subject(frame.depth_m, camera, SegmentSettings(pick="center"))
 
@@ -367,17 +361,13 @@ def test_seen_past_needs_a_larger_nearer_object_around_it():
 def test_a_steep_view_keeps_its_floor(bodies):
     """A camera 55° above the subject (mounted high, close): the floor's normal is 55° from the image's up
     and is still the floor (with the former 50° limit: no floor, elevation from the body's axis)."""
-    from wbsa.camera import MeshScene, View, preset
+    from wbsa.camera import View, preset
     from wbsa.estimation.room import compose_room
     from wbsa.estimation.segment import segment_subject
-    from wbsa.sensor.settings import SensorSettings
-    from wbsa.simulate import simulate_view
 
     room = compose_room(bodies[1], 0.0, wall_behind_m=0.8)
     camera = preset("kinect-v2")
-    frame = simulate_view(MeshScene(room.mesh, surroundings=True), camera, View(0.0, 55.0, 2.0),
-                          sensor=SensorSettings(noise="nguyen2012"), seed=4, keep_frame=True,
-                          target=room.subject_center).frame
+    frame = _room_frame(room, camera, View(0.0, 55.0, 2.0))
     seg = segment_subject(frame.depth_m, camera)
     assert seg.floor is not None
     assert np.degrees(np.arccos(-seg.floor.normal[1])) == pytest.approx(55.0, abs=2.0)

@@ -25,18 +25,22 @@ import numpy as np
 import pandas as pd
 
 
-def rank_levels(m: int, level: float) -> dict[str, float]:
-    """Level over the captures each rule takes, from ``m`` calibration subjects."""
+def rule_ranks(n: int, m: int, level: float) -> dict[str, int]:
+    """1-based rank of the score each rule takes among ``n`` capture scores of ``m`` calibration subjects
+    (:func:`~wbsa.estimation.model.conformal_rank`; past ``n`` where the rule asks for more scores than there
+    are: :func:`quantile_at` takes the largest)."""
     from scipy.stats import binom
 
-    return {"subject rank": np.ceil((m + 1) * level) / (m + 1), "plain": level,
-            "90 % confidence": (int(binom.ppf(0.9, m, level)) + 1) / (m + 1)}
+    from wbsa.estimation.model import conformal_rank
+
+    confident = int(binom.ppf(0.9, m, level)) + 1  # of m + 1, as the subject rank's ⌈(m + 1) L⌉
+    return {"subject rank": conformal_rank(n, m, level)[0], "plain": conformal_rank(n, n, level)[0],
+            "90 % confidence": -(-(n + 1) * confident // (m + 1))}
 
 
-def quantile_at(sorted_scores: np.ndarray, level: float) -> float:
-    """The ⌈(n + 1) level⌉-th of n sorted scores (the largest if that rank is past the end)."""
-    n = len(sorted_scores)
-    return float(sorted_scores[min(int(np.ceil((n + 1) * level)), n) - 1])
+def quantile_at(sorted_scores: np.ndarray, rank: int) -> float:
+    """The ``rank``-th (1-based) of the sorted scores (the largest if that rank is past the end)."""
+    return float(sorted_scores[min(rank, len(sorted_scores)) - 1])
 
 
 def split_coverage(scores: np.ndarray, subject: np.ndarray, groups: dict[str, np.ndarray], level: float,
@@ -58,8 +62,8 @@ def split_coverage(scores: np.ndarray, subject: np.ndarray, groups: dict[str, np
     for _ in range(splits):
         half = np.isin(subject, rng.permutation(ids)[: len(ids) // 2])
         s = np.sort(scores[half])
-        for rule, lvl in rank_levels(len(ids) // 2, level).items():
-            inside = scores[~half] <= quantile_at(s, lvl)
+        for rule, rank in rule_ranks(len(s), len(ids) // 2, level).items():
+            inside = scores[~half] <= quantile_at(s, rank)
             row = {"rule": rule, "all": inside.mean()}
             row.update({g: inside[sel[~half]].mean() for g, sel in groups.items()})
             rows.append(row)
@@ -81,9 +85,10 @@ def main() -> None:
     t0 = time.perf_counter()
     cal = usable(training_renders(TrainSettings(), ("calibration",), workers=args.workers)["calibration"])
     _, scores, _, _ = calibration_scores(model, cal)
-    if not np.allclose(np.sort(scores), model.scores):
-        raise SystemExit("error: these renders do not give the model's calibration scores; was the model "
-                         "trained with other settings or another wbsa? delete it to retrain")
+    if len(scores) != len(model.scores) or not np.allclose(np.sort(scores), model.scores):
+        raise SystemExit(f"error: these renders do not give the model's calibration scores ({len(scores)} "
+                         f"scores, the model has {len(model.scores)}); was the model trained with other "
+                         "settings or another wbsa? delete it to retrain")
     t = cal.table
     noisy_room = ~t["alone"].to_numpy(bool) & ~t["ideal_sensor"].to_numpy(bool)
     groups = {"noisy room": noisy_room, "ideal room": ~t["alone"].to_numpy(bool) & t["ideal_sensor"].to_numpy(bool),

@@ -355,7 +355,15 @@ def test_seen_past_needs_a_larger_nearer_object_around_it():
     other_person = Cluster(3, 18_000, (480, 200), 3.3, 1.7, 0.6, 0.4, (440, 50, 520, 400))
     child_in_front = Cluster(4, 5_000, (320, 330), 1.9, 0.9, 0.4, 0.3, (300, 260, 340, 395))
     assert seen_past([body, wall_between_legs, other_person, child_in_front]) == {2}
-    assert seen_past([body, Cluster(2, 900, (320, 330), 2.7, 0.8, 0.2, 0.2, (312, 260, 328, 395))]) == set()
+    # not far enough behind
+    near_piece = Cluster(2, 900, (320, 330), 2.7, 0.8, 0.2, 0.2, (312, 260, 328, 395))
+    assert seen_past([body, near_piece]) == set()
+    # around it and nearer, but smaller
+    small = Cluster(5, 600, (320, 330), 1.5, 0.9, 0.3, 0.2, (300, 250, 340, 399))
+    assert seen_past([wall_between_legs, small]) == set()
+    # two people touching are one object too wide at the hips: it still hides the wall between the legs
+    pair = Cluster(6, 38_000, (380, 200), 2.5, 1.8, 1.2, 1.4, (280, 40, 520, 400))
+    assert seen_past([pair, wall_between_legs]) == {2}
 
 
 def test_a_steep_view_keeps_its_floor(bodies):
@@ -414,8 +422,8 @@ def test_pick_center_takes_the_object_under_the_image_centre():
     pix = np.arange(w * h)
     label = np.full(w * h, -1)
     label[50 * w + 50] = 0  # the centre pixel is the subject's
-    subject = Cluster(0, 5000, (50, 80), 3.0, 1.8, 0.5, 0.3)
-    behind = Cluster(1, 500, (50, 60), 4.5, 0.7, 0.4, 0.3)
+    subject = Cluster(0, 5000, (50, 80), 3.0, 1.8, 0.5, 0.3, (40, 30, 60, 100))
+    behind = Cluster(1, 500, (50, 60), 4.5, 0.7, 0.4, 0.3, (45, 50, 55, 70))
     assert _choose([behind, subject], "center", (w, h), label, pix) is subject
     label[50 * w + 50] = -1  # nothing under the centre: the nearest middle
     assert _choose([behind, subject], "center", (w, h), label, pix) is behind

@@ -8,7 +8,7 @@ moves with them), the depth noise (a noisy surface reads a different area) and w
 boosted trees then correct its residual from the same measures, the body's band widths and thicknesses and
 the view's uncertainty. The interval is split-conformal: residuals divided by a fitted
 spread s(x) on held-out calibration renders (never used in fitting) give the quantile of any level, its
-rank counted in calibration subjects (:meth:`EstimatorModel.quantile`).
+rank counted in calibration subjects (:meth:`EstimatorModel.quantile`, :func:`conformal_rank`).
 
 File layout: one ``.npz`` of numbers (no pickle) with ``meta_json`` (format ``wbsa-estimator``, version 5,
 training settings, feature ranges, held-out metrics). Version 2 added the outline terms, version 3 the
@@ -19,6 +19,7 @@ behind a gap (``edge_gap_share``), version 5 the depth noise and the floor (:fun
 from __future__ import annotations
 
 import json
+import math
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -42,6 +43,51 @@ _SCENE = ("depth_noise_m", "floor_seen")
 DESIGN_TERMS = 5 * len(_BASE) + 4 + 2 + len(_OUTLINE) + len(_SCENE)
 #: Columns of :func:`spread_design`.
 SPREAD_TERMS = 7 + len(_OUTLINE) + len(_SCENE)
+
+
+def conformal_rank(n_scores: int, n_subjects: int, level: float) -> tuple[int, bool]:
+    """Rank of the split-conformal quantile of ``level`` among capture scores, counted in subjects.
+
+    With m calibration subjects, k = ⌈(m + 1) L⌉ and the level over the captures L′ = k / (m + 1); the
+    rank is the ⌈(n + 1) L′⌉-th of the n capture scores (see :meth:`EstimatorModel.quantile`). With
+    ``n_subjects == n_scores`` it is the plain split-conformal rank ⌈(n + 1) L⌉. ⌈(m + 1) L⌉ is taken
+    10⁻⁹ below its float product, so a product that is a whole number in exact arithmetic but
+    lands just above it in floating point (e.g. 100 × 0.55 = 55.00000000000001) is not rounded up to
+    the next rank; the second step is exact integer arithmetic.
+
+    Parameters
+    ----------
+    n_scores : int
+        n, the calibration scores (captures), at least 1.
+    n_subjects : int
+        m, the calibration subjects behind them, at least 1.
+    level : float
+        L, the interval's level, in (0, 1).
+
+    Returns
+    -------
+    rank : int
+        1-based rank of the score to take, in [1, n]: the largest score when ``unsure``.
+    unsure : bool
+        True when the calibration cannot promise ``level``: k > m (or the rank would lie past the n
+        scores, which happens only with more subjects than scores).
+
+    Raises
+    ------
+    WbsaError
+        ``level`` outside (0, 1), or fewer than one score or subject.
+    """
+    if not 0.0 < level < 1.0:
+        raise WbsaError(f"interval level {level} must lie in (0, 1), e.g. 0.95")
+    n, m = int(n_scores), int(n_subjects)
+    if n < 1 or m < 1:
+        raise WbsaError(f"a conformal rank needs at least one score and one subject, got {n} scores of "
+                        f"{m} subjects; calibrate on more renders")
+    k = math.ceil((m + 1) * level - 1e-9)
+    if k > m:
+        return n, True
+    rank = -(-(n + 1) * k // (m + 1))
+    return min(rank, n), rank > n
 
 
 def _check_measures(features: dict[str, np.ndarray]) -> None:
@@ -186,12 +232,13 @@ class EstimatorModel:
         Split conformal takes the ⌈(m + 1) L⌉-th smallest of m exchangeable calibration scores: a new
         score falls below it with probability at least L (Vovk et al. 2005; Lei et al. 2018). A body's
         captures share that body and are not exchangeable one by one, so the rank is counted in calibration
-        *subjects* (an approximation: the guarantee is for one score per subject): with m subjects (``meta["n_calibration_subjects"]``; older files: n over the captures
-        per subject) the level L′ = ⌈(m + 1) L⌉ / (m + 1) is taken, and the ⌈(n + 1) L′⌉-th of the n
-        capture scores. When ⌈(m + 1) L⌉ > m, no score promises L; the largest is taken and
+        *subjects* (an approximation: the guarantee is for one score per subject): with m subjects
+        (``meta["n_calibration_subjects"]``; older files: n over the captures per subject) the level
+        L′ = ⌈(m + 1) L⌉ / (m + 1) is taken, and the ⌈(n + 1) L′⌉-th of the n capture scores
+        (:func:`conformal_rank`). When ⌈(m + 1) L⌉ > m, no score promises L; the largest is taken and
         :meth:`quantile_is_sure` is False.
         """
-        return float(self.scores[min(self._rank(level), len(self.scores)) - 1])
+        return float(self.scores[self._rank(level)[0] - 1])
 
     @property
     def n_calibration_subjects(self) -> int:
@@ -201,21 +248,16 @@ class EstimatorModel:
 
     def quantile_is_sure(self, level: float) -> bool:
         """Whether the calibration has enough subjects for :meth:`quantile` to promise ``level``."""
-        return self._rank(level) <= len(self.scores)
+        return not self._rank(level)[1]
 
-    def _rank(self, level: float) -> int:
-        """1-based rank of the score :meth:`quantile` takes (more than the number of scores: not sure)."""
+    def _rank(self, level: float) -> tuple[int, bool]:
+        """:func:`conformal_rank` of this model's scores and subjects: (1-based rank, unsure). Raises when
+        even the plain rank over the n captures, ⌈(n + 1) L⌉, lies past the n scores."""
         n = len(self.scores)
-        if not 0.0 < level < 1.0:
-            raise WbsaError(f"interval level {level} must lie in (0, 1), e.g. 0.95")
-        if int(np.ceil((n + 1) * level)) > n:
+        if n < 1 or conformal_rank(n, n, level)[1]:
             raise WbsaError(f"the model was calibrated on {n} renders, too few for a {100 * level:g} % interval; "
                             f"use a lower level")
-        m = self.n_calibration_subjects
-        k = int(np.ceil((m + 1) * level))
-        if k > m:
-            return n + 1
-        return int(np.ceil((n + 1) * k / (m + 1)))
+        return conformal_rank(n, self.n_calibration_subjects, level)
 
     def predict(self, features: dict[str, np.ndarray], shape: np.ndarray, psi_deg, psi_sd_deg, elevation_deg,
                 level: float = 0.95) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

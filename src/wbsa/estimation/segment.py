@@ -15,8 +15,8 @@
    together they are still person-sized (:func:`~wbsa.estimation.clusters.merge_occluding`).
    The subject's feet are then taken down to the floor (:mod:`wbsa.estimation.feet`).
 4. A cluster is person-sized if it is 0.45–2.6 m tall (along the floor normal, or its long axis), at
-   most 2.6 m wide and 0.9 m at the hips, and not seen past a nearer object (inside its bounding box in the
-   image and 0.4 m or more behind it: the wall between the legs; :func:`seen_past`); with several,
+   most 2.6 m wide and 0.9 m at the hips, and not seen past a nearer, larger object (inside its bounding box
+   in the image and 0.4 m or more behind it: the wall between the legs; :func:`seen_past`); with several,
    ``pick`` chooses (``nearest``, ``largest``, ``center`` of the image, or an ``(x, y)`` pixel: the object
    under that pixel, else the one whose middle pixel is nearest to it), else a
    :class:`~wbsa.errors.WbsaError` lists them. With none, people side by side and touching (up to 2.5 m
@@ -110,7 +110,24 @@ def _is_pixel(pick: object) -> bool:
 
 @dataclass(frozen=True)
 class Cluster:
-    """One object found in the image (a candidate subject)."""
+    """One object found in the image (a candidate subject).
+
+    Attributes
+    ----------
+    label : int
+        The object's label among the image's returns.
+    n_pixels : int
+    pixel_xy : (int, int)
+        Its middle pixel (median column and row).
+    distance_m : float
+        Median range of its returns.
+    height_m, width_m : float
+        Extent along the floor's normal (or its long axis) and across it.
+    footprint_m : float
+        Width at the hips (:func:`~wbsa.estimation.clusters.footprint_m`).
+    bbox_px : (int, int, int, int)
+        Bounding box in the image, ``(x0, y0, x1, y1)``, inclusive.
+    """
 
     label: int
     n_pixels: int
@@ -118,8 +135,8 @@ class Cluster:
     distance_m: float
     height_m: float
     width_m: float
-    footprint_m: float = 0.0
-    bbox_px: tuple[int, int, int, int] = (0, 0, 0, 0)
+    footprint_m: float
+    bbox_px: tuple[int, int, int, int]
 
     def describe(self) -> str:
         """``1.72 m tall at pixel (312, 240), 2.9 m away`` for messages."""
@@ -267,14 +284,13 @@ def segment_subject(depth_m: np.ndarray, intrinsics, settings: SegmentSettings =
     clusters = _describe(pixel_label, pix, points, w, floor)
     behind = seen_past(clusters)
     clusters = [c for c in clusters if c.label not in behind]
-    people = [c for c in clusters if settings.min_person_height_m <= c.height_m <= settings.max_person_height_m
-              and c.width_m <= settings.max_person_width_m and c.footprint_m <= MAX_FOOTPRINT_M]
+    people = [c for c in clusters if _person_sized(c, settings)]
     if not people:
         touching = [c for c in clusters if settings.min_person_height_m <= c.height_m <= settings.max_person_height_m
                     and MAX_FOOTPRINT_M < c.footprint_m <= TOUCHING_FOOTPRINT_M]
         if touching:
             big = max(touching, key=lambda c: c.n_pixels)
-            raise WbsaError(f"the largest object, {big.describe()}, is {big.footprint_m:.1f} m wide at the hips: "
+            raise WbsaError(f"an object, {big.describe()}, is {big.footprint_m:.1f} m wide at the hips: "
                             "people touching each other? capture the subject standing apart")
         big = max(clusters, key=lambda c: c.n_pixels) if clusters else None
         what = f"the largest object is {big.describe()}" if big else "no object is left after the floor and walls"
@@ -316,12 +332,30 @@ def _describe(pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarray, widt
     return out
 
 
+def _person_sized(c: Cluster, settings: SegmentSettings) -> bool:
+    """Whether a cluster is person-sized: tall, wide and wide at the hips within the settings' bounds."""
+    return (settings.min_person_height_m <= c.height_m <= settings.max_person_height_m
+            and c.width_m <= settings.max_person_width_m and c.footprint_m <= MAX_FOOTPRINT_M)
+
+
 def seen_past(clusters: list[Cluster]) -> set[int]:
     """Labels of the clusters seen past a nearer, larger object: inside its bounding box in the image and at
     least :data:`SEEN_PAST_M` farther away (the wall between a subject's legs or inside a bent arm).
 
     Such a piece can be person-sized, and lie under the image's centre, where the operator aimed at the
-    subject; it is never the subject.
+    subject; it is never the subject. Any larger object may hide one, person-sized or not: two people
+    touching form one object too wide at the hips, and the wall between their legs must not then be
+    taken for a person.
+
+    Parameters
+    ----------
+    clusters : list of Cluster
+        Every object in the image.
+
+    Returns
+    -------
+    set of int
+        The labels of the clusters seen past another.
     """
     out = set()
     for c in clusters:

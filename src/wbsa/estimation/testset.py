@@ -78,11 +78,15 @@ def contact_strip(truth: np.ndarray, surface_height_m: np.ndarray) -> np.ndarray
     """(h, w) bool: the feet's contact strip, pixels no depth image tells between the subject and the floor.
 
     The pixels that see a surface lower than :data:`~wbsa.estimation.cloud.FLOOR_CUT_M` over the floor (the
-    subject's soles and toes, the floor) within :data:`CONTACT_REACH_PX` of such a pixel of the subject. The
-    measures cut at least this strip from the subject, in training and at run time, so the VBSA is measured
-    without it. Segmentation
-    benchmarks leave such a band out as "void" (the object boundaries of PASCAL VOC); the issue's figures
-    count it, and both are reported.
+    subject's soles and toes, the floor) within :data:`CONTACT_REACH_PX` of such a pixel of the subject.
+    The measures cut the subject's share of it only when a floor is found (by the segmentation, at run
+    time and in the training renders in rooms): :func:`~wbsa.estimation.measure.measure_subject` then
+    drops the subject's returns within the floor's noise envelope (at least ``FLOOR_CUT_M`` over it,
+    :func:`~wbsa.estimation.cloud.above_floor`) and sparse low pixels beside them, reading heights from the
+    measured depth over the found floor, not from the true surface, so the cut matches this strip only up
+    to the depth noise and the floor's error. With no floor found (flag ``no_floor``; a body alone)
+    nothing is cut and the soles are measured with the body. Segmentation benchmarks leave such a band out
+    as "void" (the object boundaries of PASCAL VOC); the issue's figures count it, and both are reported.
 
     Parameters
     ----------
@@ -90,6 +94,11 @@ def contact_strip(truth: np.ndarray, surface_height_m: np.ndarray) -> np.ndarray
         The subject's pixels.
     surface_height_m : (h, w) float64
         Height over the floor of the surface each pixel sees, NaN where none (:meth:`RoomScene.surface_height_m`).
+
+    Returns
+    -------
+    (h, w) bool
+        The strip: subject and floor pixels alike.
     """
     from scipy import ndimage
 

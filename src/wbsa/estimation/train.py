@@ -218,6 +218,22 @@ def _bag_rows(subjects: np.ndarray, seed: int, bag: int) -> np.ndarray:
     return np.isin(subjects, chosen)
 
 
+#: The parts :func:`training_renders` renders.
+_PARTS = ("fit", "calibration")
+
+
+def _check_parts(parts) -> None:
+    """Raise :class:`WbsaError` unless ``parts`` is a non-empty collection of :data:`_PARTS`."""
+    if isinstance(parts, str):
+        raise WbsaError(f"training parts must be a tuple of part names, got the string {parts!r}; "
+                        f"use e.g. ({parts!r},)")
+    unknown = [p for p in parts if p not in _PARTS]
+    if unknown:
+        raise WbsaError(f"training part {unknown[0]!r} is unknown; use fit or calibration")
+    if not parts:
+        raise WbsaError("no training part to render; use fit, calibration or both")
+
+
 def training_renders(settings: TrainSettings = TrainSettings(), parts: tuple[str, ...] = ("fit", "calibration"), *,
                      workers: int = 1, show_progress: bool | None = None) -> dict[str, Samples]:
     """Render the training captures: the fit subjects' and the calibration subjects' (steps 1–3).
@@ -226,15 +242,25 @@ def training_renders(settings: TrainSettings = TrainSettings(), parts: tuple[str
     ----------
     settings : TrainSettings
     parts : tuple of {'fit', 'calibration'}
-        Which to render (the calibration captures alone re-create a model's calibration scores).
+        Which to render, at least one (the calibration captures alone re-create a model's calibration
+        scores). Checked before anything is built.
     workers : int
         Local worker processes (the renders do not depend on it).
+    show_progress : bool, optional
+        Progress bars (None: when stderr is a terminal, :func:`wbsa.progress.progress`).
 
     Returns
     -------
     dict of str to Samples
-        One entry per part.
+        One entry per part, keyed by its name: a table of one row per capture of the part's subjects
+        (unusable ones included, ``m_ok`` False; :func:`usable`) and its (n, d) float32 descriptors.
+
+    Raises
+    ------
+    WbsaError
+        ``parts`` empty, a string rather than a tuple of them, or naming an unknown part.
     """
+    _check_parts(parts)
     pop = training_population(settings, show_progress)
     rng = np.random.default_rng(settings.seed)
     calib = rng.random(len(pop)) < settings.calibration_fraction
@@ -244,8 +270,6 @@ def training_renders(settings: TrainSettings = TrainSettings(), parts: tuple[str
     chosen = {"fit": (~calib, render), "calibration": (calib, replace(render, seed=settings.seed + 7919))}
     out = {}
     for part in parts:
-        if part not in chosen:
-            raise WbsaError(f"training part {part!r} is unknown; use fit or calibration")
         rows, part_render = chosen[part]
         out[part] = render_samples(pop[rows].reset_index(drop=True), part_render, workers=workers,
                                    show_progress=show_progress)

@@ -47,6 +47,10 @@ class RoomTestSettings:
     scene : {'room', 'alone'}
         ``alone``: the same captures of the subject with no floor, wall or second person, as a render of a
         3-D body scan would be.
+    clothing_m : float
+        A layer of everyday clothes this thick (m) over the subject's trunk, upper arms, legs and feet
+        (:mod:`wbsa.bodies.clothing`); the truth stays the bare skin's WBSA. The capture (camera, distance,
+        view) is drawn from the bare body, so the images differ from the bare ones by the clothes alone.
     seed : int
     """
 
@@ -59,6 +63,7 @@ class RoomTestSettings:
     edge_pixels: EdgePixels = "kept"
     edge_share: float = 1.0
     scene: TestScene = "room"
+    clothing_m: float = 0.0
     seed: int = 1000
 
     def __post_init__(self) -> None:
@@ -68,6 +73,8 @@ class RoomTestSettings:
             raise WbsaError(f"edge_share {self.edge_share} must be a share of the depth edges in [0, 1]")
         if self.scene not in TEST_SCENES:
             raise WbsaError(f"scene {self.scene!r} is unknown; use one of {', '.join(TEST_SCENES)}")
+        if not 0.0 <= self.clothing_m <= 0.05:
+            raise WbsaError(f"clothing_m {self.clothing_m} must be a layer of 0–0.05 m (0.01 for 1 cm of clothes)")
 
 
 #: Pixels this close (in the image) to the subject's make up the contact strip with the floor ...
@@ -118,6 +125,7 @@ def room_capture_chunk(population: pd.DataFrame, others: pd.DataFrame, first: in
     wall time.
     """
     from wbsa.bodies.body_model import BodyModel
+    from wbsa.bodies.clothing import COVERED_BONES, clothed_vertices
     from wbsa.bodies.posture import RandomPosture
     from wbsa.estimation.predict import load_any_model
     from wbsa.estimation.room import capture_room, compose_room, with_edge_pixels
@@ -132,6 +140,7 @@ def room_capture_chunk(population: pd.DataFrame, others: pd.DataFrame, first: in
         body_model = BodyModel()
         poser = RandomPosture(body_model)
         model = load_any_model(model_path)
+        covered = body_model.vertices_of_bones(COVERED_BONES)
         bodies = body_model.rest_bodies(population)
         extra = body_model.rest_bodies(others)
         for b in range(len(population)):
@@ -139,8 +148,10 @@ def room_capture_chunk(population: pd.DataFrame, others: pd.DataFrame, first: in
             rng = np.random.default_rng(np.random.SeedSequence([settings.seed, index]))
             pose_rng, other_rng, capture_rng, room_rng, edge_rng = rng.spawn(5)
             vertices, posture = poser(bodies.vertices[b], bodies.bone_heads[b], pose_rng)
-            subject = body_model.skin_mesh(vertices)
             cap = sample_capture(vertices, capture_rng, settings.capture)
+            if settings.clothing_m > 0.0:
+                vertices = clothed_vertices(vertices, body_model.skin_faces, covered, settings.clothing_m)
+            subject = body_model.skin_mesh(vertices)
             people = ()
             if room_rng.random() < settings.second_person:
                 v2, _ = poser(extra.vertices[b], extra.bone_heads[b], other_rng)
@@ -164,6 +175,7 @@ def room_capture_chunk(population: pd.DataFrame, others: pd.DataFrame, first: in
                        ideal_sensor=cap.sensor.is_ideal, azimuth_deg=cap.view.azimuth_deg,
                        elevation_deg=cap.view.elevation_deg, distance_m=cap.view.distance_m,
                        camera_height_m=cap.camera_height_m, fits=cap.fits, second_person=bool(people),
+                       clothing_m=settings.clothing_m,
                        subject_pixels=int(truth.sum()))
             t0 = time.perf_counter()
             try:

@@ -439,6 +439,26 @@ def test_wrong_depth_scale_is_an_error_not_a_number(room_view):
         segment_subject(frame.depth_m / 5.0, camera)
 
 
+def test_an_image_that_cannot_be_measured_is_refused_before_the_model_is_loaded(room_view, monkeypatch):
+    """A first use builds the default model (half an hour): an empty frame or one at the wrong depth scale
+    must be refused at once, not after the build."""
+    import wbsa.estimation.predict as predict
+    from wbsa.estimation import estimate
+    from wbsa.estimation.segment import SegmentSettings
+
+    def no_model(*args, **kwargs):
+        raise AssertionError("the model was loaded for an image that cannot be measured")
+
+    monkeypatch.setattr(predict, "load_any_model", no_model)
+    _, camera, frame = room_view
+    with pytest.raises(WbsaError, match="returns between"):
+        estimate(np.zeros_like(frame.depth_m), camera)
+    with pytest.raises(WbsaError, match="depth scale"):
+        estimate(frame.depth_m / 5.0, camera)
+    with pytest.raises(AssertionError, match="was loaded"):  # a measurable image does reach the model
+        estimate(frame.depth_m, camera, segment=SegmentSettings(pick="center"))
+
+
 def test_measures_use_the_reconstruction_the_simulation_reports(bodies):
     """Without a floor the measured VBSA is simulate_view's vbsa_recon_grid_m2, to the last bit."""
     from wbsa.camera import MeshScene, View, preset
@@ -871,3 +891,20 @@ def test_residual_tree_settings_are_checked():
     assert TrainSettings(tree_iterations=10, tree_leaves=2, tree_l2=0.0).tree_iterations == 10
     with pytest.raises(WbsaError, match="alone_share 1.5 must be a share"):
         TrainSettings(alone_share=1.5)
+    with pytest.raises(WbsaError, match="scan_share -0.1 must be a share"):
+        TrainSettings(scan_share=-0.1)
+
+
+def test_a_scan_render_has_no_sensor_effects_and_keeps_the_capture():
+    """Half the training bodies alone are read as a rendered 3-D body scan: ideal sensor, the render's edges,
+    the same camera and view."""
+    from wbsa.estimation.capture import CaptureSettings, as_scan_render, sample_capture
+
+    box = np.array([[-0.2, -0.1, 0.0], [0.2, 0.1, 1.7]])
+    for s in range(20):
+        cap = sample_capture(box, np.random.default_rng(s), CaptureSettings(ideal_share=0.0))
+        scan = as_scan_render(cap)
+        assert scan.sensor.is_ideal and scan.edge_pixels == "kept" and scan.edge_share == 0.0
+        assert (scan.camera, scan.view, scan.camera_height_m, scan.fits) == (cap.camera, cap.view,
+                                                                           cap.camera_height_m, cap.fits)
+        assert not cap.sensor.is_ideal

@@ -172,6 +172,17 @@ def sample_capture(vertices: np.ndarray, rng: np.random.Generator, settings: Cap
                    share if edges != "kept" else 0.0)
 
 
+def as_scan_render(capture: Capture) -> Capture:
+    """``capture`` read as a rendered 3-D body scan is: no sensor effects and the render's own edges.
+
+    A scan rendered to a depth image (``wbsa view``, or any ray caster) has no noise, holes, quantisation,
+    range limits or mixed pixels; its camera, view and fit are the capture's.
+    """
+    import dataclasses
+
+    return dataclasses.replace(capture, sensor=SensorSettings(), edge_pixels="kept", edge_share=0.0)
+
+
 def _noise_level(sensor: SensorSettings, rng: np.random.Generator, settings: CaptureSettings) -> SensorSettings:
     """``sensor`` made ideal (``ideal_share``) or its noise scaled (``noise_scale``); drawn after every other
     draw of a capture, and not at all when fixed, so fixed settings keep the captures they drew before."""

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from wbsa.estimation.capture import CaptureSettings, sample_capture
+from wbsa.estimation.capture import CaptureSettings, as_scan_render, sample_capture
 from wbsa.estimation.cloud import Plane
 
 #: Truth columns copied from the population table into every sample row.
@@ -46,6 +46,10 @@ class RenderSettings:
     alone_share : float
         With ``room``: share of captures of the body alone (no floor, no wall), as a render of a 3-D body
         scan is; the measures then find no floor.
+    scan_share : float
+        Share of the captures of a body alone that are read as a rendered 3-D body scan is: no sensor effects
+        (no noise, holes or quantisation) and the render's own edges. The others keep their camera's drawn
+        sensor and edges (a frame whose room was removed).
     seed : int
     """
 
@@ -56,7 +60,8 @@ class RenderSettings:
     floor_tilt_deg: float = 0.1
     room: bool = True
     wall_behind_m: tuple[float, float] = (0.5, 1.5)
-    alone_share: float = 0.1
+    alone_share: float = 0.15
+    scan_share: float = 0.5
     seed: int = 0
 
     def __post_init__(self) -> None:
@@ -64,6 +69,8 @@ class RenderSettings:
 
         if not 0.0 <= self.alone_share <= 1.0:
             raise WbsaError(f"alone_share {self.alone_share} must be a share of the captures in [0, 1]")
+        if not 0.0 <= self.scan_share <= 1.0:
+            raise WbsaError(f"scan_share {self.scan_share} must be a share of the captures of a body alone in [0, 1]")
 
 
 @dataclass(frozen=True)
@@ -132,10 +139,14 @@ def render_chunk(population: pd.DataFrame, first_sample: int, settings: RenderSe
             truth = population.iloc[b]
             for _ in range(settings.views_per_subject):
                 rng = np.random.default_rng(np.random.SeedSequence([settings.seed, sample]))
-                pose_rng, capture_rng, floor_rng, room_rng, edge_rng = rng.spawn(5)
+                # the sixth stream is the scan draw's: spawning one more leaves the first five as they were
+                pose_rng, capture_rng, floor_rng, room_rng, edge_rng, scan_rng = rng.spawn(6)
                 vertices, posture = poser(bodies.vertices[b], bodies.bone_heads[b], pose_rng)
                 mesh = model.skin_mesh(vertices)
                 cap = sample_capture(vertices, capture_rng, settings.capture)
+                alone = settings.room and settings.alone_share > 0 and bool(room_rng.uniform() < settings.alone_share)
+                if alone and settings.scan_share > 0 and scan_rng.uniform() < settings.scan_share:
+                    cap = as_scan_render(cap)
                 row = {c: truth[c] for c in TRUTH_COLUMNS if c in truth.index}
                 row.update(sample=sample, posture=posture, camera=cap.camera.name, azimuth_deg=cap.view.azimuth_deg,
                            elevation_deg=cap.view.elevation_deg, distance_m=cap.view.distance_m,
@@ -145,7 +156,6 @@ def render_chunk(population: pd.DataFrame, first_sample: int, settings: RenderSe
                            ideal_sensor=cap.sensor.is_ideal,
                            edge_pixels=cap.edge_pixels, edge_share=cap.edge_share)
                 if settings.room:
-                    alone = settings.alone_share > 0 and bool(room_rng.uniform() < settings.alone_share)
                     row.update(alone=alone)
                     depth, mixed, mask, floor = _room_capture(mesh, cap, alone, room_rng, edge_rng, settings, sample)
                 else:

@@ -50,7 +50,11 @@ class TrainSettings:
         Capture the bodies in a room and find them by segmentation, as real images are
         (:class:`~wbsa.estimation.renders.RenderSettings`).
     alone_share : float
-        With ``room``: share of captures of the body alone, with no floor or wall (a rendered body scan).
+        With ``room``: share of captures of the body alone, with no floor or wall (a frame whose room was
+        removed, or a rendered body scan).
+    scan_share : float
+        Share of those read as a rendered 3-D body scan is: no sensor effects, the render's own edges
+        (:func:`~wbsa.estimation.capture.as_scan_render`).
     folds : int
         Folds of the out-of-fold view estimates and residuals.
     tree_iterations, tree_leaves : int
@@ -73,7 +77,8 @@ class TrainSettings:
     capture: CaptureSettings = field(default_factory=CaptureSettings)
     postures: tuple[str, ...] | None = None
     room: bool = True
-    alone_share: float = 0.1
+    alone_share: float = 0.15
+    scan_share: float = 0.5
     folds: int = 3
     tree_iterations: int = 800
     tree_leaves: int = 31
@@ -88,6 +93,8 @@ class TrainSettings:
             raise WbsaError(f"calibration_fraction {self.calibration_fraction} must lie in [0.05, 0.5]")
         if not 0.0 <= self.alone_share <= 1.0:
             raise WbsaError(f"alone_share {self.alone_share} must be a share of the captures in [0, 1]")
+        if not 0.0 <= self.scan_share <= 1.0:
+            raise WbsaError(f"scan_share {self.scan_share} must be a share of the captures of a body alone in [0, 1]")
         if self.views_per_subject < 1 or self.folds < 2:
             raise WbsaError("views_per_subject must be >= 1 and folds >= 2")
         counts_ok = all(isinstance(v, int) for v in (self.tree_iterations, self.tree_leaves, self.tree_bags))
@@ -266,6 +273,7 @@ def training_renders(settings: TrainSettings = TrainSettings(), parts: tuple[str
     calib = rng.random(len(pop)) < settings.calibration_fraction
     render = RenderSettings(views_per_subject=settings.views_per_subject, capture=settings.capture,
                             postures=settings.postures, room=settings.room, alone_share=settings.alone_share,
+                            scan_share=settings.scan_share,
                             seed=settings.seed)
     chosen = {"fit": (~calib, render), "calibration": (calib, replace(render, seed=settings.seed + 7919))}
     out = {}

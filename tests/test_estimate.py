@@ -856,10 +856,13 @@ def test_capture_noise_is_scaled_or_ideal_after_every_other_draw():
     for bad in (dict(noise_scale=(1.5, 0.2)), dict(noise_scale=(-1.0, 1.0)), dict(ideal_share=1.5)):
         with pytest.raises(WbsaError, match=next(iter(bad))):
             CaptureSettings(**bad)
-    with pytest.raises(WbsaError, match="scene"):
-        from wbsa.estimation.testset import RoomTestSettings
+    from wbsa.estimation.testset import RoomTestSettings
 
+    with pytest.raises(WbsaError, match="scene"):
         RoomTestSettings(scene="garden")
+    for layer in (-0.01, 0.2, float("nan")):
+        with pytest.raises(WbsaError, match="clothing_m .* must be a layer of 0–0.05 m"):
+            RoomTestSettings(clothing_m=layer)
 
 
 def test_depth_noise_reads_the_noise_of_a_curved_surface():

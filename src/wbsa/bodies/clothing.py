@@ -2,8 +2,8 @@
 
 The bodies are bare skin, as the paper's subjects were ("nude, or wearing tight-fitting clothes"). A
 dressed person shows the camera the outside of the clothes, which encloses more area than the skin:
-a layer of thickness t over a limb of radius r adds about t / r of its area (1 cm over a 5 cm forearm,
-20 %). :func:`clothed_vertices` moves the skin outwards along its normals by a layer where a T-shirt,
+a layer of thickness t over a limb of radius r adds about t / r of its area (1 cm over a 6 cm thigh,
+17 %). :func:`clothed_vertices` moves the skin outwards along its normals by a layer where a T-shirt,
 trousers and shoes cover it (:data:`COVERED_BONES`: trunk, upper arms, legs, feet), and leaves the head,
 neck, forearms and hands bare. The layer is uniform and follows the skin: loose folds, a skirt or a coat
 bridging the legs are not modelled. Its use is to measure how far the estimator moves per centimetre of
@@ -20,7 +20,7 @@ COVERED_BONES = ("root", "pelvis", "spine", "clavicle", "shoulder", "upperarm", 
 
 
 def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """Unit vertex normals of a closed, outward-wound mesh (Open3D's, area-weighted).
+    """Unit vertex normals of an outward-wound mesh (Open3D's, area-weighted); zero where no triangle uses a vertex.
 
     Parameters
     ----------

@@ -44,8 +44,8 @@ class RenderSettings:
         image (the segmentation's edges, the detected floor). False: the body alone, its own pixels and
         the render's floor.
     alone_share : float
-        With ``room``: share of captures of the body alone (no floor, no wall), as a render of a 3-D body
-        scan is; the measures then find no floor.
+        With ``room``: share of captures of the body alone (no floor, no wall), as a frame whose room was
+        removed or a render of a 3-D body scan is; the measures then find no floor.
     scan_share : float
         Share of the captures of a body alone that are read as a rendered 3-D body scan is: no sensor effects
         (no noise, holes or quantisation) and the render's own edges. The others keep their camera's drawn

@@ -161,6 +161,9 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     depth_m = _depth_array(depth, depth_scale)
     checks.check_image_size(depth_m, intrinsics)
     depth_m, mixed = repair_mixed_pixels(depth_m, intrinsics.fx)
+    # a given model file is read (and refused if broken) at once; the default model, which a first use builds
+    # (half an hour), only once the image is measured, so an image that cannot be measured is refused first
+    mdl = None if model is None else load_any_model(model, show_progress=show_progress)
     flags: dict[str, str] = {}
     if segment is None:
         mask, floor = np.isfinite(depth_m) & (depth_m > 0), None
@@ -180,8 +183,8 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     if floor is None:
         flags["no_floor"] = checks.FLAGS["no_floor"]
     flags.update(checks.sensor_range_flags(m.distance_m, intrinsics))
-    # the model last: an image that cannot be measured is refused before a first use builds the default model
-    mdl = load_any_model(model, show_progress=show_progress)
+    if mdl is None:
+        mdl = load_any_model(None, show_progress=show_progress)
     prediction = predict_wbsa(mdl, m, intrinsics, azimuth_deg, elevation_deg, level)
     view = prediction.view
     flags.update(checks.view_flags((azimuth_deg, elevation_deg), view))

@@ -10,7 +10,7 @@ Image ``i`` draws from ``SeedSequence([seed, i])``: rows do not depend on chunki
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pandas as pd
@@ -48,9 +48,11 @@ class RoomTestSettings:
         ``alone``: the same captures of the subject with no floor, wall or second person, as a render of a
         3-D body scan would be.
     clothing_m : float
-        A layer of everyday clothes this thick (m) over the subject's trunk, upper arms, legs and feet
-        (:mod:`wbsa.bodies.clothing`); the truth stays the bare skin's WBSA. The capture (camera, distance,
-        view) is drawn from the bare body, so the images differ from the bare ones by the clothes alone.
+        A layer of everyday clothes 0–0.05 m thick over the subject's trunk, upper arms, legs and feet
+        (:mod:`wbsa.bodies.clothing`; the shoe soles flattened onto the floor); the truth stays the bare
+        skin's WBSA. The capture (camera, distance, view) is drawn from the bare body and aims at its centre;
+        the room is placed around the clothed body (the wall's gap from its back, the second person, who stays
+        bare, beside its centre), a few millimetres from where it stands around the bare one.
     seed : int
     """
 
@@ -149,8 +151,10 @@ def room_capture_chunk(population: pd.DataFrame, others: pd.DataFrame, first: in
             pose_rng, other_rng, capture_rng, room_rng, edge_rng = rng.spawn(5)
             vertices, posture = poser(bodies.vertices[b], bodies.bone_heads[b], pose_rng)
             cap = sample_capture(vertices, capture_rng, settings.capture)
+            bare_center = 0.5 * (vertices.min(axis=0) + vertices.max(axis=0))
             if settings.clothing_m > 0.0:
                 vertices = clothed_vertices(vertices, body_model.skin_faces, covered, settings.clothing_m)
+                vertices[:, 2] = np.maximum(vertices[:, 2], 0.0)  # shoe soles on the floor, not through it
             subject = body_model.skin_mesh(vertices)
             people = ()
             if room_rng.random() < settings.second_person:
@@ -163,6 +167,8 @@ def room_capture_chunk(population: pd.DataFrame, others: pd.DataFrame, first: in
                 people = ()
             else:
                 room = compose_room(subject, cap.view.azimuth_deg, wall_behind_m=wall_m, others=people)
+            if settings.clothing_m > 0.0:  # the camera aims where it aimed at the bare body
+                room = replace(room, subject_center=bare_center)
             frame, depth = capture_room(room, cap, seed=settings.seed, subject_id=index)
             truth = room.is_subject(frame.triangle_id) & (depth > 0)
             strip = contact_strip(truth, room.surface_height_m(frame.triangle_id))

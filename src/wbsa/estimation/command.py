@@ -25,7 +25,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("estimate", help="estimate WBSA from one depth image of a standing person",
                        description="Find the person in a depth image of a room, measure the visible surface and "
                                    "stature, estimate the view, and predict WBSA with a calibrated interval. Every "
-                                   "warning is printed; exit 2 on input that cannot be measured.")
+                                   "warning is printed; exit 2 on input that cannot be measured. For people in "
+                                   "tight-fitting clothes or none: everyday clothes read about 9 % high per "
+                                   "centimetre of cloth (docs/estimate.md, Clothes).")
     p.add_argument("depth", help="depth image: 16-bit PNG (mm), .npy (float metres), 32-bit float .tiff, .exr")
     p.add_argument("--camera", default="auto",
                    help="intrinsics preset (kinect-v1, kinect-v2, azure-kinect-nfov, azure-kinect-wfov, "

@@ -772,6 +772,7 @@ def test_estimate_finds_the_view_flags_and_writes_outputs(room_view, small_model
     obs = json.loads(capsys.readouterr().out)
     assert obs["code"]["coding"][0]["code"] == "8277-6" and obs["valueQuantity"]["code"] == "m2"
     assert obs["status"] == "preliminary" and len(obs["component"]) == 2 and obs["subject"]["reference"] == "Patient/7"
+    assert "tight-fitting clothes or none" in obs["method"]["text"]  # a clinical record keeps the assumption
     for argv, words in ((["--camera", "kinect-v1"], "kinect-v1 is 640x480"), (["--depth-scale", "200"], "depth scale"),
                         (["--model", str(tmp_path / "none.npz")], "does not exist")):
         rc = main(base + argv)

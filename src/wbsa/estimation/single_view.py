@@ -89,7 +89,8 @@ class Estimate:
         """One sentence on how the number was obtained (FHIR ``Observation.method.text``)."""
         return (f"wbsa {self.method}: one depth image ({self.camera}), visible body surface area "
                 f"{self.vbsa_m2:.3f} m2 and stature {self.stature_m:.2f} m measured on the point cloud, view "
-                f"azimuth {self.view_used[0]:.0f} deg / elevation {self.view_used[1]:.0f} deg, model {self.model}")
+                f"azimuth {self.view_used[0]:.0f} deg / elevation {self.view_used[1]:.0f} deg, model {self.model}; "
+                f"valid for tight-fitting clothes or none (everyday clothes read high)")
 
 
 def _depth_array(depth, depth_scale: float | None) -> np.ndarray:

@@ -151,11 +151,12 @@ def room_capture_chunk(population: pd.DataFrame, others: pd.DataFrame, first: in
             pose_rng, other_rng, capture_rng, room_rng, edge_rng = rng.spawn(5)
             vertices, posture = poser(bodies.vertices[b], bodies.bone_heads[b], pose_rng)
             cap = sample_capture(vertices, capture_rng, settings.capture)
-            bare_center = 0.5 * (vertices.min(axis=0) + vertices.max(axis=0))
-            if settings.clothing_m > 0.0:
-                vertices = clothed_vertices(vertices, body_model.skin_faces, covered, settings.clothing_m)
-                vertices[:, 2] = np.maximum(vertices[:, 2], 0.0)  # shoe soles on the floor, not through it
             subject = body_model.skin_mesh(vertices)
+            bare_center = subject.bbox_center
+            if settings.clothing_m > 0.0:
+                dressed = clothed_vertices(vertices, body_model.skin_faces, covered, settings.clothing_m)
+                dressed[:, 2] = np.maximum(dressed[:, 2], 0.0)  # shoe soles on the floor, not through it
+                subject = body_model.skin_mesh(dressed)
             people = ()
             if room_rng.random() < settings.second_person:
                 v2, _ = poser(extra.vertices[b], extra.bone_heads[b], other_rng)

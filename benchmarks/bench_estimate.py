@@ -191,7 +191,10 @@ def main() -> None:
                     help="factor on the sensor noise's sigma (default 1, Kinect v1's level)")
     ap.add_argument("--clothing-m", type=float, default=0.0,
                     help="a layer of everyday clothes this thick (m) over the trunk, upper arms, legs and feet; the "
-                         "truth stays the bare skin's WBSA (default 0: bare, the issue's benchmark)")
+                         "truth stays the bare skin's WBSA (default 0: bare, the issue's benchmark); the estimator "
+                         "is told the layer, as a user states it")
+    ap.add_argument("--clothing-unstated", action="store_true",
+                    help="with --clothing-m: the estimator is told none (what clothes nobody states read)")
     args = ap.parse_args()
 
     from wbsa.estimation.cache import default_model, default_model_path
@@ -206,7 +209,8 @@ def main() -> None:
     capture = replace(RoomTestSettings().capture, noise_scale=(args.noise_scale, args.noise_scale),
                       ideal_share=1.0 if args.ideal else 0.0)
     settings = RoomTestSettings(capture=capture, seed=args.seed, edge_pixels=args.edge_pixels,
-                                edge_share=args.edge_share, scene=args.scene, clothing_m=args.clothing_m)
+                                edge_share=args.edge_share, scene=args.scene, clothing_m=args.clothing_m,
+                                clothing_stated=not args.clothing_unstated)
     res = run_room_tests(pop, settings, model_path, workers=args.workers)
     if args.out:
         res.to_csv(args.out, index=False)
@@ -215,7 +219,8 @@ def main() -> None:
           + (f" at {args.edge_share:g} of the depth edges" if args.edge_pixels != "kept" else "")
           + (f", scene {args.scene}" if args.scene != "room" else "") + (", ideal sensor" if args.ideal else "")
           + (f", noise x{args.noise_scale:g}" if args.noise_scale != 1.0 and not args.ideal else "")
-          + (f", clothes {100 * args.clothing_m:g} cm" if args.clothing_m else ""))
+          + (f", clothes {100 * args.clothing_m:g} cm" if args.clothing_m else "")
+          + (" (not stated)" if args.clothing_m and args.clothing_unstated else ""))
     report(res, time.perf_counter() - t0)
 
 

@@ -6,8 +6,9 @@ a layer of thickness t over a limb of radius r adds about t / r of its area (1 c
 17 %). :func:`clothed_vertices` moves the skin outwards along its normals by a layer where a T-shirt,
 trousers and shoes cover it (:data:`COVERED_BONES`: trunk, upper arms, legs, feet), and leaves the head,
 neck, forearms and hands bare. The layer is uniform and follows the skin: loose folds, a skirt or a coat
-bridging the legs are not modelled. Its use is to measure how far the estimator moves per centimetre of
-clothes (``benchmarks/bench_estimate.py --clothing-m``), not to dress a training population.
+bridging the legs are not modelled. :func:`dressed_vertices` also flattens the shoe soles onto the floor.
+The estimator's training dresses a share of its bodies so (the user states the layer, ``--clothing-cm``),
+and ``benchmarks/bench_estimate.py --clothing-m`` measures it on dressed held-out bodies.
 """
 
 from __future__ import annotations
@@ -73,3 +74,25 @@ def clothed_vertices(vertices: np.ndarray, faces: np.ndarray, covered: np.ndarra
     if layer_m == 0.0 or not covered.any():
         return v.copy()
     return v + (layer_m * covered)[:, None] * vertex_normals(v, faces)
+
+
+def dressed_vertices(vertices: np.ndarray, faces: np.ndarray, covered: np.ndarray, layer_m: float) -> np.ndarray:
+    """:func:`clothed_vertices` standing on the floor z = 0: the shoe soles flattened onto it, not through it.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float64
+        One posed body's skin (metres), standing on z = 0.
+    faces : (m, 3) int
+    covered : (n,) bool
+    layer_m : float
+        0 gives the skin itself (a copy).
+
+    Returns
+    -------
+    (n, 3) float64
+    """
+    dressed = clothed_vertices(vertices, faces, covered, layer_m)
+    if layer_m > 0.0:
+        dressed[:, 2] = np.maximum(dressed[:, 2], 0.0)
+    return dressed

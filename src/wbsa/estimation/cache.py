@@ -20,7 +20,7 @@ from wbsa.estimation.train import TrainSettings
 
 CACHE_ENV = "WBSA_CACHE_DIR"
 #: Bumped whenever the measures, the renders or the model change what a trained model means.
-MODEL_REVISION = 15
+MODEL_REVISION = 16
 
 
 def cache_dir() -> Path:

@@ -36,6 +36,8 @@ HUMAN_HEIGHT_M = (0.5, 2.5)
 MIXED_PER_OUTLINE_PIXEL = 0.1
 #: A stated view further than this (degrees) from the estimated one is flagged.
 VIEW_TOLERANCE_DEG = 30.0
+#: Thickest layer of clothes (m) that can be stated; the default model is trained on 0–1.5 cm (flagged beyond).
+MAX_CLOTHING_M = 0.05
 
 
 def check_image_size(depth: np.ndarray, camera) -> None:
@@ -54,6 +56,17 @@ def check_height(stature_m: float) -> None:
     if not (math.isfinite(stature_m) and lo <= stature_m <= hi):
         raise WbsaError(f"the subject measures {stature_m:.2f} m tall in the point cloud, outside {lo:g}–{hi:g} m; "
                         "the depth scale (units per metre) or the camera intrinsics are probably wrong")
+
+
+def check_clothing(clothing_m: float) -> None:
+    """Raise if a stated layer of clothes is not a thickness of 0 to :data:`MAX_CLOTHING_M` metres."""
+    try:
+        ok = math.isfinite(float(clothing_m)) and 0.0 <= float(clothing_m) <= MAX_CLOTHING_M
+    except (TypeError, ValueError):
+        ok = False
+    if not ok:
+        raise WbsaError(f"the clothes' layer {clothing_m!r} m must be a thickness of 0 to {MAX_CLOTHING_M:g} m "
+                        "(0 for none or tight-fitting, 0.01 for 1 cm; on the command line --clothing-cm 1)")
 
 
 def check_finite_model(arrays: dict, source: str) -> None:

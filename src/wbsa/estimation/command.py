@@ -25,9 +25,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("estimate", help="estimate WBSA from one depth image of a standing person",
                        description="Find the person in a depth image of a room, measure the visible surface and "
                                    "stature, estimate the view, and predict WBSA with a calibrated interval. Every "
-                                   "warning is printed; exit 2 on input that cannot be measured. For people in "
-                                   "tight-fitting clothes or none: everyday clothes read about 9 % high per "
-                                   "centimetre of cloth (docs/estimate.md, Clothes).")
+                                   "warning is printed; exit 2 on input that cannot be measured. The camera sees "
+                                   "the outside of the clothes: state them with --clothing-cm (a 1 cm layer "
+                                   "not stated reads about 9 % high; docs/estimate.md, Clothes).")
     p.add_argument("depth", help="depth image: 16-bit PNG (mm), .npy (float metres), 32-bit float .tiff, .exr")
     p.add_argument("--camera", default="auto",
                    help="intrinsics preset (kinect-v1, kinect-v2, azure-kinect-nfov, azure-kinect-wfov, "
@@ -39,6 +39,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="stated azimuth in degrees (optional: it is estimated, and checked when given)")
     p.add_argument("--elevation", type=number_in(-90, 90), default=None,
                    help="stated elevation in degrees (optional: it is estimated, and checked when given)")
+    p.add_argument("--clothing-cm", type=number_in(0, 5), default=0.0,
+                   help="thickness of the clothes over the trunk, arms and legs in cm, how far their outside "
+                        "stands off the skin on average (default 0: none or tight-fitting; the default model "
+                        "is trained on 0-1.5)")
     p.add_argument("--level", type=number_in(0, 1, low_open=True, high_open=True), default=0.95,
                    help="prediction interval coverage (default 0.95)")
     p.add_argument("--depth-scale", type=number_in(0, low_open=True), default=None,
@@ -86,7 +90,7 @@ def run_estimate(args: argparse.Namespace) -> int:
     segment = None if args.no_segment else SegmentSettings(min_depth_m=args.min_depth, max_depth_m=args.max_depth,
                                                            pick=args.pick)
     est = estimate(depth, camera, args.model, azimuth_deg=args.azimuth, elevation_deg=args.elevation,
-                   level=args.level, segment=segment)
+                   clothing_m=args.clothing_cm / 100.0, level=args.level, segment=segment)
     if args.camera == "auto":
         est.flags["camera_assumed"] = f"no --camera given; the {camera.name} preset fits the image size"
     if args.mask_out:

@@ -4,7 +4,8 @@ WBSA is predicted on the log scale from what :func:`~wbsa.estimation.measure.mea
 the view: a ridge regression of log WBSA on log VBSA, log stature (paper eq. 8), log silhouette area,
 width and thickness, each times a view basis (1, cos ψ, cos 2ψ, cos 3ψ, sin φ), plus distance, pixel
 pitch, how the camera treated the outline (mixed returns, gaps: the area read through the outline
-moves with them), the depth noise (a noisy surface reads a different area) and whether a floor was seen;
+moves with them), the depth noise (a noisy surface reads a different area), whether a floor was seen and
+the clothes the user states (a layer of clothes adds area the image cannot tell from skin);
 boosted trees then correct its residual from the same measures, the body's band widths and thicknesses and
 the view's uncertainty. The interval is split-conformal: residuals divided by a fitted
 spread s(x) on held-out calibration renders (never used in fitting) give the quantile of any level, its
@@ -13,7 +14,8 @@ rank counted in calibration subjects (:meth:`EstimatorModel.quantile`, :func:`co
 File layout: one ``.npz`` of numbers (no pickle) with ``meta_json`` (format ``wbsa-estimator``, version 5,
 training settings, feature ranges, held-out metrics). Version 2 added the outline terms, version 3 the
 apparent build to the spread (:func:`spread_design`), version 4 the share of the outline's depth edges
-behind a gap (``edge_gap_share``), version 5 the depth noise and the floor (:func:`capture_terms`).
+behind a gap (``edge_gap_share``), version 5 the depth noise and the floor (:func:`capture_terms`), version 6
+the stated clothes (``clothing_m``).
 """
 
 from __future__ import annotations
@@ -31,18 +33,21 @@ from wbsa.estimation.trees import TreeEnsemble
 from wbsa.estimation.view import ViewModel
 
 FORMAT = "wbsa-estimator"
-VERSION = 5
+VERSION = 6
 #: Values whose training range is recorded and checked (flag ``out_of_training_range``; :func:`range_values`).
-RANGE_KEYS = ("vbsa_m2", "stature_m", "distance_m", "elevation_deg", "depth_noise_px")
+RANGE_KEYS = ("vbsa_m2", "stature_m", "distance_m", "elevation_deg", "depth_noise_px", "clothing_m")
 _BASE = ("vbsa_m2", "stature_m", "silhouette_m2", "width_m", "thickness_m")
 #: How the camera treated the subject's outline (:func:`wbsa.estimation.mixed_pixels.outline_shares`).
 _OUTLINE = ("mixed_share", "gap_share", "edge_gap_share")
 #: How the image was taken besides: its depth noise (taken per pixel pitch) and whether a floor was seen.
 _SCENE = ("depth_noise_m", "floor_seen")
+#: What the user states: the thickness of the layer of clothes (m; 0: none or tight-fitting). It is not measured
+#: on the image (:func:`with_clothing` adds it to the measures).
+_STATED = ("clothing_m",)
 #: Columns of :func:`design`: the log measures × 5 view terms, 4 view terms, distance, pitch, capture terms.
-DESIGN_TERMS = 5 * len(_BASE) + 4 + 2 + len(_OUTLINE) + len(_SCENE)
+DESIGN_TERMS = 5 * len(_BASE) + 4 + 2 + len(_OUTLINE) + len(_SCENE) + 2
 #: Columns of :func:`spread_design`.
-SPREAD_TERMS = 7 + len(_OUTLINE) + len(_SCENE)
+SPREAD_TERMS = 7 + len(_OUTLINE) + len(_SCENE) + 2
 
 
 def conformal_rank(n_scores: int, n_subjects: int, level: float) -> tuple[int, bool]:
@@ -91,15 +96,34 @@ def conformal_rank(n_scores: int, n_subjects: int, level: float) -> tuple[int, b
 
 
 def _check_measures(features: dict[str, np.ndarray]) -> None:
-    missing = [k for k in (*_BASE, "distance_m", "pitch_m", *_OUTLINE, *_SCENE) if k not in features]
+    missing = [k for k in (*_BASE, "distance_m", "pitch_m", *_OUTLINE, *_SCENE, *_STATED) if k not in features]
     if missing:
         raise WbsaError(f"measures {', '.join(missing)} are missing; measure the image with this wbsa "
                         "(wbsa.estimation.measure_subject) or re-render the training samples")
 
 
+def with_clothing(features: dict[str, np.ndarray], clothing_m) -> dict[str, np.ndarray]:
+    """The measures with the stated layer of clothes (``clothing_m``, (n,) float64 metres) added.
+
+    Parameters
+    ----------
+    features : dict of (n,) float64
+        The measures (:meth:`SubjectMeasures.features`).
+    clothing_m : float or (n,) float64
+        Thickness of the clothes over the trunk, upper arms, legs and feet (0: none or tight-fitting).
+
+    Returns
+    -------
+    dict of (n,) float64
+    """
+    n = len(np.asarray(features["vbsa_m2"]))
+    return {**features, "clothing_m": np.broadcast_to(np.asarray(clothing_m, dtype=np.float64), (n,)).copy()}
+
+
 def range_values(features: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
-    """The values of :data:`RANGE_KEYS`, (n,) float64 each: four measures and the depth noise over the pixel
-    pitch (``depth_noise_px``: a camera noisier than any the model was trained on is flagged)."""
+    """The values of :data:`RANGE_KEYS`, (n,) float64 each: four measures, the depth noise over the pixel
+    pitch (``depth_noise_px``: a camera noisier than any the model was trained on is flagged) and the stated
+    clothes."""
     out = {k: np.asarray(features[k], dtype=np.float64) for k in RANGE_KEYS if k != "depth_noise_px"}
     out["depth_noise_px"] = _depth_noise_px(features)
     return out
@@ -111,16 +135,21 @@ def _depth_noise_px(features: dict[str, np.ndarray]) -> np.ndarray:
 
 
 def capture_terms(features: dict[str, np.ndarray]) -> list[np.ndarray]:
-    """How the image was taken (:data:`_OUTLINE`, :data:`_SCENE`), (n,) float64 each: the three outline
-    shares, the depth noise over the pixel pitch (Kinect v1's noise model measured on a body at 2.6 m, 11 mm:
-    about 2.5 on Kinect v1's pixels, 1.6 on Kinect v2's; an ideal render in whole millimetres reads about
-    0.6 mm) and whether a floor was seen (1) or not (0)."""
+    """How the image was taken (:data:`_OUTLINE`, :data:`_SCENE`, :data:`_STATED`), (n,) float64 each: the three
+    outline shares, the depth noise over the pixel pitch (Kinect v1's noise model measured on a body at 2.6 m,
+    11 mm: about 2.5 on Kinect v1's pixels, 1.6 on Kinect v2's; an ideal render in whole millimetres reads
+    about 0.6 mm), whether a floor was seen (1) or not (0), and the stated clothes twice: their thickness in
+    centimetres, and that thickness over the body's apparent width (VBSA / stature; a layer t over a limb of
+    radius r adds about t / r of its area, so thin bodies gain more)."""
     cols = [np.asarray(features[k], dtype=np.float64) for k in _OUTLINE]
-    return cols + [_depth_noise_px(features), np.asarray(features["floor_seen"], dtype=np.float64)]
+    clothing_m = np.asarray(features["clothing_m"], dtype=np.float64)
+    width_m = np.asarray(features["vbsa_m2"], dtype=np.float64) / np.asarray(features["stature_m"], dtype=np.float64)
+    return cols + [_depth_noise_px(features), np.asarray(features["floor_seen"], dtype=np.float64),
+                   100.0 * clothing_m, clothing_m / width_m]
 
 
 def design(features: dict[str, np.ndarray], psi_deg: np.ndarray, elevation_deg: np.ndarray) -> np.ndarray:
-    """Linear design matrix (n, 36): log measures × view basis, view basis, log distance, pitch/stature, capture."""
+    """Linear design matrix (n, 38): log measures × view basis, view basis, log distance, pitch/stature, capture."""
     _check_measures(features)
     r = np.radians(np.asarray(psi_deg, dtype=np.float64))
     s_el = np.sin(np.radians(np.asarray(elevation_deg, dtype=np.float64)))
@@ -133,7 +162,7 @@ def design(features: dict[str, np.ndarray], psi_deg: np.ndarray, elevation_deg: 
 
 def tree_features(features: dict[str, np.ndarray], shape: np.ndarray, psi_deg: np.ndarray, psi_sd_deg: np.ndarray,
                   elevation_deg: np.ndarray) -> np.ndarray:
-    """Features of the residual trees (n, 54): log measures, view, its spread, distance, bands / stature, capture."""
+    """Features of the residual trees (n, 56): log measures, view, its spread, distance, bands / stature, capture."""
     _check_measures(features)
     st = np.asarray(features["stature_m"], dtype=np.float64)
     cols = [np.log(np.asarray(features[k], dtype=np.float64)) for k in _BASE]
@@ -144,7 +173,7 @@ def tree_features(features: dict[str, np.ndarray], shape: np.ndarray, psi_deg: n
 
 def spread_design(psi_deg: np.ndarray, psi_sd_deg: np.ndarray, features: dict[str, np.ndarray],
                   log_wbsa: np.ndarray) -> np.ndarray:
-    """Design of the log residual spread (n, 12).
+    """Design of the log residual spread (n, 14).
 
     Columns: 1, cos 2ψ, view spread / 30°, log pitch, log pixel count, the capture terms
     (:func:`capture_terms`), and the
@@ -164,7 +193,7 @@ def spread_design(psi_deg: np.ndarray, psi_sd_deg: np.ndarray, features: dict[st
 
     Returns
     -------
-    (n, 12) float64
+    (n, 14) float64
     """
     r = np.radians(np.asarray(psi_deg, dtype=np.float64))
     build = np.asarray(log_wbsa, dtype=np.float64) - 2.0 * np.log(np.asarray(features["stature_m"], dtype=np.float64))

@@ -90,10 +90,11 @@ def _cached_view_model():
 
 
 def predict_wbsa(model, measures, camera, azimuth_deg: float | None, elevation_deg: float | None,
-                 level: float) -> Prediction:
-    """Predict WBSA from measures with either kind of model (see the module doc)."""
+                 level: float, clothing_m: float = 0.0) -> Prediction:
+    """Predict WBSA from measures with either kind of model (see the module doc); ``clothing_m`` is the stated
+    layer of clothes (m), which only an estimator model allows for."""
     from wbsa.estimation.checks import range_flags
-    from wbsa.estimation.model import EstimatorModel, range_values
+    from wbsa.estimation.model import EstimatorModel, range_values, with_clothing
 
     view = _view(model, measures, azimuth_deg)
     az = view.azimuth_deg if azimuth_deg is None else float(fold_azimuth(azimuth_deg))
@@ -103,7 +104,7 @@ def predict_wbsa(model, measures, camera, azimuth_deg: float | None, elevation_d
         flags["uncertain_view"] = (f"azimuth {view.azimuth_deg:.0f}° ± {view.azimuth_sd_deg:.0f}° (camera in front "
                                    f"with probability {view.p_front:.2f}); give --azimuth if you know it")
     if isinstance(model, EstimatorModel):
-        feats = {k: np.array([v]) for k, v in measures.features().items()}
+        feats = with_clothing({k: np.array([v]) for k, v in measures.features().items()}, clothing_m)
         # a stated view counts as sure as the surest estimated one: the models never saw a smaller spread
         az_sd = view.azimuth_sd_deg if azimuth_deg is None else model.view.axis_sd_deg
         w, lo, hi = model.predict(feats, measures.shape[None], np.array([az]), np.array([az_sd]), np.array([el]), level)
@@ -114,6 +115,9 @@ def predict_wbsa(model, measures, camera, azimuth_deg: float | None, elevation_d
                                         f"subjects, too few to promise {100 * level:g} %; its widest score "
                                         "is used")
         return Prediction(float(w[0]), float(lo[0]), float(hi[0]), view, (az, el), model.name, flags)
+    if clothing_m > 0:
+        raise WbsaError("a wbsa fit model allows for no clothes; state none (--clothing-cm 0) or use the default "
+                        "estimator model")
     return _predict_legacy(model, measures, camera, view, az, el, level, flags)
 
 

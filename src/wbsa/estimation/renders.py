@@ -5,7 +5,9 @@
 anything else), draws captures (:func:`~wbsa.estimation.capture.sample_capture`), renders each with
 :func:`wbsa.simulate.simulate_view` (sensor on), by default standing in a room whose floor and subject are
 then found by :func:`~wbsa.estimation.segment.segment_subject` as in a real image, and measures the sensed
-frame with :func:`~wbsa.estimation.measure.measure_subject`. Sample ``i`` draws from its own
+frame with :func:`~wbsa.estimation.measure.measure_subject`. A share of the bodies is dressed in a layer of
+clothes (:mod:`wbsa.bodies.clothing`) whose thickness the row records (``clothing_m``), as a user states it;
+the truth stays the bare skin's WBSA. Sample ``i`` draws from its own
 stream ``SeedSequence([seed, i])``: the same seed gives the same rows whatever the chunking or workers.
 """
 
@@ -50,6 +52,11 @@ class RenderSettings:
         Share of the captures of a body alone that are read as a rendered 3-D body scan is: no sensor effects
         (no noise, holes or quantisation) and the render's own edges. The others keep their camera's drawn
         sensor and edges (a frame whose room was removed).
+    clothed_share : float
+        Share of the captures of a dressed body: a layer of clothes over the trunk, upper arms, legs and feet
+        (:func:`~wbsa.bodies.clothing.clothed_vertices`, the shoe soles flattened onto the floor).
+    clothing_m : (float, float)
+        Range of the layer's thickness (m), uniform.
     seed : int
     """
 
@@ -62,15 +69,31 @@ class RenderSettings:
     wall_behind_m: tuple[float, float] = (0.5, 1.5)
     alone_share: float = 0.15
     scan_share: float = 0.5
+    clothed_share: float = 0.0
+    clothing_m: tuple[float, float] = (0.0, 0.015)
     seed: int = 0
 
     def __post_init__(self) -> None:
         from wbsa.errors import WbsaError
 
+        check_clothing(self.clothed_share, self.clothing_m)
+
         if not 0.0 <= self.alone_share <= 1.0:
             raise WbsaError(f"alone_share {self.alone_share} must be a share of the captures in [0, 1]")
         if not 0.0 <= self.scan_share <= 1.0:
             raise WbsaError(f"scan_share {self.scan_share} must be a share of the captures of a body alone in [0, 1]")
+
+
+def check_clothing(clothed_share: float, clothing_m: tuple[float, float]) -> None:
+    """Refuse a share of dressed captures outside [0, 1] or a thickness range outside 0–5 cm (one-line WbsaError)."""
+    from wbsa.errors import WbsaError
+
+    if not 0.0 <= clothed_share <= 1.0:
+        raise WbsaError(f"clothed_share {clothed_share} must be a share of the captures in [0, 1]")
+    lo, hi = (float(v) for v in clothing_m)
+    if not 0.0 <= lo <= hi <= 0.05:
+        raise WbsaError(f"clothing_m {tuple(clothing_m)} must be a range (low, high) of layers within 0–0.05 m, "
+                        "e.g. (0.0, 0.015)")
 
 
 @dataclass(frozen=True)
@@ -82,7 +105,7 @@ class Samples:
     table : pandas.DataFrame
         One row per capture: :data:`TRUTH_COLUMNS`, ``posture, camera, azimuth_deg, elevation_deg,
         distance_m, camera_height_m, fits, holes_fraction, pixel_dropout, noise_scale`` (0 without noise),
-        ``ideal_sensor, edge_pixels, edge_share``, in a room ``alone`` (no floor or wall), without a room
+        ``ideal_sensor, edge_pixels, edge_share, clothing_m`` (0: bare), in a room ``alone`` (no floor or wall), without a room
         the render's ``vbsa_visible_m2`` and
         ``vbsa_recon_grid_m2``, and the measures (``m_`` + :meth:`SubjectMeasures.features`,
         ``m_touches_border``; ``m_ok`` False where the render had almost no returns or no subject was found).
@@ -119,6 +142,7 @@ def render_chunk(population: pd.DataFrame, first_sample: int, settings: RenderSe
     Sample numbers start at ``first_sample`` (its seeds are ``SeedSequence([seed, sample])``).
     """
     from wbsa.bodies.body_model import BodyModel
+    from wbsa.bodies.clothing import COVERED_BONES, dressed_vertices
     from wbsa.camera.extrinsics import pose_from_view
     from wbsa.camera.scene import MeshScene
     from wbsa.estimation.measure import measure_subject
@@ -134,16 +158,21 @@ def render_chunk(population: pd.DataFrame, first_sample: int, settings: RenderSe
         model = BodyModel()
         poser = RandomPosture(model, settings.postures if posture_names is None else posture_names)
         bodies = model.rest_bodies(population)
+        covered = model.vertices_of_bones(COVERED_BONES)
         sample = first_sample
         for b in range(len(population)):
             truth = population.iloc[b]
             for _ in range(settings.views_per_subject):
                 rng = np.random.default_rng(np.random.SeedSequence([settings.seed, sample]))
-                # the sixth stream is the scan draw's: spawning one more leaves the first five as they were
-                pose_rng, capture_rng, floor_rng, room_rng, edge_rng, scan_rng = rng.spawn(6)
+                # the sixth stream is the scan draw's, the seventh the clothes': spawning more leaves the first
+                # ones as they were
+                pose_rng, capture_rng, floor_rng, room_rng, edge_rng, scan_rng, clothes_rng = rng.spawn(7)
                 vertices, posture = poser(bodies.vertices[b], bodies.bone_heads[b], pose_rng)
-                mesh = model.skin_mesh(vertices)
+                clothing_m = 0.0
+                if settings.clothed_share > 0 and clothes_rng.uniform() < settings.clothed_share:
+                    clothing_m = float(clothes_rng.uniform(*settings.clothing_m))
                 cap = sample_capture(vertices, capture_rng, settings.capture)
+                mesh = model.skin_mesh(dressed_vertices(vertices, model.skin_faces, covered, clothing_m))
                 alone = settings.room and settings.alone_share > 0 and bool(room_rng.uniform() < settings.alone_share)
                 if alone and settings.scan_share > 0 and scan_rng.uniform() < settings.scan_share:
                     cap = as_scan_render(cap)
@@ -154,7 +183,7 @@ def render_chunk(population: pd.DataFrame, first_sample: int, settings: RenderSe
                            holes_fraction=cap.sensor.holes_fraction, pixel_dropout=cap.sensor.pixel_dropout,
                            noise_scale=cap.sensor.effective_noise_scale,
                            ideal_sensor=cap.sensor.is_ideal,
-                           edge_pixels=cap.edge_pixels, edge_share=cap.edge_share)
+                           edge_pixels=cap.edge_pixels, edge_share=cap.edge_share, clothing_m=clothing_m)
                 if settings.room:
                     row.update(alone=alone)
                     depth, mixed, mask, floor = _room_capture(mesh, cap, alone, room_rng, edge_rng, settings, sample)

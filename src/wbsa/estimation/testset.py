@@ -53,6 +53,9 @@ class RoomTestSettings:
         skin's WBSA. The capture (camera, distance, view) is drawn from the bare body and aims at its centre;
         the room is placed around the clothed body (the wall's gap from its back, the second person, who stays
         bare, beside its centre), a few millimetres from where it stands around the bare one.
+    clothing_stated : bool
+        The estimator is told the layer, as a user states it (``clothing_m`` of :func:`~wbsa.estimation.estimate`);
+        False: it is told "none", what a layer nobody states reads.
     seed : int
     """
 
@@ -66,6 +69,7 @@ class RoomTestSettings:
     edge_share: float = 1.0
     scene: TestScene = "room"
     clothing_m: float = 0.0
+    clothing_stated: bool = True
     seed: int = 1000
 
     def __post_init__(self) -> None:
@@ -127,7 +131,7 @@ def room_capture_chunk(population: pd.DataFrame, others: pd.DataFrame, first: in
     wall time.
     """
     from wbsa.bodies.body_model import BodyModel
-    from wbsa.bodies.clothing import COVERED_BONES, clothed_vertices
+    from wbsa.bodies.clothing import COVERED_BONES, dressed_vertices
     from wbsa.bodies.posture import RandomPosture
     from wbsa.estimation.predict import load_any_model
     from wbsa.estimation.room import capture_room, compose_room, with_edge_pixels
@@ -154,9 +158,8 @@ def room_capture_chunk(population: pd.DataFrame, others: pd.DataFrame, first: in
             subject = body_model.skin_mesh(vertices)
             bare_center = subject.bbox_center
             if settings.clothing_m > 0.0:
-                dressed = clothed_vertices(vertices, body_model.skin_faces, covered, settings.clothing_m)
-                dressed[:, 2] = np.maximum(dressed[:, 2], 0.0)  # shoe soles on the floor, not through it
-                subject = body_model.skin_mesh(dressed)
+                subject = body_model.skin_mesh(dressed_vertices(vertices, body_model.skin_faces, covered,
+                                                                settings.clothing_m))
             people = ()
             if room_rng.random() < settings.second_person:
                 v2, _ = poser(extra.vertices[b], extra.bone_heads[b], other_rng)
@@ -186,7 +189,8 @@ def room_capture_chunk(population: pd.DataFrame, others: pd.DataFrame, first: in
                        subject_pixels=int(truth.sum()))
             t0 = time.perf_counter()
             try:
-                est = estimate(depth, cap.camera, model, segment=SegmentSettings(pick=settings.pick))
+                est = estimate(depth, cap.camera, model, segment=SegmentSettings(pick=settings.pick),
+                               clothing_m=settings.clothing_m if settings.clothing_stated else 0.0)
             except WbsaError as exc:
                 row.update(error=str(exc), seconds=time.perf_counter() - t0)
                 rows.append(row)

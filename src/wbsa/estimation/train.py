@@ -20,8 +20,8 @@ from wbsa.errors import WbsaError
 from wbsa.estimation.capture import CaptureSettings
 from wbsa.estimation.measure import SCALAR_MEASURES
 from wbsa.estimation.model import (SPREAD_TERMS, EstimatorModel, design, range_values, spread_design,
-                                   tree_features)
-from wbsa.estimation.renders import RenderSettings, Samples, render_samples
+                                   tree_features, with_clothing)
+from wbsa.estimation.renders import RenderSettings, Samples, check_clothing, render_samples
 from wbsa.estimation.view import ViewModel, azimuth_sd_deg, fold_azimuth
 
 #: Columns of :meth:`SubjectMeasures.features` the model reads (``m_`` prefixed in sample tables).
@@ -55,6 +55,11 @@ class TrainSettings:
     scan_share : float
         Share of those read as a rendered 3-D body scan is: no sensor effects, the render's own edges
         (:func:`~wbsa.estimation.capture.as_scan_render`).
+    clothed_share : float
+        Share of captures of a dressed body, a layer of clothes drawn uniform in ``clothing_m`` over the trunk,
+        upper arms, legs and feet; the model reads the layer as the user states it, the truth is the skin's.
+    clothing_m : (float, float)
+        Range of that layer (m).
     folds : int
         Folds of the out-of-fold view estimates and residuals.
     tree_iterations, tree_leaves : int
@@ -79,6 +84,8 @@ class TrainSettings:
     room: bool = True
     alone_share: float = 0.15
     scan_share: float = 0.5
+    clothed_share: float = 0.2
+    clothing_m: tuple[float, float] = (0.0, 0.015)
     folds: int = 3
     tree_iterations: int = 800
     tree_leaves: int = 31
@@ -95,6 +102,7 @@ class TrainSettings:
             raise WbsaError(f"alone_share {self.alone_share} must be a share of the captures in [0, 1]")
         if not 0.0 <= self.scan_share <= 1.0:
             raise WbsaError(f"scan_share {self.scan_share} must be a share of the captures of a body alone in [0, 1]")
+        check_clothing(self.clothed_share, self.clothing_m)
         if self.views_per_subject < 1 or self.folds < 2:
             raise WbsaError("views_per_subject must be >= 1 and folds >= 2")
         counts_ok = all(isinstance(v, int) for v in (self.tree_iterations, self.tree_leaves, self.tree_bags))
@@ -130,7 +138,10 @@ def training_population(settings: TrainSettings, show_progress: bool | None = No
 
 
 def _columns(table: pd.DataFrame) -> dict[str, np.ndarray]:
-    return {k: table[f"m_{k}"].to_numpy(dtype=np.float64) for k in FEATURES}
+    """The measures (``m_`` columns) and the stated clothes (``clothing_m``; 0 where a table has none)."""
+    feats = {k: table[f"m_{k}"].to_numpy(dtype=np.float64) for k in FEATURES}
+    clothing_m = table["clothing_m"].to_numpy(dtype=np.float64) if "clothing_m" in table else 0.0
+    return with_clothing(feats, clothing_m)
 
 
 def _folds(table: pd.DataFrame, folds: int, seed: int) -> np.ndarray:
@@ -273,8 +284,8 @@ def training_renders(settings: TrainSettings = TrainSettings(), parts: tuple[str
     calib = rng.random(len(pop)) < settings.calibration_fraction
     render = RenderSettings(views_per_subject=settings.views_per_subject, capture=settings.capture,
                             postures=settings.postures, room=settings.room, alone_share=settings.alone_share,
-                            scan_share=settings.scan_share,
-                            seed=settings.seed)
+                            scan_share=settings.scan_share, clothed_share=settings.clothed_share,
+                            clothing_m=settings.clothing_m, seed=settings.seed)
     chosen = {"fit": (~calib, render), "calibration": (calib, replace(render, seed=settings.seed + 7919))}
     out = {}
     for part in parts:

@@ -196,6 +196,8 @@ def main() -> None:
     ap.add_argument("--clothing-unstated", action="store_true",
                     help="with --clothing-m: the estimator is told none (what clothes nobody states read)")
     args = ap.parse_args()
+    if args.clothing_unstated and not args.clothing_m:
+        ap.error("--clothing-unstated goes with --clothing-m T (a layer to leave unstated)")
 
     from wbsa.estimation.cache import default_model, default_model_path
     from wbsa.estimation.testset import RoomTestSettings, run_room_tests

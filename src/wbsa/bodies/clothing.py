@@ -7,7 +7,7 @@ a layer of thickness t over a limb of radius r adds about t / r of its area (1 c
 trousers and shoes cover it (:data:`COVERED_BONES`: trunk, upper arms, legs, feet), and leaves the head,
 neck, forearms and hands bare. The layer is uniform and follows the skin: loose folds, a skirt or a coat
 bridging the legs are not modelled. :func:`dressed_vertices` also flattens the shoe soles onto the floor.
-The estimator's training dresses a share of its bodies so (the user states the layer, ``--clothing-cm``),
+The estimator's training dresses a share of its captures so (the user states the layer, ``--clothing-cm``),
 and ``benchmarks/bench_estimate.py --clothing-m`` measures it on dressed held-out bodies.
 """
 

@@ -40,7 +40,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--elevation", type=number_in(-90, 90), default=None,
                    help="stated elevation in degrees (optional: it is estimated, and checked when given)")
     p.add_argument("--clothing-cm", type=number_in(0, 5), default=0.0,
-                   help="thickness of the clothes over the trunk, arms and legs in cm, how far their outside "
+                   help="thickness of the clothes over the trunk, upper arms, legs and feet in cm, how far their outside "
                         "stands off the skin on average (default 0: none or tight-fitting; the default model "
                         "is trained on 0-1.5)")
     p.add_argument("--level", type=number_in(0, 1, low_open=True, high_open=True), default=0.95,

@@ -11,7 +11,7 @@ the view's uncertainty. The interval is split-conformal: residuals divided by a 
 spread s(x) on held-out calibration renders (never used in fitting) give the quantile of any level, its
 rank counted in calibration subjects (:meth:`EstimatorModel.quantile`, :func:`conformal_rank`).
 
-File layout: one ``.npz`` of numbers (no pickle) with ``meta_json`` (format ``wbsa-estimator``, version 5,
+File layout: one ``.npz`` of numbers (no pickle) with ``meta_json`` (format ``wbsa-estimator``, version 6,
 training settings, feature ranges, held-out metrics). Version 2 added the outline terms, version 3 the
 apparent build to the spread (:func:`spread_design`), version 4 the share of the outline's depth edges
 behind a gap (``edge_gap_share``), version 5 the depth noise and the floor (:func:`capture_terms`), version 6
@@ -176,7 +176,7 @@ def spread_design(psi_deg: np.ndarray, psi_sd_deg: np.ndarray, features: dict[st
     """Design of the log residual spread (n, 14).
 
     Columns: 1, cos 2ψ, view spread / 30°, log pitch, log pixel count, the capture terms
-    (:func:`capture_terms`), and the
+    (:func:`capture_terms`: outline shares, depth noise, floor, stated clothes), and the
     apparent build b = log(predicted WBSA / stature²) with b². A single view tells a very thin or very heavy
     body's build only in part, so the prediction is drawn towards the common build there and the interval
     must widen: without b, bodies with BMI ≥ 35 were covered 0.73 of the time at 95 %, with b 0.83 (spread
@@ -187,7 +187,8 @@ def spread_design(psi_deg: np.ndarray, psi_sd_deg: np.ndarray, features: dict[st
     psi_deg, psi_sd_deg : (n,) float64
         Folded azimuth and its spread (degrees).
     features : dict of (n,) float64
-        The measures (``pitch_m``, ``n_pixels``, ``stature_m`` and the outline shares are used).
+        The measures and the stated clothes (``pitch_m``, ``n_pixels``, ``stature_m``, ``vbsa_m2``, the
+        outline shares, ``depth_noise_m``, ``floor_seen`` and ``clothing_m`` are used).
     log_wbsa : (n,) float64
         The model's predicted log WBSA (m²).
 
@@ -195,6 +196,7 @@ def spread_design(psi_deg: np.ndarray, psi_sd_deg: np.ndarray, features: dict[st
     -------
     (n, 14) float64
     """
+    _check_measures(features)
     r = np.radians(np.asarray(psi_deg, dtype=np.float64))
     build = np.asarray(log_wbsa, dtype=np.float64) - 2.0 * np.log(np.asarray(features["stature_m"], dtype=np.float64))
     return np.column_stack([np.ones_like(r), np.cos(2 * r), np.asarray(psi_sd_deg, float) / 30.0,

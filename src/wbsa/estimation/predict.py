@@ -57,6 +57,15 @@ def load_any_model(model, show_progress: bool | None = None):
     return model
 
 
+def check_model_allows_clothing(model, clothing_m: float) -> None:
+    """Raise if clothes are stated to a ``wbsa fit`` model (its per-view fits know nothing of clothes)."""
+    from wbsa.estimation.model import EstimatorModel
+
+    if clothing_m > 0 and model is not None and not isinstance(model, EstimatorModel):
+        raise WbsaError("a wbsa fit model allows for no clothes; state none (--clothing-cm 0) or use the default "
+                        "estimator model")
+
+
 def _check_legacy_finite(model, path) -> None:
     for e in model.entries:
         for key in ("coef", "cov_unscaled", "scale"):
@@ -115,9 +124,7 @@ def predict_wbsa(model, measures, camera, azimuth_deg: float | None, elevation_d
                                         f"subjects, too few to promise {100 * level:g} %; its widest score "
                                         "is used")
         return Prediction(float(w[0]), float(lo[0]), float(hi[0]), view, (az, el), model.name, flags)
-    if clothing_m > 0:
-        raise WbsaError("a wbsa fit model allows for no clothes; state none (--clothing-cm 0) or use the default "
-                        "estimator model")
+    check_model_allows_clothing(model, clothing_m)
     return _predict_legacy(model, measures, camera, view, az, el, level, flags)
 
 

@@ -54,7 +54,8 @@ class RenderSettings:
         sensor and edges (a frame whose room was removed).
     clothed_share : float
         Share of the captures of a dressed body: a layer of clothes over the trunk, upper arms, legs and feet
-        (:func:`~wbsa.bodies.clothing.clothed_vertices`, the shoe soles flattened onto the floor).
+        (:func:`~wbsa.bodies.clothing.dressed_vertices`, the shoe soles flattened onto the floor); the camera
+        aims at the dressed body's centre, a few millimetres from the bare one's.
     clothing_m : (float, float)
         Range of the layer's thickness (m), uniform.
     seed : int
@@ -76,7 +77,7 @@ class RenderSettings:
     def __post_init__(self) -> None:
         from wbsa.errors import WbsaError
 
-        check_clothing(self.clothed_share, self.clothing_m)
+        check_clothing_settings(self.clothed_share, self.clothing_m)
 
         if not 0.0 <= self.alone_share <= 1.0:
             raise WbsaError(f"alone_share {self.alone_share} must be a share of the captures in [0, 1]")
@@ -84,7 +85,7 @@ class RenderSettings:
             raise WbsaError(f"scan_share {self.scan_share} must be a share of the captures of a body alone in [0, 1]")
 
 
-def check_clothing(clothed_share: float, clothing_m: tuple[float, float]) -> None:
+def check_clothing_settings(clothed_share: float, clothing_m: tuple[float, float]) -> None:
     """Refuse a share of dressed captures outside [0, 1] or a thickness range outside 0–5 cm (one-line WbsaError)."""
     from wbsa.errors import WbsaError
 

@@ -91,7 +91,8 @@ class Estimate:
     def method_text(self) -> str:
         """One sentence on how the number was obtained (FHIR ``Observation.method.text``)."""
         clothes = ("clothes stated as none or tight-fitting (unstated clothes read high)" if self.clothing_m == 0
-                   else f"clothes stated as a {100 * self.clothing_m:.1f} cm layer over the trunk, arms and legs")
+                   else f"clothes stated as a {100 * self.clothing_m:.1f} cm layer over the trunk, upper arms, legs "
+                        "and feet")
         return (f"wbsa {self.method}: one depth image ({self.camera}), visible body surface area "
                 f"{self.vbsa_m2:.3f} m2 and stature {self.stature_m:.2f} m measured on the point cloud, view "
                 f"azimuth {self.view_used[0]:.0f} deg / elevation {self.view_used[1]:.0f} deg, model {self.model}; "
@@ -151,13 +152,14 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     ------
     WbsaError
         Unreadable input, an image that is not the camera's size, no or several people without a pick,
-        a height that is not human (wrong depth scale), a broken model, an unknown method.
+        a height that is not human (wrong depth scale), a broken model, an unknown method, a stated layer of
+        clothes that is not 0–0.05 m, or one stated to a ``wbsa fit`` model.
     """
     from wbsa.camera.intrinsics import resolve_camera
     from wbsa.estimation import checks
     from wbsa.estimation.measure import measure_subject
     from wbsa.estimation.mixed_pixels import repair_mixed_pixels
-    from wbsa.estimation.predict import load_any_model, predict_wbsa
+    from wbsa.estimation.predict import check_model_allows_clothing, load_any_model, predict_wbsa
     from wbsa.estimation.segment import segment_subject
 
     if method not in METHODS:
@@ -177,6 +179,7 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     # a given model file is read (and refused if broken) at once; the default model, which a first use builds
     # (half an hour), only once the image is measured, so an image that cannot be measured is refused first
     mdl = None if model is None else load_any_model(model, show_progress=show_progress)
+    check_model_allows_clothing(mdl, clothing_m)
     flags: dict[str, str] = {}
     if segment is None:
         mask, floor = np.isfinite(depth_m) & (depth_m > 0), None
@@ -205,5 +208,5 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     return Estimate(wbsa_m2=prediction.wbsa_m2, wbsa_lo_m2=prediction.lo_m2, wbsa_hi_m2=prediction.hi_m2, level=level,
                     vbsa_m2=m.vbsa_m2, stature_m=m.stature_m, distance_m=m.distance_m, n_pixels=m.n_pixels,
                     view=view, view_used=prediction.view_used, flags=flags, method=method, model=prediction.model_name,
-                    camera=intrinsics.name, clothing_m=float(clothing_m), mask=mask & np.isfinite(depth_m) & (depth_m > 0), surface=m.surface,
-                    measured_mask=m.mask)
+                    camera=intrinsics.name, clothing_m=float(clothing_m),
+                    mask=mask & np.isfinite(depth_m) & (depth_m > 0), surface=m.surface, measured_mask=m.mask)

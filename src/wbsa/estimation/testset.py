@@ -185,7 +185,7 @@ def room_capture_chunk(population: pd.DataFrame, others: pd.DataFrame, first: in
                        ideal_sensor=cap.sensor.is_ideal, azimuth_deg=cap.view.azimuth_deg,
                        elevation_deg=cap.view.elevation_deg, distance_m=cap.view.distance_m,
                        camera_height_m=cap.camera_height_m, fits=cap.fits, second_person=bool(people),
-                       clothing_m=settings.clothing_m,
+                       clothing_m=settings.clothing_m, clothing_stated=settings.clothing_stated,
                        subject_pixels=int(truth.sum()))
             t0 = time.perf_counter()
             try:

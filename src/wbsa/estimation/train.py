@@ -21,7 +21,7 @@ from wbsa.estimation.capture import CaptureSettings
 from wbsa.estimation.measure import SCALAR_MEASURES
 from wbsa.estimation.model import (SPREAD_TERMS, EstimatorModel, design, range_values, spread_design,
                                    tree_features, with_clothing)
-from wbsa.estimation.renders import RenderSettings, Samples, check_clothing, render_samples
+from wbsa.estimation.renders import RenderSettings, Samples, check_clothing_settings, render_samples
 from wbsa.estimation.view import ViewModel, azimuth_sd_deg, fold_azimuth
 
 #: Columns of :meth:`SubjectMeasures.features` the model reads (``m_`` prefixed in sample tables).
@@ -102,7 +102,7 @@ class TrainSettings:
             raise WbsaError(f"alone_share {self.alone_share} must be a share of the captures in [0, 1]")
         if not 0.0 <= self.scan_share <= 1.0:
             raise WbsaError(f"scan_share {self.scan_share} must be a share of the captures of a body alone in [0, 1]")
-        check_clothing(self.clothed_share, self.clothing_m)
+        check_clothing_settings(self.clothed_share, self.clothing_m)
         if self.views_per_subject < 1 or self.folds < 2:
             raise WbsaError("views_per_subject must be >= 1 and folds >= 2")
         counts_ok = all(isinstance(v, int) for v in (self.tree_iterations, self.tree_leaves, self.tree_bags))
@@ -342,7 +342,9 @@ def train_model(settings: TrainSettings = TrainSettings(), *, workers: int = 1, 
     feats_f = _columns(fit_t)
     model.meta = {
         "name": "estimator", "settings": asdict(settings),
-        "ranges": {k: [float(np.min(v)), float(np.max(v))] for k, v in range_values(feats_f).items()},
+        "ranges": {**{k: [float(np.min(v)), float(np.max(v))] for k, v in range_values(feats_f).items()},
+                   # the layers drawn are uniform in the settings' range, whose top no draw reaches exactly
+                   "clothing_m": [0.0, float(settings.clothing_m[1]) if settings.clothed_share > 0 else 0.0]},
         "n_fit": len(fit_s), "n_calibration": len(cal_s),
         "n_calibration_subjects": int(cal_t["subject_id"].nunique()),
         "calibration": {"wbsa_mape_pct": float(np.mean(np.abs(err))), "wbsa_bias_pct": float(np.mean(err)),

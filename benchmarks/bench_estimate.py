@@ -6,7 +6,7 @@ images), a random camera preset, distance 1.5–4.5 m within the camera's range 
 subject fits, camera height 0.8–2.0 m, azimuth uniform over the circle, sensor noise, quantisation and
 holes on; the estimator is not told the view. Seeded: the same arguments print the same table.
 
-    python benchmarks/bench_estimate.py --subjects 300 --workers 2 [--out results.csv]
+    python benchmarks/bench_estimate.py --subjects 300 --workers 2 [--out results.csv] [--figure agreement.png]
     python benchmarks/bench_estimate.py --edge-pixels mixed    # time-of-flight mixed pixels at every depth edge
     python benchmarks/bench_estimate.py --edge-pixels dropped  # ... or none there (a camera's flying-pixel filter)
 
@@ -195,6 +195,8 @@ def main() -> None:
                          "is told the layer, as a user states it")
     ap.add_argument("--clothing-unstated", action="store_true",
                     help="with --clothing-m: the estimator is told none (what clothes nobody states read)")
+    ap.add_argument("--figure", default=None,
+                    help="also draw a Bland–Altman plot and the error by body build to this PNG")
     args = ap.parse_args()
     if args.clothing_unstated and not args.clothing_m:
         ap.error("--clothing-unstated goes with --clothing-m T (a layer to leave unstated)")
@@ -224,6 +226,19 @@ def main() -> None:
           + (f", clothes {100 * args.clothing_m:g} cm" if args.clothing_m else "")
           + (" (not stated)" if args.clothing_m and args.clothing_unstated else ""))
     report(res, time.perf_counter() - t0)
+    if args.figure:
+        draw_agreement(res, args.figure, f"{len(pop)} held-out subjects, seed {args.seed}")
+
+
+def draw_agreement(res: pd.DataFrame, path: str, title: str) -> None:
+    """Bland–Altman plot and the error by body build (:func:`build_class`) of the estimated images, to a PNG."""
+    from wbsa.report.figures.agreement import agreement_figure
+
+    ok = res[res["error"] == ""]
+    fig = agreement_figure(ok["wbsa_m2"], ok["est_wbsa_m2"], ok["est_lo_m2"], ok["est_hi_m2"], build_class(ok),
+                           order=["child (<18 y)"] + [n for _, n in BUILD_CLASSES], title=title)
+    fig.savefig(path)
+    print(f"figure: {path}")
 
 
 if __name__ == "__main__":

@@ -21,6 +21,8 @@ Modules, one figure family each:
 - :mod:`~wbsa.report.figures.reconstruction`: reconstruction by view (Figs 15, 17).
 - :mod:`~wbsa.report.figures.distance`: the camera-distance sweep (section 3.4).
 - :mod:`~wbsa.report.figures.point_cloud`: point-cloud snapshots (Fig 8).
+- :mod:`~wbsa.report.figures.agreement`: the depth-image estimate against the truth, Bland–Altman and by group
+  (``benchmarks/bench_estimate.py --figure``).
 
 This package imports none of them (nor matplotlib) itself.
 """

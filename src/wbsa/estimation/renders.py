@@ -88,12 +88,14 @@ class RenderSettings:
 def check_clothing_settings(clothed_share: float, clothing_m: tuple[float, float]) -> None:
     """Refuse a share of dressed captures outside [0, 1] or a thickness range outside 0–5 cm (one-line WbsaError)."""
     from wbsa.errors import WbsaError
+    from wbsa.estimation.checks import MAX_CLOTHING_M
 
     if not 0.0 <= clothed_share <= 1.0:
         raise WbsaError(f"clothed_share {clothed_share} must be a share of the captures in [0, 1]")
     lo, hi = (float(v) for v in clothing_m)
-    if not 0.0 <= lo <= hi <= 0.05:
-        raise WbsaError(f"clothing_m {tuple(clothing_m)} must be a range (low, high) of layers within 0–0.05 m, "
+    if not 0.0 <= lo <= hi <= MAX_CLOTHING_M:
+        raise WbsaError(f"clothing_m {tuple(clothing_m)} must be a range (low, high) of layers within "
+                        f"0–{MAX_CLOTHING_M:g} m, "
                         "e.g. (0.0, 0.015)")
 
 

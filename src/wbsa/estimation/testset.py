@@ -16,6 +16,7 @@ import numpy as np
 import pandas as pd
 
 from wbsa.estimation.capture import CaptureSettings, sample_capture
+from wbsa.estimation.checks import MAX_CLOTHING_M
 from wbsa.errors import WbsaError
 from wbsa.typing import EDGE_PIXELS, TEST_SCENES, EdgePixels, TestScene
 
@@ -79,8 +80,9 @@ class RoomTestSettings:
             raise WbsaError(f"edge_share {self.edge_share} must be a share of the depth edges in [0, 1]")
         if self.scene not in TEST_SCENES:
             raise WbsaError(f"scene {self.scene!r} is unknown; use one of {', '.join(TEST_SCENES)}")
-        if not 0.0 <= self.clothing_m <= 0.05:
-            raise WbsaError(f"clothing_m {self.clothing_m} must be a layer of 0–0.05 m (0.01 for 1 cm of clothes)")
+        if not 0.0 <= self.clothing_m <= MAX_CLOTHING_M:
+            raise WbsaError(f"clothing_m {self.clothing_m} must be a layer of 0–{MAX_CLOTHING_M:g} m (0.01 for 1 cm "
+                            "of clothes)")
 
 
 #: Pixels this close (in the image) to the subject's make up the contact strip with the floor ...

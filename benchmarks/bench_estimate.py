@@ -10,7 +10,7 @@ holes on; the estimator is not told the view. Seeded: the same arguments print t
     python benchmarks/bench_estimate.py --edge-pixels mixed    # time-of-flight mixed pixels at every depth edge
     python benchmarks/bench_estimate.py --edge-pixels dropped  # ... or none there (a camera's flying-pixel filter)
 
-The model is the default one (built and cached first if missing, which is not timed), or --model.
+The model is the one shipped with wbsa, or --model.
 """
 
 from __future__ import annotations
@@ -36,7 +36,7 @@ def population(n: int, survey_share: float, seed: int) -> pd.DataFrame:
     from wbsa.bodies.survey import build_survey_population
     from wbsa.bodies.survey_data import load_survey, select_people
     from wbsa.bodies.table import measure_population
-    from wbsa.estimation.train import TrainSettings
+    from wbsa.training.train import TrainSettings
 
     n_survey = int(round(n * survey_share))
     params = sample_random_parameters(RandomPopulationSettings(n=n - n_survey, seed=seed, age_years=(3, 80),
@@ -177,7 +177,7 @@ def main() -> None:
     ap.add_argument("--survey-share", type=float, default=0.4, help="share of survey-matched subjects (default 0.4)")
     ap.add_argument("--seed", type=int, default=1000, help="seed of the subjects and captures (training uses 0, 1)")
     ap.add_argument("--workers", type=int, default=2)
-    ap.add_argument("--model", default=None, help="estimator model (.npz); default: the cached default model")
+    ap.add_argument("--model", default=None, help="estimator model (.npz); default: the model shipped with wbsa")
     ap.add_argument("--out", default=None, help="write the per-image results here (.csv)")
     ap.add_argument("--edge-pixels", choices=EDGE_PIXELS, default="kept",
                     help="what the camera returns for pixels straddling a depth edge: the render's depth (default, "
@@ -201,12 +201,12 @@ def main() -> None:
     if args.clothing_unstated and not args.clothing_m:
         ap.error("--clothing-unstated goes with --clothing-m T (a layer to leave unstated)")
 
-    from wbsa.estimation.cache import default_model, default_model_path
-    from wbsa.estimation.testset import RoomTestSettings, run_room_tests
+    from wbsa.estimation.default_model import default_model, default_model_path
+    from wbsa.testing.testset import RoomTestSettings, run_room_tests
 
     model_path = args.model
     if model_path is None:
-        default_model()  # builds it on first use (not timed)
+        default_model()  # read once before the clock starts
         model_path = str(default_model_path())
     t0 = time.perf_counter()
     pop = population(args.subjects, args.survey_share, args.seed)

@@ -78,8 +78,8 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=0, help="seed of the halves")
     args = ap.parse_args()
 
-    from wbsa.estimation.cache import default_model, default_model_path
-    from wbsa.estimation.train import TrainSettings, calibration_scores, training_renders, usable
+    from wbsa.estimation.default_model import default_model, default_model_path
+    from wbsa.training.train import TrainSettings, calibration_scores, training_renders, usable
 
     model = default_model()
     t0 = time.perf_counter()

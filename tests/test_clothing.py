@@ -82,11 +82,11 @@ def test_dressed_training_renders_differ_from_bare_ones_only_by_the_clothes():
     """The clothes draw from their own (seventh) stream: with every body dressed, the captures (posture,
     camera, view) are those of the bare renders, the row records the layer, and the measured VBSA grows by
     about the layer over the limbs' radius (1 cm: some 8 % on an adult, more on a child)."""
-    from wbsa.estimation.renders import RenderSettings, render_chunk
-    from wbsa.estimation.train import TrainSettings, training_population
+    from wbsa.training.renders import RenderSettings, render_chunk
+    from wbsa.training.train import TrainSettings, training_population
 
     pop = training_population(TrainSettings(n_random=8, n_survey=0, seed=5), show_progress=False).iloc[:2]
-    bare = render_chunk(pop, 0, RenderSettings(views_per_subject=2))
+    bare = render_chunk(pop, 0, RenderSettings(views_per_subject=2, clothed_share=0.0))
     dressed = render_chunk(pop, 0, RenderSettings(views_per_subject=2, clothed_share=1.0, clothing_m=(0.01, 0.01)))
     same = ["posture", "camera", "azimuth_deg", "elevation_deg", "distance_m", "camera_height_m", "wbsa_m2"]
     pd_equal = (bare.table[same] == dressed.table[same]).all().all()

@@ -46,7 +46,7 @@ def _room_frame(room, camera, view):
 def room_view(bodies):
     """A noisy Kinect v2 view at azimuth 20° of the tall man, a wall 0.8 m behind and the woman beside him."""
     from wbsa.camera import MeshScene, View, preset
-    from wbsa.estimation.room import compose_room
+    from wbsa.training.room import compose_room
     from wbsa.sensor.settings import SensorSettings
     from wbsa.simulate import simulate_view
 
@@ -80,7 +80,7 @@ def test_segmentation_keeps_a_wide_armed_tall_body_and_drops_the_room(room_view)
 
 def test_the_feet_contact_strip_is_the_soles_and_the_floor_beside_them(room_view):
     """The benchmark's "void" band: surfaces under 2 cm next to the subject, all at its feet."""
-    from wbsa.estimation.testset import CONTACT_REACH_PX, contact_strip
+    from wbsa.testing.testset import CONTACT_REACH_PX, contact_strip
 
     room, camera, frame = room_view
     height = room.surface_height_m(frame.triangle_id)
@@ -259,7 +259,7 @@ def test_side_view_keeps_both_soles_and_no_floor_strip(body_model):
     rule: soles 75 %, floor 0.50 % of the mask; now 86 % and 0.32 %)."""
     from wbsa.camera import View, preset
     from wbsa.core.backproject import backproject_depth
-    from wbsa.estimation.room import compose_room
+    from wbsa.training.room import compose_room
     from wbsa.estimation.segment import SegmentSettings, segment_subject
 
     man = body_model.rest_bodies(reference_adult(0.0))
@@ -279,7 +279,7 @@ def test_toes_across_the_image_are_found_by_their_raised_neighbourhood(body_mode
     pixels take no window at all."""
     import wbsa.estimation.feet as feet
     from wbsa.camera import View, preset
-    from wbsa.estimation.room import compose_room
+    from wbsa.training.room import compose_room
     from wbsa.estimation.segment import SegmentSettings, segment_subject
 
     woman = body_model.rest_bodies(reference_adult(1.0))
@@ -309,7 +309,7 @@ def test_the_wall_seen_between_the_legs_is_never_the_subject(body_model, monkeyp
     is person-sized but seen past the body (without that rule it was taken, 0 % of the subject kept)."""
     import wbsa.estimation.segment as segment
     from wbsa.camera import View, preset
-    from wbsa.estimation.room import compose_room
+    from wbsa.training.room import compose_room
 
     man = body_model.rest_bodies(reference_adult(0.0))
     room = compose_room(body_model.skin_mesh(_posed(body_model, man, "feet-apart")), 0.0, wall_behind_m=0.8)
@@ -336,7 +336,7 @@ def test_people_touching_are_refused_with_a_message_that_says_so(bodies):
     """The wide-armed man with the woman 0.8 m to his side, his hand on her: one object 1-2 m wide at the
     hips, no person, and an error that names it."""
     from wbsa.camera import View, preset
-    from wbsa.estimation.room import compose_room
+    from wbsa.training.room import compose_room
     from wbsa.estimation.segment import SegmentSettings, segment_subject
 
     man, woman = bodies
@@ -370,7 +370,7 @@ def test_a_steep_view_keeps_its_floor(bodies):
     """A camera 55° above the subject (mounted high, close): the floor's normal is 55° from the image's up
     and is still the floor (with the former 50° limit: no floor, elevation from the body's axis)."""
     from wbsa.camera import View, preset
-    from wbsa.estimation.room import compose_room
+    from wbsa.training.room import compose_room
     from wbsa.estimation.segment import segment_subject
 
     room = compose_room(bodies[1], 0.0, wall_behind_m=0.8)
@@ -439,24 +439,18 @@ def test_wrong_depth_scale_is_an_error_not_a_number(room_view):
         segment_subject(frame.depth_m / 5.0, camera)
 
 
-def test_an_image_that_cannot_be_measured_is_refused_before_the_model_is_loaded(room_view, monkeypatch):
-    """A first use builds the default model (half an hour): an empty frame or one at the wrong depth scale
-    must be refused at once, not after the build."""
-    import wbsa.estimation.predict as predict
+def test_a_broken_model_file_is_refused_before_the_image_is_measured(room_view, tmp_path, monkeypatch):
+    """A model file is read (and refused if broken) before the image is segmented and measured."""
+    import wbsa.estimation.segment as segment
     from wbsa.estimation import estimate
-    from wbsa.estimation.segment import SegmentSettings
 
-    def no_model(*args, **kwargs):
-        raise AssertionError("the model was loaded for an image that cannot be measured")
+    def no_segmentation(*args, **kwargs):
+        raise AssertionError("the image was segmented before the model was read")
 
-    monkeypatch.setattr(predict, "load_any_model", no_model)
+    monkeypatch.setattr(segment, "segment_subject", no_segmentation)
     _, camera, frame = room_view
-    with pytest.raises(WbsaError, match="returns between"):
-        estimate(np.zeros_like(frame.depth_m), camera)
-    with pytest.raises(WbsaError, match="depth scale"):
-        estimate(frame.depth_m / 5.0, camera)
-    with pytest.raises(AssertionError, match="was loaded"):  # a measurable image does reach the model
-        estimate(frame.depth_m, camera, segment=SegmentSettings(pick="center"))
+    with pytest.raises(WbsaError, match="neither an estimator model"):
+        estimate(frame.depth_m, camera, tmp_path / "model.txt")
 
 
 def test_measures_use_the_reconstruction_the_simulation_reports(bodies):
@@ -500,7 +494,7 @@ def test_depth_noise_of_a_body_follows_the_sensor(bodies):
 def test_floor_gives_stature_and_elevation(bodies):
     from wbsa.camera import MeshScene, View, pose_from_view, preset
     from wbsa.estimation.measure import measure_subject
-    from wbsa.estimation.renders import render_floor
+    from wbsa.training.renders import render_floor
     from wbsa.simulate import simulate_view
 
     man, _ = bodies
@@ -583,7 +577,7 @@ def test_checks_errors_and_flags():
     assert "view_disagrees" in checks.view_flags((90.0, None), est)
     assert "view_disagrees" in checks.view_flags((None, 50.0), est)
     assert checks.range_flags({"stature_m": 2.3}, {"stature_m": (1.0, 2.0)})["out_of_training_range"].startswith("stature")
-    assert checks.sensor_range_flags(4.3, preset("kinect-v1"))
+    assert checks.working_range_flags(4.3, preset("kinect-v1"))
 
 
 def test_trees_predict_like_scikit_learn():
@@ -634,10 +628,12 @@ def test_interval_quantile_covers_its_level_on_average_over_calibration_draws():
 # ---------------------------------------------------------------- with a (small) trained model
 @pytest.fixture(scope="module")
 def small_model(tmp_path_factory):
-    from wbsa.estimation.train import TrainSettings, train_model
+    from wbsa.training.renders import RenderSettings
+    from wbsa.training.train import TrainSettings, train_model
 
-    model = train_model(TrainSettings(n_random=32, n_survey=0, views_per_subject=2, calibration_fraction=0.5,
-                                      tree_iterations=200, tree_bags=2, seed=5))  # small and quick; still a bag
+    model = train_model(TrainSettings(n_random=32, n_survey=0, render=RenderSettings(views_per_subject=2),
+                                      calibration_fraction=0.5, tree_iterations=200, tree_bags=2, seed=5))
+    # small and quick; still a bag
     path = tmp_path_factory.mktemp("model") / "small.npz"
     model.save(path)
     return path
@@ -647,8 +643,8 @@ def test_out_of_fold_view_spread_is_the_held_out_one():
     """The WBSA trees and the interval's spread learn on the out-of-fold azimuth spread: it must be the one
     the finished view model reports at run time (the held-out error), not the fold models' in-sample one,
     which was about a fifth of it on revision 10's renders and made every run-time view look uncertain."""
-    from wbsa.estimation.renders import Samples
-    from wbsa.estimation.train import _oof_view
+    from wbsa.training.renders import Samples
+    from wbsa.training.fit import oof_view
     from wbsa.estimation.view import fold_azimuth
 
     rng = np.random.default_rng(0)
@@ -659,7 +655,7 @@ def test_out_of_fold_view_spread_is_the_held_out_one():
     desc[:, 0] = np.minimum(psi, 180 - psi) + rng.normal(0, 6.0, n)   # the angle from the axis, noisy
     desc[:, 1] = np.where(psi < 90, 1.0, -1.0)                        # front or back, clear
     table = pd.DataFrame({"subject_id": np.arange(n) // 3, "azimuth_deg": az})
-    psi_oof, sd_oof, axis_sd = _oof_view(Samples(table, desc), 3, 0)
+    psi_oof, sd_oof, axis_sd = oof_view(Samples(table, desc), 3, 0)
     held_out = np.sqrt(np.mean((np.minimum(psi_oof, 180 - psi_oof) - np.minimum(psi, 180 - psi)) ** 2))
     assert axis_sd == pytest.approx(held_out) and axis_sd > 4.0
     assert np.median(sd_oof) == pytest.approx(held_out, rel=0.1)  # the front is never in doubt here
@@ -830,15 +826,14 @@ def test_a_wbsa_fit_model_is_used_with_its_mismatches_flagged(room_view, tmp_pat
     from helpers.synthetic import synthetic_population, synthetic_scan
     from wbsa.estimation import SegmentSettings, estimate
 
-    monkeypatch.setenv("WBSA_CACHE_DIR", str(tmp_path / "empty-cache"))  # no default model to borrow a view from
     pop = synthetic_population(200, seed=1)
     out = fit_all(pop, synthetic_scan(pop, [(0.0, 0.0), (30.0, 0.0), (90.0, 0.0)], seed=1),
                   FitSettings(models=("linear",), groups=("all",), k=5))
     path = tmp_path / "model.json"
     out.model.save(path)
     room, camera, frame = room_view
-    with pytest.raises(WbsaError, match="needs the view"):
-        estimate(frame.depth_m, camera, path, segment=SegmentSettings(pick="center"))
+    est = estimate(frame.depth_m, camera, path, segment=SegmentSettings(pick="center"))  # the shipped view model
+    assert np.isfinite(est.view.azimuth_deg)
     est = estimate(frame.depth_m, camera, path, segment=SegmentSettings(pick="center"), azimuth_deg=15.0)
     assert est.wbsa_lo_m2 < est.wbsa_m2 < est.wbsa_hi_m2
     mismatch = est.flags["model_mismatch"]
@@ -849,15 +844,15 @@ def test_a_wbsa_fit_model_is_used_with_its_mismatches_flagged(room_view, tmp_pat
 
 
 def test_benchmark_edge_pixel_settings_are_checked():
-    from wbsa.estimation.testset import RoomTestSettings
+    from wbsa.testing.testset import RoomTestSettings
 
     assert RoomTestSettings(edge_pixels="dropped", edge_share=0.5).edge_share == 0.5
     with pytest.raises(WbsaError, match="edge_share"):
         RoomTestSettings(edge_pixels="mixed", edge_share=1.5)
     with pytest.raises(WbsaError, match="edge_pixels"):
         RoomTestSettings(edge_pixels="blurred")
-    from wbsa.estimation.capture import CaptureSettings, sample_capture
-    from wbsa.estimation.room import with_edge_pixels
+    from wbsa.training.capture import CaptureSettings, sample_capture
+    from wbsa.training.room import with_edge_pixels
 
     for bad in ("mixed", ("mixed", "blurred"), ()):
         with pytest.raises(WbsaError, match="edge_pixels"):
@@ -878,7 +873,7 @@ def test_benchmark_edge_pixel_settings_are_checked():
 def test_capture_noise_is_scaled_or_ideal_after_every_other_draw():
     """Training meets cameras less and more noisy than Kinect v1, and ideal renders (3-D body scans); the
     benchmark's fixed level draws nothing, so its captures are those it drew before the level existed."""
-    from wbsa.estimation.capture import CaptureSettings, sample_capture
+    from wbsa.training.capture import CaptureSettings, sample_capture
 
     box = np.array([[-0.2, -0.1, 0.0], [0.2, 0.1, 1.7]])
     fixed = CaptureSettings(noise_scale=(1.0, 1.0), ideal_share=0.0)
@@ -899,7 +894,7 @@ def test_capture_noise_is_scaled_or_ideal_after_every_other_draw():
     for bad in (dict(noise_scale=(1.5, 0.2)), dict(noise_scale=(-1.0, 1.0)), dict(ideal_share=1.5)):
         with pytest.raises(WbsaError, match=next(iter(bad))):
             CaptureSettings(**bad)
-    from wbsa.estimation.testset import RoomTestSettings
+    from wbsa.testing.testset import RoomTestSettings
 
     with pytest.raises(WbsaError, match="scene"):
         RoomTestSettings(scene="garden")
@@ -928,7 +923,8 @@ def test_depth_noise_reads_the_noise_of_a_curved_surface():
 
 
 def test_residual_tree_settings_are_checked():
-    from wbsa.estimation.train import TrainSettings
+    from wbsa.training.renders import RenderSettings
+    from wbsa.training.settings import TrainSettings
 
     for bad in (dict(tree_l2=float("nan")), dict(tree_iterations=800.5), dict(tree_leaves=1), dict(tree_l2=-0.1),
                 dict(tree_bags=0), dict(tree_bags=2.5)):
@@ -936,15 +932,17 @@ def test_residual_tree_settings_are_checked():
             TrainSettings(**bad)
     assert TrainSettings(tree_iterations=10, tree_leaves=2, tree_l2=0.0).tree_iterations == 10
     with pytest.raises(WbsaError, match="alone_share 1.5 must be a share"):
-        TrainSettings(alone_share=1.5)
+        TrainSettings(render=RenderSettings(alone_share=1.5))
     with pytest.raises(WbsaError, match="scan_share -0.1 must be a share"):
-        TrainSettings(scan_share=-0.1)
+        TrainSettings(render=RenderSettings(scan_share=-0.1))
+    with pytest.raises(WbsaError, match="render must be a RenderSettings"):
+        TrainSettings(render={"views_per_subject": 2})
 
 
 def test_a_scan_render_has_no_sensor_effects_and_keeps_the_capture():
     """Half the training bodies alone are read as a rendered 3-D body scan: ideal sensor, the render's edges,
     the same camera and view."""
-    from wbsa.estimation.capture import CaptureSettings, as_scan_render, sample_capture
+    from wbsa.training.capture import CaptureSettings, as_scan_render, sample_capture
 
     box = np.array([[-0.2, -0.1, 0.0], [0.2, 0.1, 1.7]])
     for s in range(20):

@@ -4,12 +4,13 @@ The plain Python API (everything a notebook needs; the ``wbsa`` command is a thi
 
 >>> import wbsa
 >>> sorted(n for n in wbsa.__all__ if n[0].islower())
-['body', 'bsa', 'estimate', 'population', 'render']
+['body', 'bsa', 'estimate', 'population', 'render', 'train']
 
 ``wbsa.population(n, kind, seed)``       a table of virtual people (stature, mass, WBSA, tape measures)
 ``wbsa.body(table, subject_id)``         one body's skin mesh (or ``wbsa.body(gender=0, height=0.7)``)
 ``wbsa.render(mesh, camera, view)``      the virtual depth camera: depth image, visible areas, reconstruction
 ``wbsa.estimate(depth, camera, model)``  WBSA from one real depth image, with its interval and flags
+``wbsa.train(settings, out)``            an estimator model for your own camera, distances or population
 ``wbsa.bsa("mosteller", 170, 70)``     the classical height/weight formulae (cm, kg → m²)
 ``wbsa.Study.from_toml(path).run(out)``  the whole study: population → scan → fit → report
 
@@ -26,7 +27,9 @@ The package is laid out like the pipeline, on top of a shared ``core``:
 ``analysis``    per-view regression, cross-validation, diagnostics, formula comparison
 ``report``      figures and the HTML report
 ``study``       the end-to-end study (``wbsa run``)
-``estimation``  WBSA of a real person from one depth image
+``estimation``  WBSA of a real person from one depth image (the run-time path)
+``training``    estimator models trained on virtual captures (``wbsa train``)
+``testing``     the estimator's held-out benchmark test set
 ``cli``         the ``wbsa`` command
 
 Names are imported on first use, so ``import wbsa`` is fast.
@@ -52,6 +55,8 @@ if TYPE_CHECKING:  # pragma: no cover - real types for IDEs and type checkers
     from wbsa.sensor.settings import SensorSettings
     from wbsa.simulate.view import SimulatedView, render
     from wbsa.study.study import Study
+    from wbsa.training.run import train
+    from wbsa.training.settings import TrainSettings
 
 _EXPORTS = {
     "body": "wbsa.bodies.make",
@@ -69,6 +74,8 @@ _EXPORTS = {
     "SensorSettings": "wbsa.sensor.settings",
     "WbsaModel": "wbsa.analysis.model_file",
     "WbsaError": "wbsa.errors",
+    "train": "wbsa.training.run",
+    "TrainSettings": "wbsa.training.settings",
 }
 __all__ = sorted(_EXPORTS)
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

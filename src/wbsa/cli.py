@@ -26,6 +26,7 @@ COMMAND_MODULES = (
     "wbsa.analysis.command",
     "wbsa.report.command",
     "wbsa.study.command",
+    "wbsa.training.command",
     "wbsa.estimation.command",
 )
 

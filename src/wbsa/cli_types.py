@@ -37,3 +37,19 @@ def number_in(low: float = -math.inf, high: float = math.inf, *, low_open: bool 
 def _phrase(span: str) -> str:
     """``in [0, 1]`` for an interval, ``>= 0`` for a bound."""
     return span if span.startswith(">") else f"in {span}"
+
+
+def range_of(low: float, high: float, *, unit: str) -> Callable[[str], tuple[float, float]]:
+    """An argparse type for ``LOW,HIGH`` with ``low <= LOW <= HIGH <= high`` (e.g. a distance range in m)."""
+
+    def check(text: str) -> tuple[float, float]:
+        try:
+            lo, hi = (float(v) for v in text.split(","))
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected LOW,HIGH in {unit}, e.g. {low:g},{high:g}; got {text!r}") \
+                from None
+        if not (low <= lo <= hi <= high):
+            raise argparse.ArgumentTypeError(f"expected {low:g} <= LOW <= HIGH <= {high:g} {unit}, got {text}")
+        return lo, hi
+
+    return check

@@ -45,6 +45,13 @@ TestScene = Literal["room", "alone"]
 #: Units and up axis of a mesh file (:func:`wbsa.simulate.target.to_body_frame`).
 MeshUnits = Literal["m", "cm", "mm"]
 MeshUp = Literal["z", "y"]
+#: Camera presets (:data:`wbsa.camera.presets.CAMERAS` has one record per name, in this order).
+PresetName = Literal["kinect-v1", "kinect-v2", "tum", "azure-kinect-nfov", "azure-kinect-wfov", "realsense-d435",
+                     "realsense-d455", "phone-lidar"]
+#: How a depth camera measures: its depth noise and quantisation follow (:mod:`wbsa.camera.presets`).
+DepthTechnology = Literal["structured-light", "time-of-flight", "active-stereo", "lidar"]
+#: Estimation routes of ``wbsa estimate`` (:mod:`wbsa.estimation.methods`).
+Method = Literal["regression"]
 #: A population's ``posture`` setting: a posture name, or ``mixed`` (a random name per subject).
 PostureChoice = Literal[Literal["a-pose", "mixed"], PostureName]
 
@@ -63,5 +70,8 @@ POSTURE_NAMES: tuple[str, ...] = get_args(PostureName)
 POSTURE_CHOICES: tuple[str, ...] = get_args(PostureChoice)
 EDGE_PIXELS: tuple[str, ...] = get_args(EdgePixels)
 TEST_SCENES: tuple[str, ...] = get_args(TestScene)
+PRESET_NAMES: tuple[str, ...] = get_args(PresetName)
+DEPTH_TECHNOLOGIES: tuple[str, ...] = get_args(DepthTechnology)
+METHODS: tuple[str, ...] = get_args(Method)
 MESH_UNITS: tuple[str, ...] = get_args(MeshUnits)
 MESH_UPS: tuple[str, ...] = get_args(MeshUp)

@@ -8,15 +8,13 @@ import os
 from dataclasses import dataclass, replace
 from functools import lru_cache
 from pathlib import Path
-from typing import Literal
 
 import numpy as np
 
 from wbsa.core.limits import check_image_size
 from wbsa.errors import WbsaError
 
-PresetName = Literal["kinect-v1", "kinect-v2", "tum", "azure-kinect-nfov", "azure-kinect-wfov", "realsense-d435",
-                     "realsense-d455", "phone-lidar"]
+from wbsa.typing import PresetName
 
 
 @dataclass(frozen=True)
@@ -149,8 +147,10 @@ class Intrinsics:
             path = Path(source)
             where = str(path)
             if not path.is_file():
+                from wbsa.camera.presets import CAMERAS
+
                 raise WbsaError(f"camera file {path} does not exist; "
-                                f"give a preset ({', '.join(PRESETS)}) or a JSON file")
+                                f"give a preset ({', '.join(CAMERAS)}) or a JSON file")
             try:
                 source = json.loads(path.read_text())
             except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
@@ -179,35 +179,11 @@ class Intrinsics:
         )
 
 
-#: Published intrinsics (reference facts): the OpenNI/ROS Kinect v1 default, the Kinect v2 depth camera and
-#: the TUM RGB-D Kinect v1 default. Ranges are the sensors' nominal working ranges (TUM used a Kinect v1).
-PRESETS: dict[str, Intrinsics] = {
-    "kinect-v1": Intrinsics(640, 480, 575.8157, 575.8157, 314.5, 235.5, name="kinect-v1",
-                            min_range_m=0.8, max_range_m=4.0),
-    "kinect-v2": Intrinsics(512, 424, 365.456, 365.456, 254.878, 205.395, name="kinect-v2",
-                            min_range_m=0.5, max_range_m=4.5),
-    "tum": Intrinsics(640, 480, 525.0, 525.0, 319.5, 239.5, name="tum", min_range_m=0.8, max_range_m=4.0),
-    # The presets below are typical values; docs/camera.md gives the source of each. Give your own camera's
-    # calibration (Open3D JSON) for accurate work: units differ from these by a few per cent.
-    "azure-kinect-nfov": Intrinsics(640, 576, 503.9, 504.0, 332.1, 325.9, name="azure-kinect-nfov",
-                                    min_range_m=0.5, max_range_m=3.86),
-    "azure-kinect-wfov": Intrinsics(512, 512, 252.0, 252.0, 261.8, 253.0, name="azure-kinect-wfov",
-                                    min_range_m=0.25, max_range_m=2.88),
-    "realsense-d435": Intrinsics(848, 480, 426.0, 426.0, 423.5, 239.5, name="realsense-d435",
-                                 min_range_m=0.3, max_range_m=3.0),
-    "realsense-d455": Intrinsics(848, 480, 415.0, 415.0, 423.5, 239.5, name="realsense-d455",
-                                 min_range_m=0.6, max_range_m=6.0),
-    "phone-lidar": Intrinsics(256, 192, 209.2, 209.2, 124.2, 96.4, name="phone-lidar",
-                              min_range_m=0.25, max_range_m=5.0),
-}
-
-
 def preset(name: PresetName) -> Intrinsics:
-    """The intrinsics of a named camera (a key of :data:`PRESETS`, e.g. ``kinect-v2``, ``realsense-d435``)."""
-    try:
-        return PRESETS[name]
-    except KeyError:
-        raise WbsaError(f"unknown camera preset {name!r}; use one of {', '.join(PRESETS)} or a JSON file") from None
+    """The intrinsics of a named camera (a key of :data:`~wbsa.camera.presets.CAMERAS`, e.g. ``kinect-v2``)."""
+    from wbsa.camera.presets import camera_record
+
+    return camera_record(name).intrinsics
 
 
 def resolve_camera(spec: str | os.PathLike | Intrinsics) -> Intrinsics:
@@ -218,9 +194,11 @@ def resolve_camera(spec: str | os.PathLike | Intrinsics) -> Intrinsics:
     if hasattr(spec, "intrinsic_matrix") and hasattr(spec, "width"):  # open3d.camera.PinholeCameraIntrinsic
         return Intrinsics.from_open3d_json({"width": spec.width, "height": spec.height,
                                             "intrinsic_matrix": np.asarray(spec.intrinsic_matrix).T.ravel().tolist()})
+    from wbsa.camera.presets import CAMERAS
+
     text = str(spec)
-    if text in PRESETS:
-        return PRESETS[text]
+    if text in CAMERAS:
+        return CAMERAS[text].intrinsics
     if text.lower().endswith(".json") or os.sep in text or Path(text).exists():
         return Intrinsics.from_open3d_json(text)
     return preset(text)  # raises the "unknown preset" message

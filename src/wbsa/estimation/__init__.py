@@ -4,14 +4,16 @@
 ``segment``      the subject in a room: floor, walls behind, 3-D clusters (:func:`segment_subject`)
 ``measure``      VBSA, stature, size and view cues of the subject's pixels (:func:`measure_subject`)
 ``view``         azimuth (mirror-equivalent) and elevation from the image (:class:`ViewModel`)
+``trees``        boosted trees as plain arrays (no pickle, no scikit-learn at run time)
 ``model``        the estimator model file: WBSA continuous in view and distance, calibrated interval
-``train``        training on virtual captures; ``cache``: the default model, built on first use
-``predict``      measures → WBSA with either an estimator model or a ``wbsa fit`` model
+``default_model`` the model shipped with wbsa (package data) and its card; resolves a ``model`` argument
+``methods``      the method slot: one :class:`Predictor` per route (``regression``), one dispatch point
 ``checks``       one-line errors and named flags; ``fhir``: the FHIR R4 Observation
 ``single_view``  :func:`estimate`, the entry point (``wbsa.estimate`` calls it)
-``capture``, ``renders``, ``room``, ``testset``  capture conditions, rendered samples, synthetic rooms, the benchmark
+``command``      ``wbsa estimate``
 
-Names are imported lazily.
+This is the run-time path (image → :class:`Estimate`): it imports nothing from :mod:`wbsa.training`, where
+models are trained. Names are imported lazily.
 """
 
 from __future__ import annotations
@@ -30,12 +32,12 @@ _EXPORTS = {
     "ViewEstimate": "wbsa.estimation.view",
     "ViewModel": "wbsa.estimation.view",
     "EstimatorModel": "wbsa.estimation.model",
-    "TrainSettings": "wbsa.estimation.train",
-    "train_model": "wbsa.estimation.train",
-    "default_model": "wbsa.estimation.cache",
-    "default_model_path": "wbsa.estimation.cache",
+    "Predictor": "wbsa.estimation.methods",
+    "predictor_for": "wbsa.estimation.methods",
+    "default_model": "wbsa.estimation.default_model",
+    "default_model_path": "wbsa.estimation.default_model",
+    "model_card": "wbsa.estimation.default_model",
     "fhir_observation": "wbsa.estimation.fhir",
-    "compose_room": "wbsa.estimation.room",
     "FLAGS": "wbsa.estimation.checks",
 }
 __all__ = sorted(_EXPORTS)

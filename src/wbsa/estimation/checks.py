@@ -19,7 +19,7 @@ FLAGS: dict[str, str] = {
     "cut_off": "the subject touches the image border and may be cut off",
     "no_floor": "no floor was found; the elevation comes from the body's long axis",
     "several_people": "more than one person-sized object; one was picked",
-    "out_of_sensor_range": "the subject is closer or farther than the camera's working range",
+    "beyond_working_range": "the subject is closer or farther than the camera's documented working range",
     "out_of_training_range": "a measure lies outside the range the model was trained on",
     "view_disagrees": "the stated view differs from the estimated one by more than 30°",
     "uncertain_view": "the camera may be in front of or behind the subject (azimuth uncertain)",
@@ -88,12 +88,14 @@ def range_flags(values: dict[str, float], ranges: dict[str, tuple[float, float]]
     return {"out_of_training_range": "; ".join(out)} if out else {}
 
 
-def sensor_range_flags(distance_m: float, camera) -> dict[str, str]:
-    """``{"out_of_sensor_range": ...}`` if the subject's distance is outside the camera's working range."""
+def working_range_flags(distance_m: float, camera) -> dict[str, str]:
+    """``{"beyond_working_range": ...}`` if the subject's distance is outside the camera's working range
+    (:attr:`~wbsa.camera.presets.CameraRecord.working_range_m`; an intrinsics file's own range)."""
     lo, hi = float(camera.min_range_m), float(camera.max_range_m)
     if lo <= distance_m <= hi:
         return {}
-    return {"out_of_sensor_range": f"subject at {distance_m:.2f} m, camera {camera.name} works {lo:g}–{hi:g} m"}
+    return {"beyond_working_range": f"subject at {distance_m:.2f} m, camera {camera.name} works {lo:g}–{hi:g} m; "
+                                    f"stand within that range"}
 
 
 def mixed_pixel_flags(mixed_share: float) -> dict[str, str]:

@@ -20,7 +20,9 @@ def _pick(text: str):
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``estimate`` subcommand."""
+    from wbsa.camera.presets import presets_help
     from wbsa.cli_types import number_in
+    from wbsa.typing import METHODS
 
     p = sub.add_parser("estimate", help="estimate WBSA from one depth image of a standing person",
                        description="Find the person in a depth image of a room, measure the visible surface and "
@@ -30,11 +32,12 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "not stated reads about 9 % high; docs/estimate.md, Clothes).")
     p.add_argument("depth", help="depth image: 16-bit PNG (mm), .npy (float metres), 32-bit float .tiff, .exr")
     p.add_argument("--camera", default="auto",
-                   help="intrinsics preset (kinect-v1, kinect-v2, azure-kinect-nfov, azure-kinect-wfov, "
-                        "realsense-d435, realsense-d455, phone-lidar, tum) or an Open3D intrinsics JSON; "
-                        "auto (default): the preset of the image's size, flagged")
-    p.add_argument("--model", default=None, help="estimator model (.npz) or wbsa fit model (.json); default: the "
-                                                 "default model, built on first use and cached (~/.cache/wbsa)")
+                   help=presets_help() + "; auto (default): the preset of the image's size, flagged")
+    p.add_argument("--method", default="regression", choices=METHODS,
+                   help="estimation route (default regression: the estimator model's regression on the measures and "
+                        "the view)")
+    p.add_argument("--model", default=None, help="estimator model (.npz, e.g. from wbsa train) or wbsa fit model "
+                                                 "(.json); default: the model shipped with wbsa")
     p.add_argument("--azimuth", type=number_in(-360, 360), default=None,
                    help="stated azimuth in degrees (optional: it is estimated, and checked when given)")
     p.add_argument("--elevation", type=number_in(-90, 90), default=None,
@@ -65,7 +68,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def auto_camera(depth_shape: tuple[int, int]):
     """The one preset (TUM excluded) whose image size is ``depth_shape`` (h, w); WbsaError if none or several."""
-    from wbsa.camera.intrinsics import PRESETS
+    from wbsa.camera.presets import PRESETS
     from wbsa.errors import WbsaError
 
     h, w = depth_shape
@@ -89,7 +92,7 @@ def run_estimate(args: argparse.Namespace) -> int:
     camera = auto_camera(depth.shape) if args.camera == "auto" else args.camera
     segment = None if args.no_segment else SegmentSettings(min_depth_m=args.min_depth, max_depth_m=args.max_depth,
                                                            pick=args.pick)
-    est = estimate(depth, camera, args.model, azimuth_deg=args.azimuth, elevation_deg=args.elevation,
+    est = estimate(depth, camera, args.model, args.method, azimuth_deg=args.azimuth, elevation_deg=args.elevation,
                    clothing_m=args.clothing_cm / 100.0, level=args.level, segment=segment)
     if args.camera == "auto":
         est.flags["camera_assumed"] = f"no --camera given; the {camera.name} preset fits the image size"

@@ -9,16 +9,13 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass, field
-from typing import Literal
 
 import numpy as np
 
 from wbsa.errors import WbsaError
 from wbsa.estimation.segment import SegmentSettings
 from wbsa.estimation.view import ViewEstimate
-
-Method = Literal["regression"]
-METHODS: tuple[str, ...] = ("regression",)
+from wbsa.typing import Method
 
 
 @dataclass(frozen=True)
@@ -126,10 +123,10 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     camera : str, path or wbsa.camera.Intrinsics
         A preset name (``kinect-v2``, ``realsense-d435``, ...) or an Open3D intrinsics JSON.
     model : EstimatorModel, path or None
-        None: the default model, built on first use and cached (:func:`wbsa.estimation.cache.default_model`).
-        A path: an estimator model file (``.npz``) or a ``wbsa fit`` model file (``.json``).
+        None: the model shipped with wbsa (:func:`wbsa.estimation.default_model.default_model`). A path: an
+        estimator model file (``.npz``, e.g. from ``wbsa train``) or a ``wbsa fit`` model file (``.json``).
     method : {'regression'}
-        The estimation route (a model-based route that fits a whole body will be added).
+        The estimation route (:mod:`wbsa.estimation.methods`).
     azimuth_deg, elevation_deg : float, optional
         A stated view; it is used for the prediction and checked against the estimated one.
     clothing_m : float
@@ -158,12 +155,11 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     from wbsa.camera.intrinsics import resolve_camera
     from wbsa.estimation import checks
     from wbsa.estimation.measure import measure_subject
+    from wbsa.estimation.methods import Request, Subject, check_method, predictor_for
     from wbsa.estimation.mixed_pixels import repair_mixed_pixels
-    from wbsa.estimation.predict import check_model_allows_clothing, load_any_model, predict_wbsa
     from wbsa.estimation.segment import segment_subject
 
-    if method not in METHODS:
-        raise WbsaError(f"estimation method {method!r} is unknown; available: {', '.join(METHODS)}")
+    check_method(method)
     if not 0 < level < 1:
         raise WbsaError(f"interval level {level} must lie in (0, 1), e.g. 0.95")
     for name, value in (("azimuth_deg", azimuth_deg), ("elevation_deg", elevation_deg)):
@@ -172,14 +168,13 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     if elevation_deg is not None and not -90 <= elevation_deg <= 90:
         raise WbsaError(f"elevation_deg {elevation_deg:g} must lie in [-90, 90]")
     checks.check_clothing(clothing_m)
+    request = Request(azimuth_deg, elevation_deg, float(clothing_m), level)
     intrinsics = resolve_camera(camera)
     depth_m = _depth_array(depth, depth_scale)
     checks.check_image_size(depth_m, intrinsics)
     depth_m, mixed = repair_mixed_pixels(depth_m, intrinsics.fx)
-    # a given model file is read (and refused if broken) at once; the default model, which a first use builds
-    # (half an hour), only once the image is measured, so an image that cannot be measured is refused first
-    mdl = None if model is None else load_any_model(model, show_progress=show_progress)
-    check_model_allows_clothing(mdl, clothing_m)
+    predictor = predictor_for(method, model)  # a model file is read (and refused if broken) before any work
+    predictor.check_request(request)
     flags: dict[str, str] = {}
     if segment is None:
         mask, floor = np.isfinite(depth_m) & (depth_m > 0), None
@@ -198,10 +193,8 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
         flags["cut_off"] = "subject pixels on the image border; step back or re-aim the camera"
     if floor is None:
         flags["no_floor"] = checks.FLAGS["no_floor"]
-    flags.update(checks.sensor_range_flags(m.distance_m, intrinsics))
-    if mdl is None:
-        mdl = load_any_model(None, show_progress=show_progress)
-    prediction = predict_wbsa(mdl, m, intrinsics, azimuth_deg, elevation_deg, level, clothing_m=float(clothing_m))
+    flags.update(checks.working_range_flags(m.distance_m, intrinsics))
+    prediction = predictor.predict(Subject(depth_m, mask, intrinsics, floor, m), request)
     view = prediction.view
     flags.update(checks.view_flags((azimuth_deg, elevation_deg), view))
     flags.update(prediction.flags)

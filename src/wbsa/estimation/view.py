@@ -91,26 +91,6 @@ class ViewModel:
     axis_sd_deg: float
     elevation_sd_deg: dict
 
-    @classmethod
-    def fit(cls, descriptors: np.ndarray, azimuth_deg: np.ndarray, *, seed: int = 0, max_iter: int = 150,
-            axis_sd_deg: float | None = None, elevation_sd_deg: dict | None = None) -> "ViewModel":
-        """Fit on renders' view descriptors (n, d) and true azimuths (n,).
-
-        ``axis_sd_deg`` should come from held-out renders; None takes the (optimistic) training spread.
-        """
-        from sklearn.ensemble import HistGradientBoostingClassifier, HistGradientBoostingRegressor
-
-        psi = fold_azimuth(azimuth_deg)
-        axis_deg = np.minimum(psi, 180.0 - psi)
-        common = dict(max_iter=max_iter, learning_rate=0.1, max_leaf_nodes=31, random_state=seed,
-                      early_stopping=False)
-        axis = HistGradientBoostingRegressor(**common).fit(descriptors, axis_deg)
-        front = HistGradientBoostingClassifier(**common).fit(descriptors, psi < 90.0)
-        if axis_sd_deg is None:
-            axis_sd_deg = float(np.sqrt(np.mean((axis.predict(descriptors) - axis_deg) ** 2)))
-        return cls(TreeEnsemble.from_sklearn(axis), TreeEnsemble.from_sklearn(front), float(axis_sd_deg),
-                   dict(elevation_sd_deg or ELEVATION_SD_DEG))
-
     def predict(self, descriptors: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """ψ̂ (n,), its standard deviation (n,) and P(front) (n,) of view descriptors (n, d).
 
@@ -121,6 +101,13 @@ class ViewModel:
         p = 1.0 / (1.0 + np.exp(-self.front.predict_raw(X)))
         psi = np.where(p >= 0.5, axis_deg, 180.0 - axis_deg)
         return psi, azimuth_sd_deg(psi, p, self.axis_sd_deg), p
+
+    def estimate(self, measures) -> ViewEstimate:
+        """The view of a measured subject: azimuth from its view descriptor, elevation measured
+        (:class:`~wbsa.estimation.measure.SubjectMeasures`), with their spreads."""
+        psi, sd, p = (float(v[0]) for v in self.predict(measures.descriptor[None]))
+        el_sd = self.elevation_sd_deg["floor" if measures.floor_seen else "axis"]
+        return ViewEstimate(psi, sd, measures.elevation_deg, el_sd, p)
 
     def to_arrays(self) -> dict[str, np.ndarray]:
         """Named arrays for a model file."""
@@ -135,3 +122,20 @@ class ViewModel:
         el = np.asarray(arrays["view_elevation_sd_deg"], dtype=float)
         return cls(TreeEnsemble.from_arrays(arrays, "view_axis_"), TreeEnsemble.from_arrays(arrays, "view_front_"),
                    float(np.asarray(arrays["view_axis_sd_deg"])[0]), {"floor": float(el[0]), "axis": float(el[1])})
+
+
+#: An estimated azimuth spread (degrees) above which the estimate is flagged ``uncertain_view``.
+UNCERTAIN_AZIMUTH_SD_DEG = 30.0
+
+
+def view_used(view: ViewEstimate, azimuth_deg: float | None,
+              elevation_deg: float | None) -> tuple[tuple[float, float], dict[str, str]]:
+    """The view a prediction uses: the stated azimuth (folded, :func:`fold_azimuth`) and elevation where given,
+    else the estimated ones; flags ``uncertain_view`` when the azimuth is estimated and unsure."""
+    az = view.azimuth_deg if azimuth_deg is None else float(fold_azimuth(azimuth_deg))
+    el = view.elevation_deg if elevation_deg is None else float(elevation_deg)
+    flags: dict[str, str] = {}
+    if azimuth_deg is None and not view.azimuth_sd_deg <= UNCERTAIN_AZIMUTH_SD_DEG:
+        flags["uncertain_view"] = (f"azimuth {view.azimuth_deg:.0f}° ± {view.azimuth_sd_deg:.0f}° (camera in front "
+                                   f"with probability {view.p_front:.2f}); give --azimuth if you know it")
+    return (az, el), flags

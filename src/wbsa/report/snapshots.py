@@ -40,7 +40,8 @@ def snapshot_intrinsics(scan_paths: tuple[Path, ...], camera: str):
     WbsaError
         Neither is available (a custom camera whose JSON was not kept).
     """
-    from wbsa.camera.intrinsics import PRESETS, Intrinsics
+    from wbsa.camera.intrinsics import Intrinsics
+    from wbsa.camera.presets import PRESETS
 
     for p in scan_paths:
         js = Path(p).parent / "intrinsics.json"

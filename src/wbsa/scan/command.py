@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from wbsa.camera.presets import presets_help
 from wbsa.parallel import RunSettings
 from wbsa.scan.settings import ScanSettings
 
@@ -29,7 +30,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="azimuths instead of --views, e.g. '0,30,90' or '0:180:30' (crossed with --elevations)")
     p.add_argument("--elevations", default=None, metavar="DEG", help="elevations instead of --views, e.g. '0,30'")
     p.add_argument("--camera", default=d.camera, metavar="NAME|JSON",
-                   help=f"camera preset (kinect-v1, kinect-v2, tum) or Open3D intrinsics JSON (default {d.camera})")
+                   help=presets_help(d.camera))
     p.add_argument("--distance", type=float, default=d.distances_m[0], metavar="M",
                    help=f"camera distance from the body's centre in metres (default {d.distances_m[0]:g}, the paper's)")
     p.add_argument("--out", required=True, metavar="DIR",

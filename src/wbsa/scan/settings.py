@@ -100,7 +100,7 @@ class ScanSettings:
 
     def camera_spec(self, base_dir: str | os.PathLike = ".") -> str:
         """``camera`` with a relative JSON path made absolute from ``base_dir`` (a preset name as it is)."""
-        from wbsa.camera.intrinsics import PRESETS
+        from wbsa.camera.presets import PRESETS
 
         cam = str(self.camera)
         if cam in PRESETS or not (cam.lower().endswith(".json") or "/" in cam or os.sep in cam):

@@ -49,9 +49,10 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def add_camera_arguments(p: argparse.ArgumentParser) -> None:
     """``--camera`` (preset or Open3D JSON) plus per-parameter overrides and ``--scale``."""
+    from wbsa.camera.presets import presets_help
+
     g = p.add_argument_group("camera")
-    g.add_argument("--camera", default="kinect-v1", metavar="NAME|JSON",
-                   help="preset (kinect-v1, kinect-v2, tum) or Open3D PinholeCameraIntrinsic JSON (default kinect-v1)")
+    g.add_argument("--camera", default="kinect-v1", metavar="NAME|JSON", help=presets_help("kinect-v1"))
     g.add_argument("--width", type=int, help="image width in pixels (overrides --camera)")
     g.add_argument("--height", type=int, help="image height in pixels (overrides --camera)")
     for name, what in (("fx", "focal length x"), ("fy", "focal length y"), ("cx", "principal point x"),

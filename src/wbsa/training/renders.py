@@ -2,7 +2,7 @@
 
 :func:`render_samples` takes a population table (phenotypes and true WBSA), poses each body with a
 :data:`~wbsa.bodies.posture.PoseBody` callable (swap in another posture model without touching
-anything else), draws captures (:func:`~wbsa.estimation.capture.sample_capture`), renders each with
+anything else), draws captures (:func:`~wbsa.training.capture.sample_capture`), renders each with
 :func:`wbsa.simulate.simulate_view` (sensor on), by default standing in a room whose floor and subject are
 then found by :func:`~wbsa.estimation.segment.segment_subject` as in a real image, and measures the sensed
 frame with :func:`~wbsa.estimation.measure.measure_subject`. A share of the bodies is dressed in a layer of
@@ -18,8 +18,9 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from wbsa.estimation.capture import CaptureSettings, as_scan_render, sample_capture
 from wbsa.estimation.cloud import Plane
+from wbsa.training.capture import CaptureSettings, as_scan_render, sample_capture
+from wbsa.training.store import RenderStore
 
 #: Truth columns copied from the population table into every sample row.
 TRUTH_COLUMNS = ("subject_id", "sex", "age_years", "stature_m", "mass_kg", "wbsa_m2")
@@ -58,7 +59,6 @@ class RenderSettings:
         aims at the dressed body's centre, a few millimetres from the bare one's.
     clothing_m : (float, float)
         Range of the layer's thickness (m), uniform.
-    seed : int
     """
 
     views_per_subject: int = 4
@@ -70,15 +70,15 @@ class RenderSettings:
     wall_behind_m: tuple[float, float] = (0.5, 1.5)
     alone_share: float = 0.15
     scan_share: float = 0.5
-    clothed_share: float = 0.0
+    clothed_share: float = 0.2
     clothing_m: tuple[float, float] = (0.0, 0.015)
-    seed: int = 0
 
     def __post_init__(self) -> None:
         from wbsa.errors import WbsaError
 
         check_clothing_settings(self.clothed_share, self.clothing_m)
-
+        if not isinstance(self.views_per_subject, int) or self.views_per_subject < 1:
+            raise WbsaError(f"views_per_subject must be an integer >= 1, got {self.views_per_subject!r}")
         if not 0.0 <= self.alone_share <= 1.0:
             raise WbsaError(f"alone_share {self.alone_share} must be a share of the captures in [0, 1]")
         if not 0.0 <= self.scan_share <= 1.0:
@@ -138,7 +138,7 @@ def render_floor(pose, rng: np.random.Generator, error_m: float, tilt_deg: float
     return Plane(n / np.linalg.norm(n), d + float(rng.normal(0.0, error_m)))
 
 
-def render_chunk(population: pd.DataFrame, first_sample: int, settings: RenderSettings,
+def render_chunk(population: pd.DataFrame, first_sample: int, settings: RenderSettings, seed: int = 0,
                  posture_names: tuple[str, ...] | None = None) -> Samples:
     """Render and measure ``settings.views_per_subject`` captures of every body of ``population``.
 
@@ -150,7 +150,7 @@ def render_chunk(population: pd.DataFrame, first_sample: int, settings: RenderSe
     from wbsa.camera.scene import MeshScene
     from wbsa.estimation.measure import measure_subject
     from wbsa.estimation.mixed_pixels import repair_mixed_pixels
-    from wbsa.estimation.room import with_edge_pixels
+    from wbsa.training.room import with_edge_pixels
     from wbsa.bodies.posture import RandomPosture
     from wbsa.parallel import keep_large_allocations, single_threaded_math
     from wbsa.simulate import simulate_view
@@ -166,7 +166,7 @@ def render_chunk(population: pd.DataFrame, first_sample: int, settings: RenderSe
         for b in range(len(population)):
             truth = population.iloc[b]
             for _ in range(settings.views_per_subject):
-                rng = np.random.default_rng(np.random.SeedSequence([settings.seed, sample]))
+                rng = np.random.default_rng(np.random.SeedSequence([seed, sample]))
                 # the sixth stream is the scan draw's, the seventh the clothes': spawning more leaves the first
                 # ones as they were
                 pose_rng, capture_rng, floor_rng, room_rng, edge_rng, scan_rng, clothes_rng = rng.spawn(7)
@@ -189,10 +189,11 @@ def render_chunk(population: pd.DataFrame, first_sample: int, settings: RenderSe
                            edge_pixels=cap.edge_pixels, edge_share=cap.edge_share, clothing_m=clothing_m)
                 if settings.room:
                     row.update(alone=alone)
-                    depth, mixed, mask, floor = _room_capture(mesh, cap, alone, room_rng, edge_rng, settings, sample)
+                    depth, mixed, mask, floor = _room_capture(mesh, cap, alone, room_rng, edge_rng, settings, seed,
+                                                              sample)
                 else:
                     scene = MeshScene(mesh, nthreads=1)
-                    sim = simulate_view(scene, cap.camera, cap.view, sensor=cap.sensor, seed=settings.seed,
+                    sim = simulate_view(scene, cap.camera, cap.view, sensor=cap.sensor, seed=seed,
                                         subject_id=sample, reconstruct=("grid",), keep_frame=True)
                     floor = render_floor(pose_from_view(cap.view, scene.center), floor_rng, settings.floor_error_m,
                                          settings.floor_tilt_deg)
@@ -220,19 +221,19 @@ def render_chunk(population: pd.DataFrame, first_sample: int, settings: RenderSe
 
 
 def _room_capture(mesh, cap, alone: bool, rng: np.random.Generator, edge_rng: np.random.Generator,
-                  settings: RenderSettings, sample: int):
+                  settings: RenderSettings, seed: int, sample: int):
     """(depth (h, w) float64 in whole millimetres, mixed returns, subject mask or None, detected floor) of
     ``mesh`` in a room, or ``alone`` (no floor, no wall)."""
     from wbsa.errors import WbsaError
     from wbsa.estimation.mixed_pixels import repair_mixed_pixels
-    from wbsa.estimation.room import capture_room, compose_room, with_edge_pixels
+    from wbsa.training.room import capture_room, compose_room, with_edge_pixels
     from wbsa.estimation.segment import SegmentSettings, segment_subject
 
     if alone:
         room = compose_room(mesh, cap.view.azimuth_deg, wall_behind_m=None, floor=False)
     else:
         room = compose_room(mesh, cap.view.azimuth_deg, wall_behind_m=float(rng.uniform(*settings.wall_behind_m)))
-    _, depth = capture_room(room, cap, seed=settings.seed, subject_id=sample)
+    _, depth = capture_room(room, cap, seed=seed, subject_id=sample)
     depth, mixed = repair_mixed_pixels(with_edge_pixels(depth, cap.edge_pixels, cap.edge_share, edge_rng),
                                         cap.camera.fx)
     try:
@@ -244,8 +245,9 @@ def _room_capture(mesh, cap, alone: bool, rng: np.random.Generator, edge_rng: np
     return depth, mixed, seg.mask, seg.floor
 
 
-def render_samples(population: pd.DataFrame, settings: RenderSettings = RenderSettings(), *, workers: int = 1,
-                   chunk_subjects: int = 25, show_progress: bool | None = None) -> Samples:
+def render_samples(population: pd.DataFrame, settings: RenderSettings = RenderSettings(), seed: int = 0, *,
+                   workers: int = 1, chunk_subjects: int = 25, store: RenderStore | None = None,
+                   show_progress: bool | None = None, log_lines: bool = False) -> Samples:
     """Render and measure captures of every body of a population table (see the module doc).
 
     Parameters
@@ -254,27 +256,41 @@ def render_samples(population: pd.DataFrame, settings: RenderSettings = RenderSe
         Phenotype columns and the truth (:data:`TRUTH_COLUMNS`), e.g. from
         :func:`wbsa.bodies.table.measure_population`.
     settings : RenderSettings
+    seed : int
+        Sample ``i`` draws from ``SeedSequence([seed, i])``.
     workers : int
         Local worker processes (dask); the rows do not depend on it.
     chunk_subjects : int
         Bodies per task.
+    store : RenderStore, optional
+        Where finished chunks are kept: chunks found there are read instead of rendered (a run killed
+        half-way resumes), new ones are written as they finish.
 
     Returns
     -------
     Samples
         Rows in sample order.
     """
+    from wbsa.parallel import map_chunks
     from wbsa.progress import progress
 
     v = settings.views_per_subject
     starts = list(range(0, len(population), chunk_subjects))
-    args = [(population.iloc[s:s + chunk_subjects].reset_index(drop=True), s * v, settings) for s in starts]
-    from wbsa.parallel import map_chunks
+    done = {s: store.read(s * v) for s in starts} if store is not None else {}
+    done = {s: part for s, part in done.items() if part is not None}
+    todo = [s for s in starts if s not in done]
+    args = [(population.iloc[s:s + chunk_subjects].reset_index(drop=True), s * v, settings, seed) for s in todo]
+    bar = progress(total=len(population) * v, desc="renders", unit="view", enabled=show_progress, log_lines=log_lines)
+    bar.update(sum(len(p) for p in done.values()))
 
-    bar = progress(total=len(population) * v, desc="renders", unit="view", enabled=show_progress)
+    def finished(part: Samples) -> None:
+        if store is not None:
+            store.write(part)
+        bar.update(len(part))
+
     try:
-        parts = map_chunks(render_chunk, args, workers=workers, tag="estimator-renders",
-                           on_result=lambda part: bar.update(len(part)))
+        parts = map_chunks(render_chunk, args, workers=workers, tag="estimator-renders", on_result=finished)
     finally:
         bar.close()
-    return Samples.concat(parts)
+    by_start = {**done, **dict(zip(todo, parts))}
+    return Samples.concat([by_start[s] for s in starts])

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import pandas as pd
 
-from wbsa.estimation.capture import CaptureSettings, sample_capture
+from wbsa.training.capture import CaptureSettings, sample_capture
 from wbsa.estimation.checks import MAX_CLOTHING_M
 from wbsa.errors import WbsaError
 from wbsa.typing import EDGE_PIXELS, TEST_SCENES, EdgePixels, TestScene
@@ -135,8 +135,8 @@ def room_capture_chunk(population: pd.DataFrame, others: pd.DataFrame, first: in
     from wbsa.bodies.body_model import BodyModel
     from wbsa.bodies.clothing import COVERED_BONES, dressed_vertices
     from wbsa.bodies.posture import RandomPosture
-    from wbsa.estimation.predict import load_any_model
-    from wbsa.estimation.room import capture_room, compose_room, with_edge_pixels
+    from wbsa.estimation.default_model import load_model
+    from wbsa.training.room import capture_room, compose_room, with_edge_pixels
     from wbsa.estimation.segment import SegmentSettings
     from wbsa.estimation.single_view import estimate
     from wbsa.estimation.view import fold_azimuth
@@ -147,7 +147,7 @@ def room_capture_chunk(population: pd.DataFrame, others: pd.DataFrame, first: in
     with single_threaded_math():
         body_model = BodyModel()
         poser = RandomPosture(body_model)
-        model = load_any_model(model_path)
+        model = load_model(model_path)
         covered = body_model.vertices_of_bones(COVERED_BONES)
         bodies = body_model.rest_bodies(population)
         extra = body_model.rest_bodies(others)

@@ -153,7 +153,7 @@ def capture_room(room: RoomScene, capture, *, seed: int, subject_id: int):
     Parameters
     ----------
     room : RoomScene
-    capture : wbsa.estimation.capture.Capture
+    capture : wbsa.training.capture.Capture
     seed, subject_id : int
 
     Returns

@@ -13,17 +13,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from wbsa.camera.presets import TRAINED_CAMERAS, CameraRecord, camera_record
 from wbsa.errors import WbsaError
 from wbsa.sensor.settings import SensorSettings
 from wbsa.typing import EDGE_PIXELS, EdgePixels
 
-#: Cameras of the default training world (presets of :data:`wbsa.camera.intrinsics.PRESETS`).
-CAMERAS: tuple[str, ...] = ("kinect-v1", "kinect-v2", "azure-kinect-nfov", "realsense-d435", "realsense-d455",
-                            "phone-lidar")
-#: Disparity quantisation (baseline m, step px) of the structured-light and stereo cameras; None = time of
-#: flight (no disparity). Kinect v1: facts.md; RealSense: datasheet baselines, about 1/12 px subpixel.
-_DISPARITY = {"kinect-v1": (0.075, 1 / 8), "tum": (0.075, 1 / 8), "realsense-d435": (0.050, 1 / 12),
-              "realsense-d455": (0.095, 1 / 12)}
+#: Camera-to-subject distances (m) a training world may span: nearer, a standing adult does not fit the frame
+#: of any preset; farther, beyond every preset's working range.
+DISTANCE_LIMITS_M = (0.5, 8.0)
 
 
 @dataclass(frozen=True)
@@ -32,8 +29,9 @@ class CaptureSettings:
 
     Attributes
     ----------
-    cameras : tuple of str
-        Intrinsics presets, drawn uniformly.
+    cameras : tuple of str or CameraRecord
+        Camera presets (:data:`wbsa.camera.presets.CAMERAS`) or records of the user's own cameras, drawn
+        uniformly; each brings its intrinsics, working range and disparity quantisation.
     distance_m : (float, float)
         Camera to subject's centre, drawn uniformly, then narrowed to the camera's range and lengthened
         until the subject fits the frame.
@@ -54,7 +52,7 @@ class CaptureSettings:
         differ (time-of-flight mixing, a flying-pixel filter, neither), and the estimator meets them all.
     """
 
-    cameras: tuple[str, ...] = CAMERAS
+    cameras: tuple[str | CameraRecord, ...] = TRAINED_CAMERAS
     distance_m: tuple[float, float] = (1.5, 4.5)
     camera_height_m: tuple[float, float] = (0.8, 2.0)
     noise: bool = True
@@ -65,18 +63,19 @@ class CaptureSettings:
     edge_pixels: tuple[EdgePixels, ...] = EDGE_PIXELS  # type: ignore[assignment]
 
     def __post_init__(self) -> None:
-        from wbsa.camera.intrinsics import PRESETS
-
         if isinstance(self.edge_pixels, str) or not self.edge_pixels or not set(self.edge_pixels) <= set(EDGE_PIXELS):
             raise WbsaError(f"edge_pixels {self.edge_pixels!r} must be a tuple of some of {', '.join(EDGE_PIXELS)}, "
                             "e.g. ('kept',)")
 
-        unknown = [c for c in self.cameras if c not in PRESETS]
-        if unknown or not self.cameras:
-            raise WbsaError(f"cameras {unknown or '()'} are not presets; use some of {', '.join(PRESETS)}")
+        if isinstance(self.cameras, (str, CameraRecord)) or not self.cameras:
+            raise WbsaError(f"cameras {self.cameras!r} must be a non-empty tuple of presets or camera records")
+        for c in self.cameras:
+            if not isinstance(c, CameraRecord):
+                camera_record(c)  # a one-line error naming the presets
         lo, hi = self.distance_m
-        if not 0.3 <= lo <= hi:
-            raise WbsaError(f"distance_m {self.distance_m} must be (low, high) metres with 0.3 <= low <= high")
+        if not DISTANCE_LIMITS_M[0] <= lo <= hi <= DISTANCE_LIMITS_M[1]:
+            raise WbsaError(f"distance_m {tuple(self.distance_m)} must be (low, high) metres within "
+                            f"{DISTANCE_LIMITS_M[0]:g}-{DISTANCE_LIMITS_M[1]:g} m, e.g. (1.5, 4.5)")
         lo, hi = self.camera_height_m
         if not 0.0 <= lo <= hi:
             raise WbsaError(f"camera_height_m {self.camera_height_m} must be (low, high) metres with 0 <= low <= high")
@@ -101,12 +100,13 @@ class Capture:
     edge_share: float = 0.0
 
 
-def sensor_for(camera: str, rng: np.random.Generator, settings: CaptureSettings):
-    """The :class:`~wbsa.sensor.SensorSettings` of a camera preset with random holes and dropout."""
+def sensor_for(camera: CameraRecord, rng: np.random.Generator, settings: CaptureSettings):
+    """The :class:`~wbsa.sensor.SensorSettings` of a camera with random holes and dropout: depth noise
+    (Nguyen et al. 2012) and, where the camera has one, its disparity quantisation."""
 
     if not settings.noise:
         return SensorSettings()
-    baseline, step = _DISPARITY.get(camera, (None, None))
+    baseline, step = camera.disparity or (None, None)
     return SensorSettings(noise="nguyen2012", quantise=baseline is not None,
                        baseline_m=baseline or 0.075, disparity_step_px=step or 0.125,
                        holes_fraction=float(rng.uniform(0, settings.max_holes_fraction)),
@@ -145,12 +145,12 @@ def sample_capture(vertices: np.ndarray, rng: np.random.Generator, settings: Cap
     Capture
         ``fits`` False if the subject could not be framed within the camera's range (it is then cut off).
     """
-    from wbsa.camera.intrinsics import PRESETS
     from wbsa.camera.views import View
 
-    name = settings.cameras[int(rng.integers(len(settings.cameras)))]
-    camera = PRESETS[name]
-    sensor = sensor_for(name, rng, settings)
+    chosen = settings.cameras[int(rng.integers(len(settings.cameras)))]
+    record = chosen if isinstance(chosen, CameraRecord) else camera_record(chosen)
+    camera = record.intrinsics
+    sensor = sensor_for(record, rng, settings)
     v = np.asarray(vertices, dtype=np.float64)
     target = 0.5 * (v.min(axis=0) + v.max(axis=0))
     az = float(rng.uniform(0.0, 360.0)) if azimuth_deg is None else float(azimuth_deg)

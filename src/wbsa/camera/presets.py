@@ -1,0 +1,121 @@
+"""The camera presets: one record per depth camera, everything wbsa knows of it in one place.
+
+A :class:`CameraRecord` holds the intrinsics (image size, focal lengths, principal point, working range),
+how the camera measures depth (its technology, the disparity quantisation of structured-light and stereo
+cameras), whether the default estimator model was trained on it, and where the numbers come from. The
+intrinsics, the sensor simulation of the training renders, the working-range check of an estimate and every
+``--help`` list of presets read this table; adding a camera is adding a record.
+
+Sources (docs/references.md): Kinect v1: the OpenNI/ROS default calibration and Khoshelham & Elberink (2012)
+for its 0.075 m baseline and 1/8-pixel disparity step; Kinect v2: libfreenect2's factory depth intrinsics;
+TUM: Sturm et al. (2012); Azure Kinect: Microsoft's hardware specification (NFOV unbinned, WFOV 2×2 binned);
+RealSense D435/D455: Intel's datasheet (baselines 50 / 95 mm, about 1/12-pixel subpixel disparity);
+phone LiDAR: ARKit's scene-depth map of an iPhone 12 Pro. Values other than Kinect v1/v2 and TUM are typical:
+give your own calibration (Open3D JSON) for accurate work.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from wbsa.camera.intrinsics import Intrinsics
+from wbsa.errors import WbsaError
+from wbsa.typing import PRESET_NAMES, DepthTechnology
+
+
+@dataclass(frozen=True)
+class CameraRecord:
+    """One depth camera.
+
+    Attributes
+    ----------
+    intrinsics : Intrinsics
+        Image size, focal lengths, principal point (pixels) and the nominal working range
+        (``min_range_m``, ``max_range_m``).
+    technology : {'structured-light', 'time-of-flight', 'active-stereo', 'lidar'}
+    disparity : (float, float) or None
+        Baseline (m) and disparity step (pixels) of a structured-light or stereo camera, whose depth is
+        quantised in disparity; None for time of flight and LiDAR.
+    trained : bool
+        Whether the default estimator model's training renders use this camera.
+    note : str
+        What the preset is (one line; shown in ``--help``).
+    """
+
+    intrinsics: Intrinsics
+    technology: DepthTechnology
+    disparity: tuple[float, float] | None
+    trained: bool
+    note: str
+
+    def __post_init__(self) -> None:
+        if self.disparity is not None:
+            baseline_m, step_px = (float(v) for v in self.disparity)
+            if not (math.isfinite(baseline_m) and baseline_m > 0 and math.isfinite(step_px) and step_px > 0):
+                raise WbsaError(f"camera {self.name}: disparity must be (baseline m, step px), both positive, "
+                                f"got {self.disparity!r}")
+
+    @property
+    def name(self) -> str:
+        """The preset's name (the intrinsics' ``name``)."""
+        return self.intrinsics.name
+
+    @property
+    def working_range_m(self) -> tuple[float, float]:
+        """(nearest, farthest) distance the camera is specified for (m)."""
+        return self.intrinsics.min_range_m, self.intrinsics.max_range_m
+
+    def describe(self) -> str:
+        """``name (note, w×h, a–b m)``: one entry of a ``--help`` list."""
+        k = self.intrinsics
+        return f"{self.name} ({self.note}, {k.width}x{k.height}, {k.min_range_m:g}-{k.max_range_m:g} m)"
+
+
+def _record(name: str, size: tuple[int, int], focal: tuple[float, float], centre: tuple[float, float],
+            range_m: tuple[float, float], technology: DepthTechnology, disparity: tuple[float, float] | None,
+            trained: bool, note: str) -> CameraRecord:
+    return CameraRecord(Intrinsics(*size, *focal, *centre, name=name, min_range_m=range_m[0], max_range_m=range_m[1]),
+                        technology, disparity, trained, note)
+
+
+#: Every camera preset, by name (the order of :data:`wbsa.typing.PresetName`).
+CAMERAS: dict[str, CameraRecord] = {r.name: r for r in (
+    _record("kinect-v1", (640, 480), (575.8157, 575.8157), (314.5, 235.5), (0.8, 4.0), "structured-light",
+            (0.075, 1 / 8), True, "Kinect v1, OpenNI/ROS default, the paper's camera"),
+    _record("kinect-v2", (512, 424), (365.456, 365.456), (254.878, 205.395), (0.5, 4.5), "time-of-flight", None, True,
+            "Kinect v2 depth camera"),
+    _record("tum", (640, 480), (525.0, 525.0), (319.5, 239.5), (0.8, 4.0), "structured-light", (0.075, 1 / 8),
+            False, "TUM RGB-D default, a Kinect v1"),
+    _record("azure-kinect-nfov", (640, 576), (503.9, 504.0), (332.1, 325.9), (0.5, 3.86), "time-of-flight", None,
+            True, "Azure Kinect NFOV unbinned"),
+    _record("azure-kinect-wfov", (512, 512), (252.0, 252.0), (261.8, 253.0), (0.25, 2.88), "time-of-flight", None,
+            False, "Azure Kinect WFOV 2x2 binned"),
+    _record("realsense-d435", (848, 480), (426.0, 426.0), (423.5, 239.5), (0.3, 3.0), "active-stereo",
+            (0.050, 1 / 12), True, "Intel RealSense D435"),
+    _record("realsense-d455", (848, 480), (415.0, 415.0), (423.5, 239.5), (0.6, 6.0), "active-stereo",
+            (0.095, 1 / 12), True, "Intel RealSense D455"),
+    _record("phone-lidar", (256, 192), (209.2, 209.2), (124.2, 96.4), (0.25, 5.0), "lidar", None, True,
+            "phone LiDAR, ARKit scene depth"),
+)}
+assert tuple(CAMERAS) == PRESET_NAMES, "the camera table and wbsa.typing.PresetName must list the same presets"
+
+#: The intrinsics of every preset, by name.
+PRESETS: dict[str, Intrinsics] = {name: r.intrinsics for name, r in CAMERAS.items()}
+#: Cameras of the default training world.
+TRAINED_CAMERAS: tuple[str, ...] = tuple(name for name, r in CAMERAS.items() if r.trained)
+
+
+def camera_record(name: str) -> CameraRecord:
+    """The record of a preset; a one-line :class:`WbsaError` naming the presets otherwise."""
+    try:
+        return CAMERAS[name]
+    except (KeyError, TypeError):
+        raise WbsaError(f"unknown camera preset {name!r}; use one of {', '.join(CAMERAS)} or a JSON file") from None
+
+
+def presets_help(default: str | None = None) -> str:
+    """The presets as a ``--help`` text: ``preset (one of ...) or Open3D intrinsics JSON``."""
+    tail = f" (default {default})" if default else ""
+    return (f"camera preset, one of: {'; '.join(r.describe() for r in CAMERAS.values())}; or an Open3D "
+            f"PinholeCameraIntrinsic JSON file{tail}")

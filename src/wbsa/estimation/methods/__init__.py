@@ -1,0 +1,132 @@
+"""Estimation methods: one question (WBSA of a segmented, measured subject) behind one interface.
+
+Modelled on the ray-casting back ends (:mod:`wbsa.camera.backends`): every method is a :class:`Predictor`
+in a module of its own, and :func:`predictor_for` is the one place that picks it.
+
+``regression`` (:mod:`.regression`)
+    The estimator model (:class:`~wbsa.estimation.model.EstimatorModel`): the subject's measures and the view
+    estimated from the image through a ridge regression and residual trees, with a split-conformal interval.
+    The shipped default model (:mod:`wbsa.estimation.default_model`) or a model file ``wbsa train`` wrote.
+``regression`` with a ``wbsa fit`` model file (:mod:`.per_view`)
+    The paper's per-view regressions at one camera and distance: the nearest fitted view is used and any
+    difference in camera, distance or view is flagged ``model_mismatch``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Protocol
+
+import numpy as np
+
+from wbsa.errors import WbsaError
+from wbsa.typing import METHODS, Method
+
+if TYPE_CHECKING:  # pragma: no cover
+    from wbsa.camera.intrinsics import Intrinsics
+    from wbsa.estimation.cloud import Plane
+    from wbsa.estimation.measure import SubjectMeasures
+    from wbsa.estimation.view import ViewEstimate
+
+
+@dataclass(frozen=True)
+class Subject:
+    """The subject of one depth image, segmented and measured: what every method starts from.
+
+    Attributes
+    ----------
+    depth_m : (h, w) float64
+        The depth image (metres, 0 = no return), mixed returns repaired.
+    mask : (h, w) bool
+        The subject's pixels (the segmentation).
+    camera : Intrinsics
+    floor : Plane or None
+        The detected floor in the camera frame.
+    measures : SubjectMeasures
+    """
+
+    depth_m: np.ndarray
+    mask: np.ndarray
+    camera: Intrinsics
+    floor: Plane | None
+    measures: SubjectMeasures
+
+
+@dataclass(frozen=True)
+class Request:
+    """What the user states beside the image: the view (degrees, None = estimate it), the layer of clothes
+    (m) and the interval's level."""
+
+    azimuth_deg: float | None = None
+    elevation_deg: float | None = None
+    clothing_m: float = 0.0
+    level: float = 0.95
+
+
+@dataclass(frozen=True)
+class Prediction:
+    """WBSA and its interval (m²), the view estimated and the view used (degrees), the model's name and its
+    flags."""
+
+    wbsa_m2: float
+    lo_m2: float
+    hi_m2: float
+    view: ViewEstimate
+    view_used: tuple[float, float]
+    model_name: str
+    flags: dict[str, str] = field(default_factory=dict)
+
+
+class Predictor(Protocol):
+    """What a method does: predict WBSA of one subject."""
+
+    name: str
+
+    def check_request(self, request: Request) -> None:
+        """Raise :class:`WbsaError` for a request this predictor cannot serve (before the image is measured)."""
+
+    def predict(self, subject: Subject, request: Request) -> Prediction:
+        """WBSA of ``subject`` with its interval and flags."""
+
+
+def check_method(method: str) -> Method:
+    """``method`` if it is a method name, else a one-line :class:`WbsaError`."""
+    if not isinstance(method, str) or method not in METHODS:
+        raise WbsaError(f"estimation method {method!r} is unknown; use one of {', '.join(METHODS)}")
+    return method  # type: ignore[return-value]
+
+
+def predictor_for(method: Method, model=None) -> Predictor:
+    """The predictor of ``method`` with ``model`` (the one dispatch point).
+
+    Parameters
+    ----------
+    method : {'regression'}
+    model : EstimatorModel, WbsaModel, path or None
+        None: the shipped default model. A path: an estimator model file (``.npz``) or a ``wbsa fit`` model
+        file (``.json``), read and checked at once.
+
+    Returns
+    -------
+    Predictor
+    """
+    from wbsa.estimation.default_model import load_model
+    from wbsa.estimation.model import EstimatorModel
+
+    check_method(method)
+    loaded = load_model(model)
+    if isinstance(loaded, EstimatorModel):
+        from wbsa.estimation.methods.regression import RegressionPredictor
+
+        return RegressionPredictor(loaded)
+    from wbsa.analysis.model_file import WbsaModel
+
+    if not isinstance(loaded, WbsaModel):
+        raise WbsaError(f"model must be an estimator model, a wbsa fit model or the path of one, got "
+                        f"{type(loaded).__name__}")
+    from wbsa.estimation.methods.per_view import PerViewPredictor
+
+    return PerViewPredictor(loaded)
+
+
+__all__ = ["Prediction", "Predictor", "Request", "Subject", "check_method", "predictor_for"]

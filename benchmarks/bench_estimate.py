@@ -36,7 +36,7 @@ def population(n: int, survey_share: float, seed: int) -> pd.DataFrame:
     from wbsa.bodies.survey import build_survey_population
     from wbsa.bodies.survey_data import load_survey, select_people
     from wbsa.bodies.table import measure_population
-    from wbsa.training.train import TrainSettings
+    from wbsa.training.pipeline import TrainSettings
 
     n_survey = int(round(n * survey_share))
     params = sample_random_parameters(RandomPopulationSettings(n=n - n_survey, seed=seed, age_years=(3, 80),
@@ -109,6 +109,30 @@ def summarise(g: pd.DataFrame) -> pd.Series:
                       "az_p95_deg": g["azimuth_error_deg"].quantile(0.95), "flagged": (g["flags"] != "").mean()})
 
 
+def segmentation_shares(g: pd.DataFrame) -> pd.Series:
+    """Share of images segmented well, strictly and outside the feet's 2 cm contact strip (which the measures
+    cut anyway), a refused image counting as a miss; the judged share is the latter (target ≥ 0.99)."""
+    ok = g["error"] == ""
+    strict = ok & (g["seg_kept"] >= TARGETS["kept"]) & (g["seg_included"] <= TARGETS["included"])
+    off = ok & (g["seg_kept_off_strip"] >= TARGETS["kept"]) & (g["seg_included_off_strip"] <= TARGETS["included"])
+    return pd.Series({"n": len(g), "strict_share": strict.mean(), "off_strip_share": off.mean(),
+                      "target_met": verdict(off.mean() >= TARGETS["seg_share"])})
+
+
+def segmentation_by_camera(res: pd.DataFrame) -> pd.DataFrame:
+    """:func:`segmentation_shares` per camera over the images within its working range
+    (:data:`wbsa.camera.presets.CAMERAS`), and per distance band of 1 m."""
+    from wbsa.camera.presets import CAMERAS
+
+    rng = res["camera"].map(lambda c: CAMERAS[c].working_range_m if c in CAMERAS else (0.0, np.inf))
+    inside = res[[lo <= d <= hi for d, (lo, hi) in zip(res["distance_m"], rng)]].copy()
+    inside["band"] = pd.cut(inside["distance_m"], [0.0, 2.0, 3.0, 4.0, 5.0, 8.0]).astype(str)
+    cams = inside.groupby("camera").apply(segmentation_shares, include_groups=False).reset_index()
+    bands = inside.groupby(["camera", "band"]).apply(segmentation_shares, include_groups=False).reset_index()
+    return pd.concat([cams.assign(band="all"), bands], ignore_index=True)[
+        ["camera", "band", "n", "strict_share", "off_strip_share", "target_met"]].round(3)
+
+
 def verdict(ok: bool) -> str:
     return "met" if ok else "MISSED"
 
@@ -155,6 +179,8 @@ def report(res: pd.DataFrame, wall_s: float) -> None:
     print("\n| measure | value | target | |\n|---|---|---|---|")
     for name, value, target, met in rows:
         print(f"| {name} | {value} | {target} | {'' if met is None else verdict(met)} |")
+    print("\nsegmentation by camera, within its working range (kept ≥ 98 %, non-subject ≤ 1 %; refused: a miss):")
+    print(segmentation_by_camera(res).to_string(index=False))
     ok["distance band"] = pd.cut(ok["distance_m"], [1.5, 2.5, 3.5, 4.5], include_lowest=True).astype(str)
     ok["age group"] = np.where(ok["age_years"] < 18, "child (<18 y)", "adult")
     pd.set_option("display.width", 160)

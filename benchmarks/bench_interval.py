@@ -79,7 +79,7 @@ def main() -> None:
     args = ap.parse_args()
 
     from wbsa.estimation.default_model import default_model, default_model_path
-    from wbsa.training.train import TrainSettings, calibration_scores, training_renders, usable
+    from wbsa.training.pipeline import TrainSettings, calibration_scores, training_renders, usable
 
     model = default_model()
     t0 = time.perf_counter()

@@ -114,7 +114,7 @@ def main() -> None:
 
     from wbsa.camera.backends import check_backend
     from wbsa.camera.backends.warp_backend import warp_module
-    from wbsa.camera.intrinsics import resolve_camera
+    from wbsa.camera.presets import resolve_camera
     from wbsa.camera.backends import measure_views
     from wbsa.camera.raycast import MeshScene
     from wbsa.camera.views import parse_views

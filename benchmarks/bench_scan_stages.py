@@ -43,7 +43,7 @@ def main() -> None:
     from wbsa.camera import MeshScene
     from wbsa.camera.backends import measure_views
     from wbsa.camera.backends.warp_backend import warp_module
-    from wbsa.camera.intrinsics import resolve_camera
+    from wbsa.camera.presets import resolve_camera
     from wbsa.camera.views import parse_views
     from wbsa.scan.engine import scan_population
     from wbsa.scan.settings import ScanJob

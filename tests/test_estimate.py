@@ -629,7 +629,7 @@ def test_interval_quantile_covers_its_level_on_average_over_calibration_draws():
 @pytest.fixture(scope="module")
 def small_model(tmp_path_factory):
     from wbsa.training.renders import RenderSettings
-    from wbsa.training.train import TrainSettings, train_model
+    from wbsa.training.pipeline import TrainSettings, train_model
 
     model = train_model(TrainSettings(n_random=32, n_survey=0, render=RenderSettings(views_per_subject=2),
                                       calibration_fraction=0.5, tree_iterations=200, tree_bags=2, seed=5))

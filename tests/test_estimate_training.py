@@ -58,7 +58,7 @@ def test_the_model_quantile_takes_the_conformal_rank():
                                           ("calibration", r"a tuple .* use e\.g\. \('calibration',\)")])
 def test_training_parts_are_checked_before_the_population_is_built(monkeypatch, parts, match):
     """A bad ``parts`` stops :func:`training_renders` at once, not after minutes of building and rendering."""
-    from wbsa.training import train
+    from wbsa.training import pipeline as train
 
     def no_population(*args, **kwargs):
         raise AssertionError("the population was built before the parts were checked")

@@ -55,7 +55,7 @@ DATA_FILES = ("fits.parquet", "fits.csv", "model.json")
 
 def config(root: Path, name: str, seed: int = 1, chunk: int = 3) -> Path:
     """A small study file with a camera JSON beside it, named relative to the file (as users write it)."""
-    from wbsa.camera.intrinsics import preset
+    from wbsa.camera.presets import preset
 
     (root / "cam.json").write_text(json.dumps(preset("kinect-v1").to_open3d_json()))
     path = root / f"{name.replace(' ', '_')}.toml"

@@ -6,9 +6,9 @@ Importing this package is cheap (numpy only); Open3D is imported when a :class:`
 from wbsa.camera.area import GRAZING_COS, sphere_cap_area_m2, vbsa_hit_m2, vbsa_visible_m2
 from wbsa.camera.extrinsics import Pose, look_at_rotation, pose_from_view
 from wbsa.camera.fit import distance_to_fit, max_stature_m, vertical_half_fov_deg
-from wbsa.camera.intrinsics import Intrinsics, preset, resolve_camera
-from wbsa.camera.presets import CAMERAS, PRESETS, CameraRecord, camera_record
+from wbsa.camera.intrinsics import Intrinsics
 from wbsa.camera.measure import measure_view
+from wbsa.camera.presets import CAMERAS, PRESETS, CameraRecord, camera_record, preset, resolve_camera
 from wbsa.camera.raycast import RayHits, cast, render
 from wbsa.camera.roi import projected_roi, silhouette_blocks
 from wbsa.camera.scene import MeshScene

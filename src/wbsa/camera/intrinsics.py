@@ -14,7 +14,6 @@ import numpy as np
 from wbsa.core.limits import check_image_size
 from wbsa.errors import WbsaError
 
-from wbsa.typing import PresetName
 
 
 @dataclass(frozen=True)
@@ -147,10 +146,8 @@ class Intrinsics:
             path = Path(source)
             where = str(path)
             if not path.is_file():
-                from wbsa.camera.presets import CAMERAS
-
-                raise WbsaError(f"camera file {path} does not exist; "
-                                f"give a preset ({', '.join(CAMERAS)}) or a JSON file")
+                raise WbsaError(f"camera file {path} does not exist; give a camera preset name (wbsa estimate "
+                                f"--help lists them) or an Open3D intrinsics JSON file")
             try:
                 source = json.loads(path.read_text())
             except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
@@ -177,31 +174,6 @@ class Intrinsics:
             name=str(source.get("name", "custom")), min_range_m=float(source.get("min_range_m") or 0.0),
             max_range_m=math.inf if max_range is None else float(max_range),
         )
-
-
-def preset(name: PresetName) -> Intrinsics:
-    """The intrinsics of a named camera (a key of :data:`~wbsa.camera.presets.CAMERAS`, e.g. ``kinect-v2``)."""
-    from wbsa.camera.presets import camera_record
-
-    return camera_record(name).intrinsics
-
-
-def resolve_camera(spec: str | os.PathLike | Intrinsics) -> Intrinsics:
-    """A preset name, the path of an Open3D intrinsics JSON file, or an Open3D
-    ``PinholeCameraIntrinsic`` object, as intrinsics."""
-    if isinstance(spec, Intrinsics):
-        return spec
-    if hasattr(spec, "intrinsic_matrix") and hasattr(spec, "width"):  # open3d.camera.PinholeCameraIntrinsic
-        return Intrinsics.from_open3d_json({"width": spec.width, "height": spec.height,
-                                            "intrinsic_matrix": np.asarray(spec.intrinsic_matrix).T.ravel().tolist()})
-    from wbsa.camera.presets import CAMERAS
-
-    text = str(spec)
-    if text in CAMERAS:
-        return CAMERAS[text].intrinsics
-    if text.lower().endswith(".json") or os.sep in text or Path(text).exists():
-        return Intrinsics.from_open3d_json(text)
-    return preset(text)  # raises the "unknown preset" message
 
 
 @lru_cache(maxsize=16)

@@ -17,11 +17,15 @@ give your own calibration (Open3D JSON) for accurate work.
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
 
 from wbsa.camera.intrinsics import Intrinsics
 from wbsa.errors import WbsaError
-from wbsa.typing import PRESET_NAMES, DepthTechnology
+from wbsa.typing import PRESET_NAMES, DepthTechnology, PresetName
 
 
 @dataclass(frozen=True)
@@ -119,3 +123,24 @@ def presets_help(default: str | None = None) -> str:
     tail = f" (default {default})" if default else ""
     return (f"camera preset, one of: {'; '.join(r.describe() for r in CAMERAS.values())}; or an Open3D "
             f"PinholeCameraIntrinsic JSON file{tail}")
+
+
+def preset(name: PresetName) -> Intrinsics:
+    """The intrinsics of a named camera (a key of :data:`~wbsa.camera.presets.CAMERAS`, e.g. ``kinect-v2``)."""
+    return camera_record(name).intrinsics
+
+
+def resolve_camera(spec: str | os.PathLike | Intrinsics) -> Intrinsics:
+    """A preset name, the path of an Open3D intrinsics JSON file, or an Open3D
+    ``PinholeCameraIntrinsic`` object, as intrinsics."""
+    if isinstance(spec, Intrinsics):
+        return spec
+    if hasattr(spec, "intrinsic_matrix") and hasattr(spec, "width"):  # open3d.camera.PinholeCameraIntrinsic
+        return Intrinsics.from_open3d_json({"width": spec.width, "height": spec.height,
+                                            "intrinsic_matrix": np.asarray(spec.intrinsic_matrix).T.ravel().tolist()})
+    text = str(spec)
+    if text in CAMERAS:
+        return CAMERAS[text].intrinsics
+    if text.lower().endswith(".json") or os.sep in text or Path(text).exists():
+        return Intrinsics.from_open3d_json(text)
+    return preset(text)  # raises the "unknown preset" message

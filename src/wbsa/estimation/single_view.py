@@ -152,7 +152,7 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
         a height that is not human (wrong depth scale), a broken model, an unknown method, a stated layer of
         clothes that is not 0–0.05 m, or one stated to a ``wbsa fit`` model.
     """
-    from wbsa.camera.intrinsics import resolve_camera
+    from wbsa.camera.presets import resolve_camera
     from wbsa.estimation import checks
     from wbsa.estimation.measure import measure_subject
     from wbsa.estimation.methods import Request, Subject, check_method, predictor_for

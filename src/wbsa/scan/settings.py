@@ -110,7 +110,7 @@ class ScanSettings:
 
     def intrinsics(self, base_dir: str | os.PathLike = ".") -> Intrinsics:
         """The camera's intrinsics; a relative JSON path is read from ``base_dir``."""
-        from wbsa.camera.intrinsics import resolve_camera
+        from wbsa.camera.presets import resolve_camera
 
         return resolve_camera(self.camera_spec(base_dir))
 

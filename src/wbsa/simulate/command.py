@@ -96,7 +96,7 @@ def intrinsics_from_args(args: argparse.Namespace):
     """
     from dataclasses import replace
 
-    from wbsa.camera.intrinsics import resolve_camera
+    from wbsa.camera.presets import resolve_camera
 
     base = resolve_camera(args.camera)
     changes = {name: getattr(args, name) for name in _INTRINSIC_FLAGS if getattr(args, name, None) is not None}

@@ -6,7 +6,7 @@
 ``renders``   posed bodies rendered and measured by the estimator's own code (:func:`render_samples`)
 ``store``     finished render chunks on disk, so a killed run resumes (:class:`RenderStore`)
 ``fit``       the model's fit on rendered samples: view model, regression, trees, spread, scores
-``train``     :func:`train_model`: population → renders → fit → calibration
+``pipeline``  :func:`train_model`: population → renders → fit → calibration
 ``recipe``    the shipped default model: revision, settings hash, rebuild, model card
 ``cache``     where ``wbsa train`` keeps its runs without ``--out``
 ``run``       :func:`train`, the entry point (``wbsa.train`` and ``wbsa train`` call it)
@@ -22,8 +22,8 @@ _EXPORTS = {
     "TrainSettings": "wbsa.training.settings",
     "RenderSettings": "wbsa.training.renders",
     "CaptureSettings": "wbsa.training.capture",
-    "train_model": "wbsa.training.train",
-    "training_renders": "wbsa.training.train",
+    "train_model": "wbsa.training.pipeline",
+    "training_renders": "wbsa.training.pipeline",
     "train": "wbsa.training.run",
     "TrainedModel": "wbsa.training.run",
     "compose_room": "wbsa.training.room",

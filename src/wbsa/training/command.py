@@ -54,7 +54,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def _camera(spec: str, disparity: tuple[float, float] | None):
     """A preset name as it is; an Open3D intrinsics JSON as a camera record."""
-    from wbsa.camera.intrinsics import resolve_camera
+    from wbsa.camera.presets import resolve_camera
     from wbsa.camera.presets import CAMERAS, CameraRecord
 
     if spec in CAMERAS and disparity is None:
@@ -104,7 +104,7 @@ def run_train(args: argparse.Namespace) -> int:
         if settings != TrainSettings() or args.disparity is not None:
             raise WbsaError("--default rebuilds the shipped model from its recipe; give no camera, distance, noise, "
                             "population, views or seed option with it")
-        from wbsa.training.recipe import rebuild_default_model
+        from wbsa.training.run import rebuild_default_model
 
         model_path, card_path = rebuild_default_model(args.out, workers=workers)
         print(f"wrote {model_path} and {card_path}")

@@ -1,7 +1,7 @@
 """The fit of an estimator model on rendered samples: view model, WBSA regression and trees, spread, scores.
 
 Every function here is pure: samples (tables and descriptors) and settings in, arrays or models out.
-:func:`wbsa.training.train.train_model` calls them in order.
+:func:`wbsa.training.pipeline.train_model` calls them in order.
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """The recipe of the shipped default model: its revision, its training settings' hash, its rebuild and its card.
 
 The model that ships in ``wbsa/data`` (:mod:`wbsa.estimation.default_model`) is what ``TrainSettings()``
-trains at :data:`MODEL_REVISION`. ``wbsa train --default`` rebuilds it (about 45 minutes on 2 cores) and writes
+trains at :data:`MODEL_REVISION`. ``wbsa train --default`` rebuilds it (:func:`wbsa.training.run.rebuild_default_model`) (about 45 minutes on 2 cores) and writes
 its model card; a test fails when the settings or the revision change without that rebuild
 (``tests/test_default_model.py``).
 """
@@ -87,15 +87,3 @@ def write_default_model(model: EstimatorModel, settings: TrainSettings, folder: 
     card = write_text(json.dumps(model_card(model, settings, benchmark), indent=1, default=str) + "\n",
                       Path(folder) / DEFAULT_CARD_FILE)
     return path, card
-
-
-def rebuild_default_model(out=None, *, workers: int | None = None) -> tuple[Path, Path]:
-    """Train ``TrainSettings()`` (resumably, in ``out`` or the cache) and write it as the shipped default model
-    into the package's data folder (a checkout's ``src/wbsa/data`` with an editable install)."""
-    from importlib import resources
-
-    from wbsa.training.run import train
-
-    settings = TrainSettings()
-    result = train(settings, out, workers=workers)
-    return write_default_model(result.model, settings, Path(str(resources.files("wbsa") / "data")))

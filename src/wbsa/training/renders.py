@@ -20,6 +20,7 @@ import pandas as pd
 
 from wbsa.estimation.cloud import Plane
 from wbsa.training.capture import CaptureSettings, as_scan_render, sample_capture
+from wbsa.training.samples import Samples
 from wbsa.training.store import RenderStore
 
 #: Truth columns copied from the population table into every sample row.
@@ -97,36 +98,6 @@ def check_clothing_settings(clothed_share: float, clothing_m: tuple[float, float
         raise WbsaError(f"clothing_m {tuple(clothing_m)} must be a range (low, high) of layers within "
                         f"0–{MAX_CLOTHING_M:g} m, "
                         "e.g. (0.0, 0.015)")
-
-
-@dataclass(frozen=True)
-class Samples:
-    """Rendered and measured samples.
-
-    Attributes
-    ----------
-    table : pandas.DataFrame
-        One row per capture: :data:`TRUTH_COLUMNS`, ``posture, camera, azimuth_deg, elevation_deg,
-        distance_m, camera_height_m, fits, holes_fraction, pixel_dropout, noise_scale`` (0 without noise),
-        ``ideal_sensor, edge_pixels, edge_share, clothing_m`` (0: bare), in a room ``alone`` (no floor or wall), without a room
-        the render's ``vbsa_visible_m2`` and
-        ``vbsa_recon_grid_m2``, and the measures (``m_`` + :meth:`SubjectMeasures.features`,
-        ``m_touches_border``; ``m_ok`` False where the render had almost no returns or no subject was found).
-    descriptors : (n, d) float32
-        View descriptor then shape bands of each sample (:class:`SubjectMeasures` ``descriptor``, ``shape``).
-    """
-
-    table: pd.DataFrame
-    descriptors: np.ndarray
-
-    def __len__(self) -> int:
-        return len(self.table)
-
-    @staticmethod
-    def concat(parts: list["Samples"]) -> "Samples":
-        """One :class:`Samples` from several, in order."""
-        return Samples(pd.concat([p.table for p in parts], ignore_index=True),
-                       np.concatenate([p.descriptors for p in parts]))
 
 
 def render_floor(pose, rng: np.random.Generator, error_m: float, tilt_deg: float) -> Plane:

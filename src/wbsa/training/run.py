@@ -101,7 +101,7 @@ def train(settings: TrainSettings = TrainSettings(), out: str | os.PathLike | No
     from wbsa.parallel import default_workers
     from wbsa.training.cache import training_folder
     from wbsa.training.recipe import MODEL_REVISION, settings_hash
-    from wbsa.training.train import train_model
+    from wbsa.training.pipeline import train_model
 
     check_training_dependencies()
     if not isinstance(settings, TrainSettings):
@@ -117,3 +117,15 @@ def train(settings: TrainSettings = TrainSettings(), out: str | os.PathLike | No
         model.meta.update(name=f"trained-{key}", revision=MODEL_REVISION, settings_hash=key)
         path = model.save(folder / "model.npz")
     return TrainedModel(model, path, folder, key, time.monotonic() - start)
+
+
+def rebuild_default_model(out=None, *, workers: int | None = None) -> tuple[Path, Path]:
+    """Train ``TrainSettings()`` (resumably, in ``out`` or the cache) and write it as the shipped default model
+    into the package's data folder (a checkout's ``src/wbsa/data`` with an editable install)."""
+    from importlib import resources
+
+    from wbsa.training.recipe import write_default_model
+
+    settings = TrainSettings()
+    result = train(settings, out, workers=workers)
+    return write_default_model(result.model, settings, Path(str(resources.files("wbsa") / "data")))

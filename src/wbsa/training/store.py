@@ -49,7 +49,7 @@ class RenderStore:
 
     def read(self, first_sample: int):
         """The chunk starting at ``first_sample`` if it is done, else None."""
-        from wbsa.training.renders import Samples
+        from wbsa.training.samples import Samples
 
         table_path, desc_path = self._paths(first_sample)
         if not (table_path.is_file() and desc_path.is_file()):

@@ -30,7 +30,7 @@ def test_two_compartment_densities_and_their_inverse():
     fat = np.linspace(0.03, 0.6, 20)
     for eq in ("siri", "brozek"):
         np.testing.assert_allclose(fat_from_density(density_from_fat(fat, eq), eq), fat, atol=1e-13)
-    # anny's 980 kg/m³ would be 55 % fat by Siri (facts.md)
+    # anny's 980 kg/m³ would be 55 % fat by Siri (Siri 1961; docs/references.md)
     assert fat_from_density(np.array([980.0]))[0] == pytest.approx(0.5510, abs=1e-4)
 
 

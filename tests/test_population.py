@@ -40,7 +40,7 @@ def test_default_body_skin_area_matches_independent_computation(body_model):
     drop |= is_cav[faces].all(axis=1)
     o3 = o3d.geometry.TriangleMesh(o3d.utility.Vector3dVector(verts), o3d.utility.Vector3iVector(faces[~drop]))
     assert mesh.area_m2 == pytest.approx(o3.get_surface_area(), rel=1e-9)
-    # facts.md: the default body's skin is 1.5224 m² (shell 1.5663 m²)
+    # measured with anny 0.6.2: the default body's skin is 1.5224 m² (shell 1.5663 m²; docs/population.md)
     assert mesh.area_m2 == pytest.approx(1.5224, abs=5e-4)
     assert triangle_areas_m2(verts, faces).sum() == pytest.approx(1.5663, abs=5e-4)
 
@@ -179,7 +179,7 @@ def test_heavier_body_has_larger_girths_and_area(anthropometer, body_model):
 def test_age_mapping_follows_anny_anchors():
     from wbsa.bodies.age import param_to_years, years_to_param
 
-    assert param_to_years(0.5) == pytest.approx(12.67, abs=0.01)  # facts.md: 0.5 ≈ 12.7 y
+    assert param_to_years(0.5) == pytest.approx(12.67, abs=0.01)  # anny's age anchors: 0.5 ≈ 12.7 y
     assert param_to_years(0.77) == pytest.approx(18.0)
     years = np.array([1.0, 12.0, 30.0, 70.0])
     assert np.allclose(param_to_years(years_to_param(years)), years)

@@ -57,7 +57,8 @@ def incidence(frame) -> np.ndarray:
 # -- the published model ---------------------------------------------------------------------------
 
 def test_nguyen_sigmas_known_values():
-    # σz = 0.0012 + 0.0019 (z - 0.4)² below 60°; ≈ 3 cm at the paper's 4.3 m (facts.md)
+    # σz = 0.0012 + 0.0019 (z - 0.4)² below 60°; ≈ 3 cm at the paper's 4.3 m
+    # (Nguyen et al. 2012; docs/references.md)
     assert axial_sigma_m(1.0, 0.0) == pytest.approx(0.0012 + 0.0019 * 0.36)
     assert axial_sigma_m(4.3, math.radians(30)) == pytest.approx(0.030099, abs=1e-6)
     # above 60° the angular term 0.0001/√z · θ²/(π/2 − θ)² is added

@@ -9,7 +9,8 @@ from wbsa.errors import check_field
 from wbsa.typing import NOISE_MODELS, NoiseModel
 from wbsa.settings_io import check_types
 
-#: Returns closer than this to grazing are dropped by default when Nguyen noise is on (facts.md).
+#: Returns closer than this to grazing are dropped by default when Nguyen noise is on: its σ diverges at grazing,
+#: and implementations of the model drop them (Nguyen et al. 2012; docs/references.md).
 NGUYEN_GRAZING_DROPOUT_DEG = 8.0
 #: Kinect v1 projector–camera baseline (metres) and disparity resolution (pixels).
 KINECT_V1_BASELINE_M = 0.075

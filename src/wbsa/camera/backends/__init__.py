@@ -34,7 +34,8 @@ if TYPE_CHECKING:  # pragma: no cover
 BackendName = RaycastBackend
 #: The names accepted by ``backend`` settings and ``--backend``.
 BACKENDS: tuple[str, ...] = RAYCAST_BACKENDS
-#: The default back end (its rows, and hence the scan's settings hash, are those of earlier versions).
+#: The default back end: the reference path, whose rows (and hence the scans' settings hashes) existing scan
+#: folders hold.
 DEFAULT_BACKEND = "open3d"
 
 

@@ -27,6 +27,7 @@ COMMAND_MODULES = (
     "wbsa.report.command",
     "wbsa.study.command",
     "wbsa.estimation.command",
+    "wbsa.server.command",
 )
 
 

@@ -92,9 +92,8 @@ def formula_rows(height_cm: float | None, mass_kg: float | None, sex: str | None
     except WbsaError as exc:
         return {"error": str(exc)}
     rows = []
-    for key, value in values.items():
-        base, _, fixed = key.partition("_")
-        name = FORMULAE[base].name + (f" ({fixed})" if fixed else "")
+    for key, value in values.items():  # without sex: schlich_male and schlich_female in schlich's place
+        name = FORMULAE[key].name if key in FORMULAE else f"{FORMULAE['schlich'].name} ({key.split('_')[-1]})"
         rows.append({"key": key, "name": name, "bsa_m2": round(float(value), 4)})
     return {"rows": rows, "height_cm": height_cm, "mass_kg": mass_kg, "sex": sex}
 
@@ -108,7 +107,7 @@ def answer_json(est, result_id: str, name: str, options, files: dict) -> dict:
         "wbsa_m2": round(est.wbsa_m2, 3), "wbsa_lo_m2": round(est.wbsa_lo_m2, 3),
         "wbsa_hi_m2": round(est.wbsa_hi_m2, 3), "level": est.level, "method": est.method,
         "method_text": est.method_text(), "model": est.model, "camera": est.camera,
-        "estimate": est.to_dict(),
+        "estimate": est.to_dict(), "pick": list(options.pick) if isinstance(options.pick, tuple) else options.pick,
         "flags": flag_rows(est.flags),
         "view": {**est.view.to_dict(), "distance_m": round(est.distance_m, 3),
                  "azimuth_used_deg": est.view_used[0], "elevation_used_deg": est.view_used[1],

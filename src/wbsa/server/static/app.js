@@ -4,6 +4,7 @@
 const $ = (id) => document.getElementById(id);
 let current = null;       // the answer shown
 let viewer = null;
+let info = { max_upload_bytes: Infinity };
 
 function el(tag, attrs, text) {
   const e = document.createElement(tag);
@@ -25,7 +26,7 @@ function setBusy(on) {
 }
 
 async function loadInfo() {
-  const info = await (await fetch("api/info")).json();
+  info = await (await fetch("api/info")).json();
   for (const p of info.presets) $("camera").append(el("option", { value: p.name }, `${p.name} (${p.width} × ${p.height})`));
   for (const m of info.methods) $("method").append(el("option", { value: m }, m));
 }
@@ -52,6 +53,11 @@ async function readAnswer(response) {
 
 async function send(files) {
   if (!files.length) { showError("choose or drop a depth file first"); return; }
+  const bytes = files.reduce((n, f) => n + f.size, 0);
+  if (bytes > info.max_upload_bytes) {
+    showError(`the upload is ${(bytes / 2 ** 20).toFixed(1)} MiB, above this server's limit of ${(info.max_upload_bytes / 2 ** 20).toFixed(0)} MiB; send one depth image at a time, or a smaller image`);
+    return;
+  }
   if (files.length > 1) return sendBatch(files);
   showError("");
   setBusy(true);

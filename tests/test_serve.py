@@ -312,10 +312,15 @@ def test_every_bad_input_gets_one_clear_line_and_the_server_keeps_running(server
     assert list(app.state.root.iterdir()) == []  # every estimate's folder removed
 
 
-def test_fifty_uploads_at_once_are_answered_or_told_the_server_is_busy(server, frames):
-    """50 at once against 24 places: each gets an answer or the one-line busy message, the server goes on,
-    the estimates run off the event loop (the page loads while they run), and no folder is left."""
-    url, app = server
+def test_fifty_uploads_at_once_are_answered_or_told_the_server_is_busy(small_estimator_model, frames, tmp_path):
+    """50 at once against a server with 4 places: each gets an answer or the one-line busy message, the server
+    goes on, the estimates run off the event loop (the page loads while they run), and no folder is left.
+    (20 at once, all answered, on the default 32 places: benchmarks/bench_serve.py.)"""
+    from wbsa.server.app import create_app
+    from wbsa.server.command import start_in_thread
+
+    app = create_app(small_estimator_model, temp_dir=str(tmp_path), max_pending=4)
+    url, stop = start_in_thread(app)
     good = frames["one"]["path"].read_bytes()
     out = []
 
@@ -330,10 +335,12 @@ def test_fifty_uploads_at_once_are_answered_or_told_the_server_is_busy(server, f
     for t in threads:
         t.join()
     codes = [c for c, _ in out]
-    assert len(out) == 50 and set(codes) <= {200, 503} and codes.count(200) >= 24, codes
+    assert len(out) == 50 and set(codes) == {200, 503} and codes.count(200) >= 4, codes
     assert len({b["wbsa_m2"] for c, b in out if c == 200}) == 1  # the same answer from every thread
     assert all("the server is busy" in b["error"] for c, b in out if c == 503)
     assert _alive(url) and app.state.runner.pending == 0 and list(app.state.root.iterdir()) == []
+    stop()
+    assert not app.state.root.exists()
 
 
 def test_a_batch_gives_one_row_per_file_and_a_csv(server, frames, small_estimator_model):

@@ -148,7 +148,7 @@ function showView(v) {
   const [a0x, a0y] = at(az - sd, r), [a1x, a1y] = at(az + sd, r);
   s.append(svg("path", { d: `M${cx},${cy} L${a0x},${a0y} A${r},${r} 0 0 0 ${a1x},${a1y} Z`, fill: "#cfe0f7", stroke: "none" }));
   const cams = [[az, 1]];
-  if (v.uncertain) cams.push([-az, 0.35]);
+  if (v.uncertain) cams.push([Math.PI - az, 0.35]);  // front and back may be swapped
   for (const [a, opacity] of cams) {
     const [x, y] = at(a, r);
     const g = svg("g", { transform: `translate(${x},${y}) rotate(${-a * 180 / Math.PI})`, opacity: String(opacity) });
@@ -171,7 +171,7 @@ function showView(v) {
   const et = svg("text", { x: ex + 90, y: ey - 5, "font-size": 11, fill: "#5b6577" });
   et.textContent = `elevation ${fmt(v.elevation_used_deg, 0)}°`;
   s.append(et);
-  $("view-line").textContent = `Azimuth ${fmt(v.azimuth_deg, 0)}° ± ${fmt(v.azimuth_sd_deg, 0)}° (0 = in front, 90 = at the person's left; a mirror view looks the same), elevation ${fmt(v.elevation_deg, 0)}° ± ${fmt(v.elevation_sd_deg, 0)}°, ${fmt(v.distance_m, 2)} m away.`;
+  $("view-line").textContent = `Azimuth ${fmt(v.azimuth_deg, 0)}° ± ${fmt(v.azimuth_sd_deg, 0)}° (0 = in front, 90 = at the person's left; its mirror image, −azimuth, looks the same${v.uncertain ? "; the faint camera: front and back may be swapped" : ""}), elevation ${fmt(v.elevation_deg, 0)}° ± ${fmt(v.elevation_sd_deg, 0)}°, ${fmt(v.distance_m, 2)} m away.`;
 }
 
 function showFormulae(f, wbsa) {

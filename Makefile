@@ -60,6 +60,7 @@ bench: $(STAMP)
 	$(VENV)/bin/python benchmarks/bench_population_realism.py --n 300 --survey-n 100
 	$(VENV)/bin/python benchmarks/bench_paper_scale.py
 	$(VENV)/bin/python benchmarks/bench_estimate.py --subjects 300 --workers 2
+	$(VENV)/bin/python benchmarks/bench_serve.py --browser
 
 clean:
 	rm -rf $(VENV) build src/*.egg-info

@@ -282,6 +282,7 @@ def test_every_bad_input_gets_one_clear_line_and_the_server_keeps_running(server
         ({"pick": "middle"}, [("depth", "one.png", good)], 400, "nearest, largest, center or x,y"),
         ({"pick": "5000,5"}, [("depth", "two.png", two)], 422, "lies outside the 512 x 424 depth image"),
         ({"sex": "x"}, [("depth", "one.png", good)], 400, "must be male or female"),
+        ({"elevation_deg": "95"}, [("depth", "one.png", good)], 400, "elevation_deg: expected an elevation"),
         ({"model": "evil.npz"}, [("depth", "one.png", good)], 400, "unknown field 'model'"),
         ({}, [], 400, "no depth file was sent"),
     ]
@@ -307,8 +308,9 @@ def test_every_bad_input_gets_one_clear_line_and_the_server_keeps_running(server
                   f"Content-Length: {9 * 2**20}\r\n\r\n".encode())
         reply = s.makefile("rb").read().decode()
     assert reply.startswith("HTTP/1.1 413") and "above this server's limit of 8 MiB" in reply, reply
-    code, body = _post(url, {}, [("depth", "one.png", good)])
-    assert code == 200 and body["wbsa_m2"] > 1.0 and _alive(url)
+    code, body = _post(url, {"azimuth_deg": "20", "elevation_deg": "12"}, [("depth", "one.png", good)])
+    assert code == 200 and body["wbsa_lo_m2"] < body["wbsa_m2"] < body["wbsa_hi_m2"] and _alive(url)
+    assert (body["view"]["azimuth_used_deg"], body["view"]["elevation_used_deg"]) == (20, 12)  # a stated view is used
     assert list(app.state.root.iterdir()) == []  # every estimate's folder removed
 
 

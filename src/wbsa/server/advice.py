@@ -19,9 +19,10 @@ ADVICE: dict[str, str] = {
                            "detail, and take the picture again.",
     "out_of_training_range": "The person or the picture is unlike those the model learned from; treat the answer "
                              "with caution and check it against a height-and-weight formula below.",
-    "view_disagrees": "The stated view does not match the picture: check the angle you typed, or leave it empty "
-                      "so that it is estimated.",
-    "uncertain_view": "Ask the person to face the camera squarely, or state the view, and take the picture again.",
+    "view_disagrees": "The view typed does not match the picture: check the azimuth and elevation you typed, or "
+                      "leave them empty so that they are estimated.",
+    "uncertain_view": "Type the azimuth if you know it (0 when the person faces the camera), or ask the person to "
+                      "face the camera squarely and take the picture again.",
     "model_mismatch": "The model was made for another camera or distance; use the camera and distance it was "
                       "made for, or the default model.",
     "camera_assumed": "Choose the camera that took the picture (or upload its intrinsics JSON) if it is not "

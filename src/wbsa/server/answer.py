@@ -29,7 +29,8 @@ def run_estimate(depth_m: np.ndarray, camera, model, options):
     import wbsa
     from wbsa.estimation import SegmentSettings
 
-    return wbsa.estimate(depth_m, camera, model, method=options.method, clothing_m=options.clothing_m,
+    return wbsa.estimate(depth_m, camera, model, method=options.method, azimuth_deg=options.azimuth_deg,
+                         elevation_deg=options.elevation_deg, clothing_m=options.clothing_m,
                          segment=SegmentSettings(pick=options.pick))
 
 

@@ -5,7 +5,8 @@
 ``GET /api/info``                      camera presets, methods, limits (for the page's form)
 ``POST /api/estimate``                 one depth file (form: ``depth``, optional ``intrinsics``,
                                        ``camera``, ``clothing_cm``, ``method``, ``height_cm``,
-                                       ``mass_kg``, ``sex``, ``pick``) -> the answer
+                                       ``mass_kg``, ``sex``, ``pick``, ``azimuth_deg``,
+                                       ``elevation_deg``) -> the answer
 ``POST /api/result/{id}/pick?pick=x,y`` the same image, the person at pixel (x, y) -> a new answer
 ``GET /api/result/{id}/{file}``         ``depth.png``, ``estimate.json``, ``fhir.json``, ``mask.png``,
                                        ``surface.ply``
@@ -29,7 +30,7 @@ from wbsa.server.uploads import MAX_UPLOAD_BYTES, UploadError, check_depth_uploa
 
 STATIC = Path(__file__).parent / "static"
 #: Text fields of ``POST /api/estimate`` and ``POST /api/batch``.
-FIELDS = {"camera", "clothing_cm", "method", "height_cm", "mass_kg", "sex", "pick"}
+FIELDS = {"camera", "clothing_cm", "method", "height_cm", "mass_kg", "sex", "pick", "azimuth_deg", "elevation_deg"}
 #: File fields.
 FILES = {"depth", "intrinsics"}
 #: Headers on every response: no script, style or image from anywhere but this server.
@@ -103,7 +104,9 @@ def options_from_form(form, presets, methods) -> "Options":
     return Options(camera=camera, intrinsics=camera_from_upload(intrinsics[0]) if intrinsics else None,
                    intrinsics_name=intrinsics[0].name if intrinsics else "", clothing_m=(clothing_cm or 0.0) / 100.0,
                    pick=pick, method=method, height_cm=_number(f, "height_cm", 1, 300, "a height in cm"),
-                   mass_kg=_number(f, "mass_kg", 0.1, 700, "a mass in kg"), sex=sex)
+                   mass_kg=_number(f, "mass_kg", 0.1, 700, "a mass in kg"), sex=sex,
+                   azimuth_deg=_number(f, "azimuth_deg", -360, 360, "an azimuth in degrees"),
+                   elevation_deg=_number(f, "elevation_deg", -90, 90, "an elevation in degrees"))
 
 
 def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_upload_bytes: int = MAX_UPLOAD_BYTES,

@@ -44,6 +44,8 @@ class Options:
     height_cm, mass_kg : float or None
         Typed by the operator for the BSA formulae.
     sex : str or None
+    azimuth_deg, elevation_deg : float or None
+        A stated view (optional; it is estimated, and checked when given).
     """
 
     camera: str = "auto"
@@ -55,6 +57,8 @@ class Options:
     height_cm: float | None = None
     mass_kg: float | None = None
     sex: str | None = None
+    azimuth_deg: float | None = None
+    elevation_deg: float | None = None
 
 
 @dataclass

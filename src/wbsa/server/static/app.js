@@ -40,6 +40,8 @@ function formData(files) {
   fd.append("height_cm", $("height").value);
   fd.append("mass_kg", $("mass").value);
   fd.append("sex", $("sex").value);
+  fd.append("azimuth_deg", $("azimuth").value);
+  fd.append("elevation_deg", $("elevation").value);
   const cam = $("intrinsics").files[0];
   if (cam) fd.append("intrinsics", cam, cam.name);
   return fd;

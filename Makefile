@@ -22,14 +22,20 @@ $(STAMP): pyproject.toml constraints.txt
 	$(PIP) install -q -c constraints.txt -e '.[test]'
 	touch $(STAMP)
 
-# Open3D's CPU wheel needs libusb-1.0 to import.
+# Open3D's CPU wheel needs libusb-1.0 to import; the browser tests of wbsa serve need Debian's chromium and
+# chromium-driver (tests/test_serve.py drives the headless browser through selenium).
+
 system-deps:
-	@if ldconfig -p 2>/dev/null | grep -q 'libusb-1.0.so'; then :; \
+	@missing=""; \
+	ldconfig -p 2>/dev/null | grep -q 'libusb-1.0.so' || missing="$$missing libusb-1.0-0"; \
+	command -v chromium >/dev/null 2>&1 || missing="$$missing chromium"; \
+	command -v chromedriver >/dev/null 2>&1 || missing="$$missing chromium-driver"; \
+	if [ -z "$$missing" ]; then :; \
 	elif [ "$$(id -u)" = 0 ]; then \
-	  echo "installing libusb-1.0-0 (needed by open3d-cpu)"; \
-	  (apt-get install -y -q libusb-1.0-0 >/dev/null 2>&1 || (apt-get update -q >/dev/null && apt-get install -y -q libusb-1.0-0 >/dev/null)); \
+	  echo "installing$$missing (open3d-cpu needs libusb; the browser tests need chromium)"; \
+	  (apt-get install -y -q $$missing >/dev/null 2>&1 || (apt-get update -q >/dev/null && apt-get install -y -q $$missing >/dev/null)); \
 	else \
-	  echo "error: open3d-cpu needs libusb-1.0; run: sudo apt-get install -y libusb-1.0-0" >&2; exit 2; \
+	  echo "error: missing Debian packages:$$missing; run: sudo apt-get install -y$$missing" >&2; exit 2; \
 	fi
 
 demo: $(STAMP)
@@ -54,6 +60,7 @@ bench: $(STAMP)
 	$(VENV)/bin/python benchmarks/bench_population_realism.py --n 300 --survey-n 100
 	$(VENV)/bin/python benchmarks/bench_paper_scale.py
 	$(VENV)/bin/python benchmarks/bench_estimate.py --subjects 300 --workers 2
+	$(VENV)/bin/python benchmarks/bench_serve.py --browser
 
 clean:
 	rm -rf $(VENV) build src/*.egg-info

@@ -23,3 +23,18 @@ def anthropometer(body_model):
     from wbsa.bodies.anthropometry import Anthropometer
 
     return Anthropometer(body_model)
+
+
+@pytest.fixture(scope="session")
+def small_estimator_model(tmp_path_factory):
+    """The path of a small estimator model (32 bodies, 2 views each), trained once per run (about 75 s on two
+    busy cores): quick, and still a bagged model with a calibrated interval."""
+    from wbsa.training.pipeline import train_model
+    from wbsa.training.renders import RenderSettings
+    from wbsa.training.settings import TrainSettings
+
+    model = train_model(TrainSettings(n_random=32, n_survey=0, render=RenderSettings(views_per_subject=2),
+                                      calibration_fraction=0.5, tree_iterations=200, tree_bags=2, seed=5))
+    path = tmp_path_factory.mktemp("model") / "small.npz"
+    model.save(path)
+    return path

@@ -627,16 +627,9 @@ def test_interval_quantile_covers_its_level_on_average_over_calibration_draws():
 
 # ---------------------------------------------------------------- with a (small) trained model
 @pytest.fixture(scope="module")
-def small_model(tmp_path_factory):
-    from wbsa.training.renders import RenderSettings
-    from wbsa.training.pipeline import TrainSettings, train_model
-
-    model = train_model(TrainSettings(n_random=32, n_survey=0, render=RenderSettings(views_per_subject=2),
-                                      calibration_fraction=0.5, tree_iterations=200, tree_bags=2, seed=5))
-    # small and quick; still a bag
-    path = tmp_path_factory.mktemp("model") / "small.npz"
-    model.save(path)
-    return path
+def small_model(small_estimator_model):
+    """The run's small model (tests/conftest.py), trained once for this file and tests/test_serve.py."""
+    return small_estimator_model
 
 
 def test_out_of_fold_view_spread_is_the_held_out_one():

@@ -28,6 +28,7 @@ COMMAND_MODULES = (
     "wbsa.study.command",
     "wbsa.training.command",
     "wbsa.estimation.command",
+    "wbsa.server.command",
 )
 
 

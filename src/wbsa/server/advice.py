@@ -1,0 +1,46 @@
+"""What the operator should do about each flag of an estimate: one table beside :data:`~wbsa.estimation.checks.FLAGS`.
+
+The page shows, for every flag an estimate carries, the flag's meaning (``FLAGS``, the one place it is
+written), the estimate's own detail (``Estimate.flags``) and the step below. A test checks that this table
+names every flag and no other.
+"""
+
+from __future__ import annotations
+
+#: Flag name -> what to do about it, in words a nurse can act on.
+ADVICE: dict[str, str] = {
+    "cut_off": "Step the person back from the edge of the picture, or turn the camera, so that the whole body "
+               "from head to feet is inside the image; then take the picture again.",
+    "no_floor": "Tilt the camera down a little so that some floor shows in front of the feet; the answer is "
+                "more reliable with the floor in view.",
+    "several_people": "Check that the outlined person is the one to measure; if not, click on the right person "
+                      "in the depth picture.",
+    "out_of_sensor_range": "Move the person (or the camera) to the camera's working distance, given in the "
+                           "detail, and take the picture again.",
+    "out_of_training_range": "The person or the picture is unlike those the model learned from; treat the answer "
+                             "with caution and check it against a height-and-weight formula below.",
+    "view_disagrees": "The view typed does not match the picture: check the azimuth and elevation you typed, or "
+                      "leave them empty so that they are estimated.",
+    "uncertain_view": "Type the azimuth if you know it (0 when the person faces the camera), or ask the person to "
+                      "face the camera squarely and take the picture again.",
+    "model_mismatch": "The model was made for another camera or distance; use the camera and distance it was "
+                      "made for, or the default model.",
+    "camera_assumed": "Choose the camera that took the picture (or upload its intrinsics JSON) if it is not "
+                      "the one named.",
+    "interval_unsure": "The range given may be too narrow; report it as approximate.",
+    "mixed_pixels": "Stand the person well in front of a plain wall, or turn on the camera's flying-pixel "
+                    "filter, and take the picture again.",
+}
+
+
+def flag_rows(flags: dict[str, str]) -> list[dict[str, str]]:
+    """The page's rows for an estimate's ``flags``: name, meaning, the estimate's detail, what to do.
+
+    >>> flag_rows({"cut_off": "subject pixels on the image border"})[0]["meaning"]
+    'the subject touches the image border and may be cut off'
+    """
+    from wbsa.estimation.checks import FLAGS
+
+    return [{"name": name, "meaning": FLAGS.get(name, name.replace("_", " ")), "detail": detail,
+             "todo": ADVICE.get(name, "Check the picture and take it again if in doubt.")}
+            for name, detail in flags.items()]

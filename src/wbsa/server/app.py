@@ -1,0 +1,300 @@
+"""The web application of ``wbsa serve``: the page, its static files and the JSON routes it calls.
+
+=====================================  ===========================================================
+``GET /``                              the page (``static/index.html``; JS and CSS under ``/static``)
+``GET /api/info``                      camera presets, methods, limits (for the page's form)
+``POST /api/estimate``                 one depth file (form: ``depth``, optional ``intrinsics``,
+                                       ``camera``, ``clothing_cm``, ``method``, ``height_cm``,
+                                       ``mass_kg``, ``sex``, ``pick``, ``azimuth_deg``,
+                                       ``elevation_deg``) -> the answer
+``POST /api/result/{id}/pick?pick=x,y`` the same image, the person at pixel (x, y) -> a new answer
+``GET /api/result/{id}/{file}``         ``depth.png``, ``estimate.json``, ``fhir.json``, ``mask.png``,
+                                       ``surface.ply``
+``POST /api/batch``                    several ``depth`` files -> a batch id; ``GET /api/batch/{id}``
+                                       its progress and rows, ``GET /api/batch/{id}.csv`` the table
+=====================================  ===========================================================
+
+Errors are JSON ``{"error": "<one line>"}`` with a 4xx status (503 when busy); a failure of wbsa itself is
+a 500 with a message and no traceback. The server keeps running after any of them.
+"""
+
+from __future__ import annotations
+
+import argparse
+import shutil
+import tempfile
+from contextlib import asynccontextmanager
+from pathlib import Path
+
+from wbsa.server.uploads import MAX_UPLOAD_BYTES, UploadError, check_depth_upload, check_fields, read_form
+
+STATIC = Path(__file__).parent / "static"
+#: Text fields of ``POST /api/estimate`` and ``POST /api/batch``.
+FIELDS = {"camera", "clothing_cm", "method", "height_cm", "mass_kg", "sex", "pick", "azimuth_deg", "elevation_deg"}
+#: File fields.
+FILES = {"depth", "intrinsics"}
+#: Headers on every response: no script, style or image from anywhere but this server.
+SECURITY_HEADERS = {
+    "Content-Security-Policy": "default-src 'self'; img-src 'self' data: blob:; object-src 'none'; "
+                               "base-uri 'none'; frame-ancestors 'none'",
+    "X-Content-Type-Options": "nosniff",
+    "Referrer-Policy": "no-referrer",
+}
+
+
+class SecurityHeaders:
+    """ASGI middleware adding :data:`SECURITY_HEADERS` to every HTTP response (bodies pass through unread)."""
+
+    def __init__(self, app) -> None:
+        self.app = app
+
+    async def __call__(self, scope, receive, send) -> None:
+        if scope["type"] != "http":
+            return await self.app(scope, receive, send)
+        extra = [(k.lower().encode(), v.encode()) for k, v in SECURITY_HEADERS.items()]
+
+        async def send_with_headers(message) -> None:
+            if message["type"] == "http.response.start":
+                message = {**message, "headers": list(message.get("headers", [])) + extra}
+            await send(message)
+
+        await self.app(scope, receive, send_with_headers)
+
+
+def _number(fields: dict, name: str, low: float, high: float, what: str) -> float | None:
+    """A form field as a number in [low, high] (None when empty), checked by :func:`wbsa.cli_types.number_in`."""
+    from wbsa.cli_types import number_in
+
+    text = fields.get(name, "").strip()
+    if not text:
+        return None
+    try:
+        return number_in(low, high, what=what)(text)
+    except argparse.ArgumentTypeError as exc:
+        raise UploadError(f"{name}: {exc}") from None
+
+
+def options_from_form(form, presets, methods) -> "Options":
+    """The page's choices as :class:`~wbsa.server.jobs.Options`, every field checked."""
+    from wbsa.estimation.command import _pick
+    from wbsa.server.jobs import Options, camera_from_upload
+
+    check_fields(form, FIELDS, FILES)
+    f = form.fields
+    camera = f.get("camera", "auto").strip() or "auto"
+    if camera != "auto" and camera not in presets:
+        raise UploadError(f"camera {camera!r} is not a preset; choose one of auto, {', '.join(presets)}, or upload "
+                          "the camera's intrinsics JSON")
+    intrinsics = form.files.get("intrinsics", [])
+    if len(intrinsics) > 1:
+        raise UploadError("give one intrinsics JSON, not several")
+    method = f.get("method", methods[0]).strip() or methods[0]
+    if method not in methods:
+        raise UploadError(f"method {method!r} is unknown; available: {', '.join(methods)}")
+    sex = f.get("sex", "").strip() or None
+    if sex not in (None, "male", "female"):
+        raise UploadError(f"sex {sex!r} must be male or female (or left empty)")
+    pick = None
+    if f.get("pick", "").strip():
+        try:
+            pick = _pick(f["pick"].strip())
+        except argparse.ArgumentTypeError as exc:
+            raise UploadError(f"pick: {exc}") from None
+    clothing_cm = _number(f, "clothing_cm", 0, 5, "a thickness of clothes in cm")
+    return Options(camera=camera, intrinsics=camera_from_upload(intrinsics[0]) if intrinsics else None,
+                   intrinsics_name=intrinsics[0].name if intrinsics else "", clothing_m=(clothing_cm or 0.0) / 100.0,
+                   pick=pick, method=method, height_cm=_number(f, "height_cm", 1, 300, "a height in cm"),
+                   mass_kg=_number(f, "mass_kg", 0.1, 700, "a mass in kg"), sex=sex,
+                   azimuth_deg=_number(f, "azimuth_deg", -360, 360, "an azimuth in degrees"),
+                   elevation_deg=_number(f, "elevation_deg", -90, 90, "an elevation in degrees"))
+
+
+def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_upload_bytes: int = MAX_UPLOAD_BYTES,
+               temp_dir: str | None = None, keep_results: int = 64):
+    """The ``wbsa serve`` application (Starlette, ASGI).
+
+    Parameters
+    ----------
+    model : EstimatorModel, path or None
+        As for :func:`wbsa.estimate`; a path is read (and refused if broken) here, once. None: the default
+        model.
+    workers : int
+        Estimates run at once (threads).
+    max_pending : int
+        Estimates accepted (waiting or running) before uploads are refused as busy (503).
+    max_upload_bytes : int
+        Largest request body.
+    temp_dir : str, optional
+        Where the server's temporary folder is made (default: the system's); it is removed at shutdown.
+    keep_results : int
+        Answers kept in memory for downloads and picks.
+
+    Returns
+    -------
+    starlette.applications.Starlette
+        ``app.state`` holds ``root`` (the temporary folder), ``runner``, ``results`` and ``batches``.
+    """
+    from starlette.applications import Starlette
+    from starlette.requests import ClientDisconnect, Request
+    from starlette.responses import FileResponse, JSONResponse, Response
+    from starlette.routing import Mount, Route
+    from starlette.staticfiles import StaticFiles
+
+    from wbsa.camera.presets import PRESETS
+    from wbsa.typing import METHODS
+    from wbsa.server.batch import Batch, BatchStore, run_batch
+    from wbsa.server.jobs import ResultStore, Runner, internal_error, measure, new_id
+
+    if model is not None and not hasattr(model, "predict"):
+        from wbsa.estimation.default_model import load_model
+
+        model = load_model(model)
+    presets = [k for k in PRESETS if k != "tum"] + ["tum"]
+    methods = list(METHODS)
+    root = Path(tempfile.mkdtemp(prefix="wbsa-serve-", dir=temp_dir))
+    runner = Runner(workers=workers, max_pending=max_pending)
+    results = ResultStore(keep_results)
+    batches = BatchStore()
+
+    def error(exc: UploadError) -> JSONResponse:
+        return JSONResponse({"error": str(exc)}, status_code=exc.status)
+
+    async def page(request: Request) -> Response:
+        return FileResponse(STATIC / "index.html", media_type="text/html")
+
+    async def info(request: Request) -> Response:
+        return JSONResponse({
+            "presets": [{"name": k, "width": PRESETS[k].width, "height": PRESETS[k].height} for k in presets],
+            "methods": methods, "max_upload_bytes": max_upload_bytes, "max_clothing_cm": 5,
+            "model": "default" if model is None else str(getattr(model, "meta", {}).get("name", "given"))})
+
+    async def estimate_one(request: Request) -> Response:
+        try:
+            runner.reserve()
+        except UploadError as exc:
+            return error(exc)
+        try:
+            form = await read_form(request, max_upload_bytes)
+            options = options_from_form(form, presets, methods)
+            depth = form.files.get("depth", [])
+            if len(depth) != 1:
+                raise UploadError("send one depth file in the field 'depth' (for several, use the batch)"
+                                  if depth else "no depth file was sent; choose or drop a depth image")
+            check_depth_upload(depth[0])
+            result = await runner.run(measure, depth[0], options, model, root)
+        except UploadError as exc:
+            return error(exc)
+        except ClientDisconnect:
+            return Response(status_code=400)
+        except Exception as exc:  # a failure of wbsa itself: the server answers and keeps running
+            return JSONResponse({"error": internal_error(exc)}, status_code=500)
+        finally:
+            runner.release()
+        results.add(result)
+        return JSONResponse(result.answer, status_code=422 if "error" in result.answer else 200)
+
+    async def pick(request: Request) -> Response:
+        import dataclasses
+
+        from wbsa.estimation.command import _pick
+
+        try:
+            runner.reserve()
+        except UploadError as exc:
+            return error(exc)
+        try:
+            before = results.get(request.path_params["rid"])
+            if before.depth_m is None:
+                raise UploadError("this upload holds no depth image to pick from; upload a depth file")
+            text = request.query_params.get("pick", "")
+            try:
+                at = _pick(text)
+            except argparse.ArgumentTypeError as exc:
+                raise UploadError(f"pick: {exc}") from None
+            options = dataclasses.replace(before.options, pick=at)
+            result = await runner.run(measure, None, options, model, root, depth_m=before.depth_m)
+            result.name = before.name
+            result.answer["name"] = before.name
+        except UploadError as exc:
+            return error(exc)
+        except Exception as exc:
+            return JSONResponse({"error": internal_error(exc)}, status_code=500)
+        finally:
+            runner.release()
+        results.add(result)
+        return JSONResponse(result.answer, status_code=422 if "error" in result.answer else 200)
+
+    async def result_file(request: Request) -> Response:
+        try:
+            result = results.get(request.path_params["rid"])
+            name = request.path_params["name"]
+            if name not in result.files:
+                raise UploadError(f"this result has no file {name!r}", status=404)
+        except UploadError as exc:
+            return error(exc)
+        content, media, filename = result.files[name]
+        return Response(content, media_type=media,
+                        headers={"Content-Disposition": f'attachment; filename="{filename}"'})
+
+    async def batch_start(request: Request) -> Response:
+        try:
+            runner.reserve()
+        except UploadError as exc:
+            return error(exc)
+        try:
+            form = await read_form(request, max_upload_bytes)
+            options = options_from_form(form, presets, methods)
+            uploads = form.files.get("depth", [])
+            if not uploads:
+                raise UploadError("no depth files were sent; choose or drop depth images")
+        except UploadError as exc:
+            runner.release()
+            return error(exc)
+        except ClientDisconnect:
+            runner.release()
+            return Response(status_code=400)
+        batch = Batch(new_id(), [u.name for u in uploads])
+        batches.add(batch)
+        runner.submit(run_batch, batch, uploads, options, model, root, results).add_done_callback(
+            lambda _: runner.release())
+        return JSONResponse(batch.progress())
+
+    async def batch_progress(request: Request) -> Response:
+        try:
+            return JSONResponse(batches.get(request.path_params["bid"]).progress())
+        except UploadError as exc:
+            return error(exc)
+
+    async def batch_csv(request: Request) -> Response:
+        try:
+            batch = batches.get(request.path_params["bid"])
+        except UploadError as exc:
+            return error(exc)
+        return Response(batch.csv_bytes(), media_type="text/csv",
+                        headers={"Content-Disposition": 'attachment; filename="wbsa-batch.csv"'})
+
+    @asynccontextmanager
+    async def lifespan(app):
+        try:
+            yield
+        finally:
+            runner.close()
+            shutil.rmtree(root, ignore_errors=True)
+
+    from starlette.middleware import Middleware
+
+    app = Starlette(routes=[
+        Route("/", page),
+        Route("/api/info", info),
+        Route("/api/estimate", estimate_one, methods=["POST"]),
+        Route("/api/result/{rid}/pick", pick, methods=["POST"]),
+        Route("/api/result/{rid}/{name}", result_file),
+        Route("/api/batch", batch_start, methods=["POST"]),
+        Route("/api/batch/{bid}.csv", batch_csv),
+        Route("/api/batch/{bid}", batch_progress),
+        Mount("/static", StaticFiles(directory=STATIC), name="static"),
+    ], lifespan=lifespan, middleware=[Middleware(SecurityHeaders)])
+    app.state.root, app.state.runner, app.state.results, app.state.batches = root, runner, results, batches
+    app.state.model = model
+    return app
+

@@ -1,0 +1,410 @@
+"""``wbsa serve``: the page in a real browser (Debian's headless Chromium), the routes, and every bad input.
+
+The server runs on a free loopback port in a thread of this process; the browser is driven by selenium with
+the system's chromedriver. Frames are rendered rooms of known virtual bodies (Kinect v2, as in
+tests/test_estimate.py) and every number on the page is compared with :func:`wbsa.estimate` on the same file.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import shutil
+import socket
+import struct
+import threading
+import urllib.error
+import urllib.request
+import uuid
+import zlib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+CHROMIUM = "/usr/bin/chromium"
+CHROMEDRIVER = "/usr/bin/chromedriver"
+ARTEFACTS = Path(os.environ.get("WBSA_TEST_ARTEFACTS", Path(__file__).resolve().parents[1] / "test-artefacts"))
+
+
+# ---------------------------------------------------------------- frames, server, browser
+@pytest.fixture(scope="module")
+def frames(body_model, tmp_path_factory):
+    """Kinect v2 frames (16-bit PNG, mm) of a man alone in a room and of the man with a woman beside him,
+    with the pixels of each person."""
+    from wbsa.bodies.anthropometry import reference_adult
+    from wbsa.camera import MeshScene, View, preset
+    from wbsa.core import write_depth_png
+    from wbsa.training.room import compose_room
+    from wbsa.sensor.settings import SensorSettings
+    from wbsa.simulate import simulate_view
+
+    folder = tmp_path_factory.mktemp("frames")
+    man = body_model.skin_mesh(body_model.rest_bodies(reference_adult(0.0)).vertices[0])
+    woman = body_model.skin_mesh(body_model.rest_bodies(reference_adult(1.0)).vertices[0])
+    out = {}
+    for name, others in (("one", ()), ("two", ((woman, 1.3),))):
+        room = compose_room(man, 20.0, wall_behind_m=0.8, others=others)
+        frame = simulate_view(MeshScene(room.mesh, surroundings=True), preset("kinect-v2"), View(20.0, 12.0, 3.2),
+                              sensor=SensorSettings(noise="nguyen2012"), seed=4, keep_frame=True,
+                              target=room.subject_center).frame
+        path = folder / f"{name}.png"
+        write_depth_png(path, frame.depth_m)
+        tri = frame.triangle_id
+        n_man = len(man.faces)
+        out[name] = {"path": path, "man": (tri >= 0) & (tri < n_man),
+                     "woman": (tri >= n_man) & (tri < n_man + len(woman.faces))}
+    return out
+
+
+@pytest.fixture(scope="module")
+def server(small_estimator_model, tmp_path_factory):
+    """The app on a free loopback port (upload limit 8 MiB, so the limit is cheap to test); its temporary
+    folder is checked to be gone after the server stops."""
+    from wbsa.server.app import create_app
+    from wbsa.server.command import start_in_thread
+
+    app = create_app(small_estimator_model, temp_dir=str(tmp_path_factory.mktemp("serve")),
+                     max_upload_bytes=8 * 2**20, max_pending=24)
+    url, stop = start_in_thread(app)
+    yield url, app
+    stop()
+    assert not app.state.root.exists()
+
+
+@pytest.fixture(scope="module")
+def browser():
+    """Headless Chromium (selenium + the Debian chromedriver) with a fresh profile, closed network features."""
+    from selenium import webdriver
+    from selenium.webdriver.chrome.service import Service
+
+    profile = Path(os.environ.get("TMPDIR", "/tmp")) / f"wbsa-chromium-{uuid.uuid4().hex}"
+    options = webdriver.ChromeOptions()
+    options.binary_location = CHROMIUM
+    for arg in ("--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+                "--disable-background-networking", "--disable-component-update", "--disable-sync",
+                "--disable-dev-shm-usage", f"--user-data-dir={profile}", "--window-size=1280,1900"):
+        options.add_argument(arg)
+    driver = webdriver.Chrome(service=Service(CHROMEDRIVER), options=options)
+    driver.set_page_load_timeout(30)
+    yield driver
+    driver.quit()
+    shutil.rmtree(profile, ignore_errors=True)
+
+
+def _estimate(path, model, pick=None):
+    import wbsa
+    from wbsa.estimation import SegmentSettings
+
+    return wbsa.estimate(str(path), "kinect-v2", str(model), segment=SegmentSettings(pick=pick))
+
+
+def _wait(driver, script: str, timeout: float = 60):
+    """Wait until the JavaScript expression ``script`` is true."""
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    WebDriverWait(driver, timeout, poll_frequency=0.1).until(lambda d: d.execute_script(f"return {script}"))
+
+
+def _upload(driver, url: str, *paths, camera: str = "kinect-v2", height_cm: str = "", mass_kg: str = ""):
+    """Open the page, fill the form and choose ``paths`` (the page sends them on choosing)."""
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.support.ui import Select
+
+    driver.get(url)
+    _wait(driver, "document.getElementById('camera').options.length > 1")
+    Select(driver.find_element(By.ID, "camera")).select_by_value(camera)
+    driver.find_element(By.ID, "height").send_keys(height_cm)
+    driver.find_element(By.ID, "mass").send_keys(mass_kg)
+    driver.find_element(By.ID, "depth-file").send_keys("\n".join(str(p) for p in paths))
+
+
+def _answer(driver) -> dict:
+    """The answer the page shows: its id, the WBSA it holds, the error line, the 3-D view's triangles."""
+    return driver.execute_script("""
+        const v = document.getElementById('wbsa-value');
+        return {id: document.body.dataset.answer || '', wbsa: v.dataset.wbsaM2 || '', text: v.textContent,
+                error: document.getElementById('error').hidden ? '' : document.getElementById('error').textContent,
+                triangles: document.getElementById('viewer').dataset.triangles || '',
+                flags: [...document.querySelectorAll('#flag-list li')].map(li => li.textContent),
+                formulae: document.querySelectorAll('#formulae-table tbody tr').length,
+                depthWidth: document.getElementById('depth-img').naturalWidth,
+                downloads: [...document.querySelectorAll('#downloads a')].map(a => a.getAttribute('href'))};""")
+
+
+# ---------------------------------------------------------------- in the browser
+def test_the_page_shows_the_answer_of_wbsa_estimate_for_a_rendered_body(server, browser, frames,
+                                                                          small_estimator_model):
+    """A known body in a room: the page's WBSA, interval and flags are wbsa.estimate's on the same file; the
+    depth picture, the 3-D view (every triangle of the surface), the view sketch, the formulae and the
+    downloads are shown. A screenshot is kept as a test artefact."""
+    from wbsa.estimation.checks import FLAGS
+
+    url, app = server
+    est = _estimate(frames["one"]["path"], small_estimator_model)
+    _upload(browser, url, frames["one"]["path"], height_cm="186", mass_kg="84")
+    _wait(browser, "document.body.dataset.answer && document.getElementById('viewer').dataset.triangles > 0")
+    shown = _answer(browser)
+    assert float(shown["wbsa"]) == pytest.approx(est.wbsa_m2, abs=5e-4) and shown["text"] == f"{est.wbsa_m2:.2f}"
+    interval = browser.find_element("id", "interval").text
+    assert f"{est.wbsa_lo_m2:.2f} – {est.wbsa_hi_m2:.2f} m²" in interval and "95 % interval" in interval
+    assert "regression" in browser.find_element("id", "method-line").text
+    assert len(shown["flags"]) == len(est.flags) and est.flags
+    for name, text in zip(est.flags, shown["flags"]):
+        assert FLAGS[name][1:] in text and name in text
+    assert int(shown["triangles"]) == len(est.surface.faces) and shown["depthWidth"] == 512
+    assert browser.execute_script("return document.querySelectorAll('#sketch *').length") > 5
+    assert shown["formulae"] == 14 and shown["error"] == ""  # wbsa's row and the 13 formulae (Schlich twice)
+    assert [Path(h).name for h in shown["downloads"]] == ["estimate.json", "fhir.json", "mask.png", "surface.ply"]
+    with urllib.request.urlopen(url + shown["downloads"][1]) as r:
+        assert json.loads(r.read())["valueQuantity"]["value"] == round(est.wbsa_m2, 4)
+    ARTEFACTS.mkdir(parents=True, exist_ok=True)
+    shot = ARTEFACTS / "serve-answer.png"
+    browser.save_screenshot(str(shot))
+    print(f"screenshot of the answer page: {shot}")
+    assert shot.stat().st_size > 20_000
+
+
+def test_a_click_on_the_second_person_measures_that_person(server, browser, frames, small_estimator_model):
+    """Two people: the page says so and shows the depth picture; a click on the woman gives wbsa.estimate's
+    answer for the pixel clicked (hers), a click on the man then gives his."""
+    from selenium.webdriver.common.action_chains import ActionChains
+
+    url, _ = server
+    two = frames["two"]
+    _upload(browser, url, two["path"])
+    _wait(browser, "!document.getElementById('error').hidden && document.getElementById('depth-img').naturalWidth > 0")
+    assert "2 person-sized objects" in _answer(browser)["error"]
+    img = browser.find_element("id", "depth-img")
+    results = {}
+    for who in ("woman", "man"):
+        ys, xs = np.nonzero(two[who])
+        x, y = int(np.median(xs)), int(np.median(ys[xs == int(np.median(xs))]))  # a pixel on the body's axis
+        before = _answer(browser)["id"]
+        w = browser.execute_script("return arguments[0].clientWidth", img)
+        h = browser.execute_script("return arguments[0].clientHeight", img)
+        ActionChains(browser).move_to_element_with_offset(img, int((x + 0.5) * w / 512 - w / 2),
+                                                          int((y + 0.5) * h / 424 - h / 2)).click().perform()
+        _wait(browser, f"document.body.dataset.answer && document.body.dataset.answer !== '{before}' "
+                       "&& document.body.dataset.busy === '0'")
+        pick = browser.execute_script("return fetch('api/result/' + document.body.dataset.answer + '/estimate.json')"
+                                      ".then(r => r.json())")
+        shown = _answer(browser)
+        answer_pick = tuple(browser.execute_script("return current.pick"))
+        assert two[who][answer_pick[1], answer_pick[0]], (who, answer_pick)
+        est = _estimate(two["path"], small_estimator_model, pick=answer_pick)
+        assert float(shown["wbsa"]) == pytest.approx(est.wbsa_m2, abs=5e-4) and pick["n_pixels"] == est.n_pixels
+        results[who] = est
+    assert results["woman"].wbsa_m2 != results["man"].wbsa_m2
+    assert results["woman"].stature_m < results["man"].stature_m - 0.05  # she is 1.72 m, he 1.86 m
+
+
+def test_a_bad_file_shows_its_error_and_the_server_still_answers(server, browser, frames, tmp_path):
+    """A text file renamed .png and the header of a 100-megapixel image: the page shows the message; the next
+    file is answered. Two files give the batch table with its CSV."""
+    url, _ = server
+    text = tmp_path / "notes.png"
+    text.write_text("this is not a depth image\n")
+    huge = tmp_path / "huge.png"
+    huge.write_bytes(_png_header(10_000, 10_000))
+    for path, words in ((text, "notes.png is not a .png file"), (huge, "100.0 megapixels) is above wbsa's limit")):
+        _upload(browser, url, path)
+        _wait(browser, "!document.getElementById('error').hidden")
+        assert words in _answer(browser)["error"]
+    _upload(browser, url, frames["one"]["path"])
+    _wait(browser, "document.body.dataset.answer")
+    assert _answer(browser)["error"] == ""
+    _upload(browser, url, frames["one"]["path"], text)
+    _wait(browser, "document.getElementById('batch-csv').hidden === false", timeout=60)
+    rows = browser.execute_script("return [...document.querySelectorAll('#batch-table tbody tr')]"
+                                  ".map(tr => [...tr.children].map(td => td.textContent))")
+    assert len(rows) == 2 and rows[0][0] == "one.png" and float(rows[0][1]) > 1.0 and "is not a .png" in rows[1][4]
+    assert browser.find_element("id", "batch-count").text == "2 of 2 done"
+
+
+# ---------------------------------------------------------------- the routes and bad input
+def _png_header(width: int, height: int) -> bytes:
+    """A PNG signature and IHDR chunk announcing a ``width`` x ``height`` 16-bit grey image (no pixel data)."""
+    ihdr = struct.pack(">IIBBBBB", width, height, 16, 0, 0, 0, 0)
+    chunk = b"IHDR" + ihdr
+    return b"\x89PNG\r\n\x1a\n" + struct.pack(">I", len(ihdr)) + chunk + struct.pack(">I", zlib.crc32(chunk))
+
+
+def _form(fields: dict, files: list[tuple[str, str, bytes]], boundary: str = "wbsaTEST") -> tuple[bytes, str]:
+    parts = []
+    for name, value in fields.items():
+        parts.append(f'--{boundary}\r\nContent-Disposition: form-data; name="{name}"\r\n\r\n{value}\r\n'.encode())
+    for name, filename, data in files:
+        parts.append(f'--{boundary}\r\nContent-Disposition: form-data; name="{name}"; filename="{filename}"\r\n'
+                     "Content-Type: application/octet-stream\r\n\r\n".encode() + data + b"\r\n")
+    parts.append(f"--{boundary}--\r\n".encode())
+    return b"".join(parts), f"multipart/form-data; boundary={boundary}"
+
+
+def _post(url: str, fields: dict | None = None, files=(), path: str = "api/estimate") -> tuple[int, dict]:
+    body, ctype = _form(fields or {}, list(files))
+    req = urllib.request.Request(url + path, data=body, headers={"Content-Type": ctype}, method="POST")
+    try:
+        with urllib.request.urlopen(req, timeout=120) as r:
+            return r.status, json.loads(r.read())
+    except urllib.error.HTTPError as err:
+        return err.code, json.loads(err.read())
+
+
+def _alive(url: str) -> bool:
+    with urllib.request.urlopen(url + "api/info", timeout=30) as r:
+        return r.status == 200 and "kinect-v2" in r.read().decode()
+
+
+def test_every_bad_input_gets_one_clear_line_and_the_server_keeps_running(server, frames):
+    url, app = server
+    good, two = frames["one"]["path"].read_bytes(), frames["two"]["path"].read_bytes()
+    empty_npy = io.BytesIO()
+    np.save(empty_npy, np.zeros((0, 0), np.float32))
+    cases = [
+        ({}, [("depth", "notes.png", b"plain text, renamed")], 415, "notes.png is not a .png file"),
+        ({}, [("depth", "frame.jpg", b"\xff\xd8\xff")], 415, "not a depth file type wbsa reads"),
+        ({}, [("depth", "empty.png", b"")], 400, "empty.png is empty (0 bytes)"),
+        ({}, [("depth", "zero.png", _png_header(0, 0))], 400, "says 0 x 0 pixels: it holds no image"),
+        ({}, [("depth", "zero.npy", empty_npy.getvalue())], 400, "says 0 x 0 pixels"),
+        ({}, [("depth", "huge.png", _png_header(100_000, 100_000))], 413, "10000.0 megapixels) is above"),
+        ({}, [("depth", "cut.png", good[:2000])], 422, "cut.png is not a readable image"),
+        ({}, [("depth", "one.png", good), ("intrinsics", "cam.json", b"not json")], 400,
+         "cam.json is not an intrinsics JSON"),
+        ({}, [("depth", "one.png", good), ("intrinsics", "cam.json", b'{"width": 512}')], 400,
+         "cam.json: camera JSON lacks 'intrinsic_matrix'"),
+        ({"camera": "kinect-v1"}, [("depth", "one.png", good)], 422, "is 512x424 but camera kinect-v1 is 640x480"),
+        ({"camera": "/etc/passwd"}, [("depth", "one.png", good)], 400, "holds a file path"),
+        ({"camera": "../cam.json"}, [("depth", "one.png", good)], 400, "holds a file path"),
+        ({"camera": "kinect-v9"}, [("depth", "one.png", good)], 400, "'kinect-v9' is not a preset"),
+        ({"clothing_cm": "thick"}, [("depth", "one.png", good)], 400, "clothing_cm: expected a thickness"),
+        ({"pick": "middle"}, [("depth", "one.png", good)], 400, "nearest, largest, center or x,y"),
+        ({"pick": "5000,5"}, [("depth", "two.png", two)], 422, "lies outside the 512 x 424 depth image"),
+        ({"sex": "x"}, [("depth", "one.png", good)], 400, "must be male or female"),
+        ({"elevation_deg": "95"}, [("depth", "one.png", good)], 400, "elevation_deg: expected an elevation"),
+        ({"model": "evil.npz"}, [("depth", "one.png", good)], 400, "unknown field 'model'"),
+        ({}, [], 400, "no depth file was sent"),
+    ]
+    for fields, files, status, words in cases:
+        code, body = _post(url, fields, files)
+        assert (code, words in body.get("error", "")) == (status, True), (fields, [f[1] for f in files], code, body)
+        assert "\n" not in body["error"] and str(app.state.root) not in json.dumps(body)
+        assert "/tmp" not in body["error"], body
+    # a form whose body ends before the form does: the upload was cut off
+    body, ctype = _form({}, [("depth", "one.png", good)])
+    req = urllib.request.Request(url + "api/estimate", data=body[:-200], headers={"Content-Type": ctype}, method="POST")
+    with pytest.raises(urllib.error.HTTPError) as err:
+        urllib.request.urlopen(req, timeout=30)
+    assert err.value.code == 400 and "was cut off after" in json.loads(err.value.read())["error"]
+    # a sender that goes away half-way through its announced body
+    host, port = url.split("//")[1].strip("/").split(":")
+    with socket.create_connection((host, int(port)), timeout=10) as s:
+        s.sendall(f"POST /api/estimate HTTP/1.1\r\nHost: x\r\nContent-Type: {ctype}\r\n"
+                  f"Content-Length: {len(body)}\r\n\r\n".encode() + body[: len(body) // 2])
+    # a body above the limit is refused from its announced length, before any of it is read
+    with socket.create_connection((host, int(port)), timeout=10) as s:
+        s.sendall(f"POST /api/estimate HTTP/1.1\r\nHost: x\r\nContent-Type: {ctype}\r\n"
+                  f"Content-Length: {9 * 2**20}\r\n\r\n".encode())
+        reply = s.makefile("rb").read().decode()
+    assert reply.startswith("HTTP/1.1 413") and "above this server's limit of 8 MiB" in reply, reply
+    code, body = _post(url, {"azimuth_deg": "20", "elevation_deg": "12"}, [("depth", "one.png", good)])
+    assert code == 200 and body["wbsa_lo_m2"] < body["wbsa_m2"] < body["wbsa_hi_m2"] and _alive(url)
+    assert (body["view"]["azimuth_used_deg"], body["view"]["elevation_used_deg"]) == (20, 12)  # a stated view is used
+    assert list(app.state.root.iterdir()) == []  # every estimate's folder removed
+
+
+def test_fifty_uploads_at_once_are_answered_or_told_the_server_is_busy(small_estimator_model, frames, tmp_path):
+    """50 at once against a server with 4 places: each gets an answer or the one-line busy message, the server
+    goes on, the estimates run off the event loop (the page loads while they run), and no folder is left.
+    (20 at once, all answered, on the default 32 places: benchmarks/bench_serve.py.)"""
+    from wbsa.server.app import create_app
+    from wbsa.server.command import start_in_thread
+
+    app = create_app(small_estimator_model, temp_dir=str(tmp_path), max_pending=4)
+    url, stop = start_in_thread(app)
+    good = frames["one"]["path"].read_bytes()
+    out = []
+
+    def one() -> None:
+        out.append(_post(url, {"camera": "kinect-v2"}, [("depth", "one.png", good)]))
+
+    threads = [threading.Thread(target=one) for _ in range(50)]
+    for t in threads:
+        t.start()
+    with urllib.request.urlopen(url, timeout=10) as r:  # the event loop is free while estimates run
+        assert r.status == 200
+    for t in threads:
+        t.join()
+    codes = [c for c, _ in out]
+    assert len(out) == 50 and set(codes) == {200, 503} and codes.count(200) >= 4, codes
+    assert len({b["wbsa_m2"] for c, b in out if c == 200}) == 1  # the same answer from every thread
+    assert all("the server is busy" in b["error"] for c, b in out if c == 503)
+    assert _alive(url) and app.state.runner.pending == 0 and list(app.state.root.iterdir()) == []
+    stop()
+    assert not app.state.root.exists()
+
+
+def test_a_batch_gives_one_row_per_file_and_a_csv(server, frames, small_estimator_model):
+    import csv
+    import io
+    import time
+
+    url, _ = server
+    good = frames["one"]["path"].read_bytes()
+    code, batch = _post(url, {"camera": "kinect-v2"},
+                        [("depth", "a.png", good), ("depth", "b.txt", b"x"), ("depth", "c.png", good)], "api/batch")
+    assert code == 200 and batch["total"] == 3
+    for _ in range(600):
+        with urllib.request.urlopen(url + f"api/batch/{batch['id']}") as r:
+            batch = json.loads(r.read())
+        if batch["done"]:
+            break
+        time.sleep(0.1)
+    assert batch["done_count"] == 3
+    with urllib.request.urlopen(url + batch["csv"]) as r:
+        rows = list(csv.DictReader(io.StringIO(r.read().decode())))
+    est = _estimate(frames["one"]["path"], small_estimator_model)
+    assert [r["file"] for r in rows] == ["a.png", "b.txt", "c.png"]
+    assert float(rows[0]["wbsa_m2"]) == pytest.approx(est.wbsa_m2, abs=5e-4) and rows[0]["flags"] == ";".join(est.flags)
+    assert rows[1]["wbsa_m2"] == "" and "not a depth file type" in rows[1]["error"]
+
+
+def test_the_advice_names_every_flag_and_the_answer_reads_them_from_flags():
+    from wbsa.estimation.checks import FLAGS
+    from wbsa.server.advice import ADVICE, flag_rows
+
+    assert set(ADVICE) == set(FLAGS)
+    row = flag_rows({"cut_off": "subject pixels on the image border"})[0]
+    assert row["meaning"] == FLAGS["cut_off"] and row["todo"] == ADVICE["cut_off"]
+
+
+def test_upload_names_never_carry_folders_and_messages_never_carry_the_servers_paths():
+    from wbsa.server.uploads import display_name, scrub
+
+    assert display_name("../../etc/passwd.png") == "passwd.png" and display_name("C:\\a\\b.npy") == "b.npy"
+    assert display_name("\x00\x1b.png") == ".png" and len(display_name("x" * 500 + ".png")) <= 100
+    assert scrub("/srv/t/wbsa-serve-1/r-2/depth.png is not readable", "/srv/t/wbsa-serve-1/r-2", "a.png") == \
+        "a.png is not readable"
+
+
+@pytest.mark.slow
+def test_wbsa_serve_prints_its_address_and_serves_the_page(small_estimator_model):
+    import subprocess
+    import sys
+
+    proc = subprocess.Popen([sys.executable, "-m", "wbsa", "serve", "--model", str(small_estimator_model)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        line = proc.stdout.readline()
+        assert line.startswith("wbsa serve: open http://127.0.0.1:"), (line, proc.stderr.read() if proc.poll() else "")
+        address = line.split()[3]
+        with urllib.request.urlopen(address, timeout=30) as r:
+            page = r.read().decode()
+        assert "Body surface area from one depth image" in page and "https://" not in page
+    finally:
+        proc.terminate()
+        proc.wait(timeout=30)
+    bad = subprocess.run([sys.executable, "-m", "wbsa", "serve", "--model", "/nonexistent/m.npz"],
+                         capture_output=True, text=True, timeout=120)
+    assert bad.returncode == 2 and bad.stderr.startswith("error:") and bad.stderr.count("\n") == 1, bad.stderr

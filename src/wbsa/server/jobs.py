@@ -153,7 +153,8 @@ def read_upload(upload: Upload, folder: Path) -> np.ndarray:
 
 def resolve(depth_m: np.ndarray, options: Options):
     """The camera of ``options`` for an image of ``depth_m``'s size and whether it was assumed."""
-    from wbsa.camera.intrinsics import Intrinsics, resolve_camera
+    from wbsa.camera.intrinsics import Intrinsics
+    from wbsa.camera.presets import resolve_camera
     from wbsa.estimation.command import auto_camera
 
     if options.intrinsics is not None:

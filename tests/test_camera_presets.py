@@ -1,0 +1,76 @@
+"""The camera record table: one record per preset, read by the intrinsics, the training sensor, every --help
+and the docs."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from wbsa.errors import WbsaError
+
+DOCS = Path(__file__).resolve().parents[1] / "docs"
+
+
+def test_every_help_lists_every_preset(capsys):
+    from wbsa.camera.presets import CAMERAS
+    from wbsa.cli import main
+
+    for command in (["view"], ["scan"], ["estimate"], ["train"]):
+        try:
+            main([*command, "--help"])
+        except SystemExit:
+            pass
+        text = " ".join(capsys.readouterr().out.split())
+        missing = [name for name in CAMERAS if name not in text]
+        assert not missing, (command, missing)
+
+
+def test_the_docs_preset_table_is_the_camera_table():
+    """docs/camera.md's table of presets lists each record's size and working range."""
+    from wbsa.camera.presets import CAMERAS
+
+    rows = {m.group(1): m.group(0) for m in re.finditer(r"^\| `([a-z0-9-]+)`[^|]*\| \d+×\d+ .*$", (DOCS / "camera.md").read_text(),
+                                                        re.M)}
+    assert set(rows) == set(CAMERAS)
+    for name, record in CAMERAS.items():
+        k = record.intrinsics
+        assert f"{k.width}×{k.height}" in rows[name]
+        lo, hi = record.working_range_m
+        assert re.search(rf"\b{lo:g}(\.0)?–{hi:g}(\.0)? m", rows[name]), (name, rows[name])
+
+
+def test_the_training_sensor_reads_the_record():
+    """A structured-light or stereo camera's depth is quantised in disparity with its own baseline and step;
+    time of flight is not."""
+    from wbsa.camera.presets import CAMERAS
+    from wbsa.training.capture import CaptureSettings, sensor_for
+
+    settings = CaptureSettings()
+    for name in ("kinect-v1", "realsense-d455", "kinect-v2"):
+        record = CAMERAS[name]
+        sensor = sensor_for(record, np.random.default_rng(0), settings)
+        if record.disparity is None:
+            assert not sensor.quantise
+        else:
+            assert sensor.quantise and (sensor.baseline_m, sensor.disparity_step_px) == record.disparity
+
+
+def test_a_subject_beyond_the_working_range_is_flagged():
+    from wbsa.camera.presets import CAMERAS
+    from wbsa.estimation.checks import working_range_flags
+
+    for record in CAMERAS.values():
+        lo, hi = record.working_range_m
+        assert working_range_flags((lo + hi) / 2, record.intrinsics) == {}
+        assert "beyond_working_range" in working_range_flags(hi + 0.1, record.intrinsics)
+        assert "beyond_working_range" in working_range_flags(lo - 0.05, record.intrinsics)
+
+
+def test_an_unknown_preset_is_one_line_naming_them():
+    from wbsa.camera.presets import CAMERAS, camera_record
+
+    with pytest.raises(WbsaError, match="unknown camera preset 'kinect-v3'; use one of " + ", ".join(CAMERAS)):
+        camera_record("kinect-v3")

@@ -1,7 +1,7 @@
 """NVIDIA Warp kernels of the Warp back end: every view of one body in a few compiled passes (CPU or CUDA).
 
-(About 540 lines, above the project's ~400: the kernels of one pass share Warp structs and device functions
-that Warp needs in the module that launches them.)
+(About 540 lines, above the project's ~400: the passes, their shared structs and device functions stay one
+Warp module, compiled and cached as one unit.)
 
 One ray per pixel centre through ``K⁻¹ [u, v, 1]`` finds the nearest triangle whose projection holds
 that centre, so for a view with the whole mesh in front of the camera the pixel rays are answered by

@@ -43,7 +43,7 @@ EdgePixels = Literal["kept", "mixed", "dropped"]
 #: nothing (a render of the body alone, as of a 3-D body scan).
 TestScene = Literal["room", "alone"]
 #: Units and up axis of a mesh file (:func:`wbsa.simulate.target.to_body_frame`).
-MeshUnits = Literal["m", "cm", "mm"]
+MeshUnits = Literal["m", "cm", "mm", "in"]
 MeshUp = Literal["z", "y"]
 #: A population's ``posture`` setting: a posture name, or ``mixed`` (a random name per subject).
 PostureChoice = Literal[Literal["a-pose", "mixed"], PostureName]

@@ -160,6 +160,12 @@ def render(mesh: Any, camera: Any = "kinect-v1", view: Any = (0.0, 0.0, 4.3), *,
     SimulatedView
         ``.row`` (the measured areas), ``.frame`` / ``.depth_m`` and ``.surfaces``.
 
+    Raises
+    ------
+    WbsaError
+        For a camera, view or sensor of the wrong kind, and a mesh that is not a person's size in metres
+        (its longest side outside 0.4–2.8 m: the message names the units it looks like, e.g. millimetres).
+
     Examples
     --------
     >>> import numpy as np, wbsa
@@ -173,7 +179,6 @@ def render(mesh: Any, camera: Any = "kinect-v1", view: Any = (0.0, 0.0, 4.3), *,
     >>> seen.depth_m.shape
     (480, 640)
     """
-    import warnings
     from collections.abc import Mapping
 
     from wbsa.camera import MeshScene, View, resolve_camera
@@ -200,11 +205,12 @@ def render(mesh: Any, camera: Any = "kinect-v1", view: Any = (0.0, 0.0, 4.3), *,
         sensor = SensorSettings(**sensor)
     elif sensor is not None and not isinstance(sensor, SensorSettings):
         raise WbsaError(f"sensor must be SensorSettings or a dict of its fields, got {type(sensor).__name__}")
+    from wbsa.core.mesh import TriangleMesh
+    from wbsa.simulate.target import check_person_size
+
+    mesh = TriangleMesh.from_any(mesh)
+    check_person_size(mesh)
     scene = MeshScene(mesh)
-    size_m = float((scene.bbox_max - scene.bbox_min).max())
-    if size_m > 5.0:
-        warnings.warn(f"the mesh is {size_m:g} m across; wbsa expects metres (scale a millimetre mesh by 0.001)",
-                      stacklevel=2)
     return simulate_view(scene, intrinsics, view, sensor=sensor, seed=seed, reconstruct=tuple(reconstruct),
                          keep_frame=True, keep_surfaces=True)
 

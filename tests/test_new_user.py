@@ -1,0 +1,85 @@
+"""What a new user trips on (issue 30): strict inputs, strict outputs, a happy path without warnings."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+
+import numpy as np
+import pytest
+
+from wbsa.cli import main
+from wbsa.errors import WbsaError
+
+
+def run_cli(*args) -> tuple[int, str, str]:
+    o, e = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(o), contextlib.redirect_stderr(e):
+        code = main([str(a) for a in args])
+    return code, o.getvalue(), e.getvalue()
+
+
+def assert_one_line_error(code: int, err: str, *fragments: str) -> None:
+    assert code == 2 and err.startswith("error: ") and err.count("\n") == 1 and "Traceback" not in err, err
+    for f in fragments:
+        assert f in err, err
+
+
+def strict_json(text: str):
+    """``json.loads`` that refuses NaN and Infinity (as Node, jq and FHIR tooling do)."""
+    def refuse(name):
+        raise AssertionError(f"{name} in JSON output")
+
+    return json.loads(text, parse_constant=refuse)
+
+
+def _box(size_m=(0.4, 0.2, 1.7)):
+    """A closed box (vertices (8, 3) in metres, faces (12, 3)) standing on z = 0."""
+    sx, sy, sz = size_m
+    corners = np.array([[x, y, z] for x in (-sx / 2, sx / 2) for y in (-sy / 2, sy / 2) for z in (0.0, sz)])
+    faces = np.array([[0, 4, 5], [0, 5, 1], [2, 3, 7], [2, 7, 6], [0, 1, 3], [0, 3, 2],
+                      [4, 6, 7], [4, 7, 5], [1, 5, 7], [1, 7, 3], [0, 2, 6], [0, 6, 4]])
+    return corners, faces
+
+
+# --- 1. mesh units -------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("scale,units,guess", [(1000.0, "m", "mm"), (100.0, "m", "cm"), (1 / 0.0254, "m", "in"),
+                                               (1.0, "mm", "m"), (100.0, "mm", "cm")])
+def test_a_mesh_in_other_units_is_refused_with_the_right_fix(tmp_path, scale, units, guess):
+    from wbsa.core.mesh import TriangleMesh
+    from wbsa.core.mesh_io import write_mesh
+
+    v, f = _box()
+    path = write_mesh(TriangleMesh(v * scale, f), tmp_path / "box.ply")
+    code, out, err = run_cli("view", path, "--units", units, "--json")
+    assert_one_line_error(code, err, f"give --units {guess}")
+    assert out == ""
+    if units == "m":  # the API: a mesh is in metres
+        import wbsa
+
+        with pytest.raises(WbsaError, match=f"scale its vertices by {1.0 / scale:g}"):
+            wbsa.render(TriangleMesh(v * scale, f))
+
+
+def test_a_mesh_of_no_person_size_in_any_units_is_refused(tmp_path):
+    from wbsa.core.mesh import TriangleMesh
+    from wbsa.core.mesh_io import write_mesh
+
+    v, f = _box()
+    path = write_mesh(TriangleMesh(v * 1e6, f), tmp_path / "huge.ply")
+    code, _, err = run_cli("view", path, "--json")
+    assert_one_line_error(code, err, "in any of metres, centimetres, millimetres, inches")
+
+
+def test_a_mesh_in_the_stated_units_is_measured(tmp_path):
+    from wbsa.core.mesh import TriangleMesh
+    from wbsa.core.mesh_io import write_mesh
+
+    v, f = _box()
+    metres = json.loads(run_cli("view", write_mesh(TriangleMesh(v, f), tmp_path / "m.ply"), "--json")[1])
+    code, out, err = run_cli("view", write_mesh(TriangleMesh(v / 0.0254, f), tmp_path / "in.ply"), "--units", "in",
+                             "--json")
+    assert code == 0 and err == "", err
+    assert json.loads(out)["mesh_area_m2"] == pytest.approx(metres["mesh_area_m2"], rel=1e-9)

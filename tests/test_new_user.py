@@ -83,3 +83,35 @@ def test_a_mesh_in_the_stated_units_is_measured(tmp_path):
                              "--json")
     assert code == 0 and err == "", err
     assert json.loads(out)["mesh_area_m2"] == pytest.approx(metres["mesh_area_m2"], rel=1e-9)
+
+
+# --- 2. view angles ------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("flag,value,fragment", [("--azimuth", "400", "-360 to 360 degrees"),
+                                                 ("--elevation", "95", "-90 to 90 degrees"),
+                                                 ("--elevation", "0:120:30", "got 120")])
+def test_view_angles_out_of_range_are_refused_not_wrapped(tmp_path, flag, value, fragment):
+    from wbsa.core.mesh import TriangleMesh
+    from wbsa.core.mesh_io import write_mesh
+
+    path = write_mesh(TriangleMesh(*_box()), tmp_path / "box.ply")
+    code, out, err = run_cli("view", path, flag, value, "--json")
+    assert_one_line_error(code, err, fragment)
+    code, out, err = run_cli("view", path, "--azimuth", "-30", "--json")  # the subject's right: in range
+    assert code == 0 and strict_json(out)["azimuth_deg"] == 330.0
+
+
+def test_view_angles_are_checked_where_they_enter_the_library():
+    import wbsa
+    from wbsa.scan.settings import ScanSettings
+
+    with pytest.raises(WbsaError, match="view azimuth_deg must be -360 to 360 degrees"):
+        wbsa.render(_box(), "kinect-v1", (400, 0, 3.0))
+    with pytest.raises(WbsaError, match="view elevation_deg must be -90 to 90 degrees"):
+        wbsa.render(_box(), "kinect-v1", (0, 95, 3.0))
+    with pytest.raises(WbsaError, match="^azimuths_deg must be -360 to 360 degrees"):
+        ScanSettings(azimuths_deg=(0.0, 400.0))
+    with pytest.raises(WbsaError, match="^elevation_deg must be -90 to 90"):
+        wbsa.estimate(np.ones((480, 640)), "kinect-v1", elevation_deg=95)
+    with pytest.raises(WbsaError, match="^azimuth_deg must be -360 to 360"):
+        wbsa.estimate(np.ones((480, 640)), "kinect-v1", azimuth_deg=float("nan"))

@@ -166,11 +166,12 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
         raise WbsaError(f"estimation method {method!r} is unknown; available: {', '.join(METHODS)}")
     if not 0 < level < 1:
         raise WbsaError(f"interval level {level} must lie in (0, 1), e.g. 0.95")
-    for name, value in (("azimuth_deg", azimuth_deg), ("elevation_deg", elevation_deg)):
-        if value is not None and not np.isfinite(value):
-            raise WbsaError(f"{name} must be a finite number of degrees, got {value!r}")
-    if elevation_deg is not None and not -90 <= elevation_deg <= 90:
-        raise WbsaError(f"elevation_deg {elevation_deg:g} must lie in [-90, 90]")
+    from wbsa.camera.views import check_angle
+
+    if azimuth_deg is not None:
+        azimuth_deg = check_angle(azimuth_deg, "azimuth", "azimuth_deg")
+    if elevation_deg is not None:
+        elevation_deg = check_angle(elevation_deg, "elevation", "elevation_deg")
     checks.check_clothing(clothing_m)
     intrinsics = resolve_camera(camera)
     depth_m = _depth_array(depth, depth_scale)

@@ -195,10 +195,16 @@ def render(mesh: Any, camera: Any = "kinect-v1", view: Any = (0.0, 0.0, 4.3), *,
         mesh = read_mesh(mesh)
     if not isinstance(view, View):
         try:
-            view = View(*(float(v) for v in view))
+            numbers = tuple(float(v) for v in view)
+            if len(numbers) not in (2, 3):
+                raise ValueError
         except (TypeError, ValueError):
             raise WbsaError(f"view must be a View or (azimuth_deg, elevation_deg[, distance_m]) in degrees and "
                             f"metres, got {view!r}") from None
+        from wbsa.camera.views import check_angle
+
+        view = View(check_angle(numbers[0], "azimuth", "view azimuth_deg"),
+                    check_angle(numbers[1], "elevation", "view elevation_deg"), *numbers[2:])
     if isinstance(reconstruct, str):
         reconstruct = (reconstruct,)
     if isinstance(sensor, Mapping):

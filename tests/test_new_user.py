@@ -115,3 +115,66 @@ def test_view_angles_are_checked_where_they_enter_the_library():
         wbsa.estimate(np.ones((480, 640)), "kinect-v1", elevation_deg=95)
     with pytest.raises(WbsaError, match="^azimuth_deg must be -360 to 360"):
         wbsa.estimate(np.ones((480, 640)), "kinect-v1", azimuth_deg=float("nan"))
+
+
+# --- 3. strict machine-readable output -----------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def body_depth(tmp_path_factory, body_model):
+    """A body mesh file, and the 16-bit depth PNG of its front view by a Kinect v2 at 2.5 m (the body alone)."""
+    from wbsa.camera import MeshScene, View, preset
+    from wbsa.core import write_depth_png
+    from wbsa.core.mesh_io import read_mesh
+    from wbsa.simulate import simulate_view
+
+    root = tmp_path_factory.mktemp("body")
+    assert run_cli("body", "--out", root / "body.ply")[0] == 0
+    frame = simulate_view(MeshScene(read_mesh(root / "body.ply")), preset("kinect-v2"), View(0.0, 0.0, 2.5),
+                          keep_frame=True).frame
+    write_depth_png(root / "depth.png", frame.depth_m)
+    return root / "body.ply", root / "depth.png"
+
+
+@pytest.fixture(scope="module")
+def fit_model(tmp_path_factory):
+    """A ``wbsa fit`` model (Kinect v1 at 4.3 m, three views) from synthetic tables: it estimates no view."""
+    from helpers.synthetic import synthetic_population, synthetic_scan
+    from wbsa.analysis.fit_views import fit_all
+    from wbsa.analysis.settings import FitSettings
+
+    pop = synthetic_population(200, seed=1)
+    out = fit_all(pop, synthetic_scan(pop, [(0.0, 0.0), (30.0, 0.0), (90.0, 0.0)], seed=1),
+                  FitSettings(models=("linear",), groups=("all",), k=5))
+    path = tmp_path_factory.mktemp("fit") / "model.json"
+    out.model.save(path)
+    return path
+
+
+def test_every_json_and_fhir_output_parses_strictly(body_depth, fit_model, monkeypatch):
+    """``--json``/``--fhir`` of every command that has them, through a parser that refuses NaN/Infinity; a
+    number that was not estimated is null, and the flags say why."""
+    monkeypatch.setenv("WBSA_CACHE_DIR", "/nonexistent/wbsa-cache")  # no default model to borrow a view from
+    mesh, depth = body_depth
+    outputs = {}
+    for argv in (["bsa", "--height-cm", "170", "--weight-kg", "70", "--json"],
+                 ["bsa", "--height-cm", "170", "--weight-kg", "70", "--sex", "female", "--formula", "schlich", "--json"],
+                 ["view", mesh, "--json"], ["view", mesh, "--azimuth", "0,90", "--reconstruct", "grid", "--json"],
+                 ["view", mesh, "--distance", "1e4", "--json"],  # sees nothing
+                 ["estimate", depth, "--camera", "kinect-v2", "--model", fit_model, "--azimuth", "0", "--json"],
+                 ["estimate", depth, "--camera", "kinect-v2", "--model", fit_model, "--azimuth", "0", "--fhir"]):
+        code, out, err = run_cli(*argv)
+        assert code == 0, (argv, err)
+        outputs[" ".join(map(str, argv[:1] + argv[-1:]))] = strict_json(out)
+    est = outputs["estimate --json"]
+    assert est["view"]["azimuth_deg"] is None and "view_not_estimated" in est["flags"]
+    assert est["view_used"]["azimuth_deg"] == 0.0 and est["wbsa_m2"] > 1.0
+    assert any("view_not_estimated" in n["text"] for n in outputs["estimate --fhir"]["note"])
+    code, out, err = run_cli("estimate", depth, "--camera", "kinect-v2", "--model", fit_model, "--azimuth", "0")
+    assert code == 0 and "nan" not in out.lower() and "azimuth 0° stated (not estimated)" in out, out
+
+
+def test_written_json_files_are_strict(tmp_path):
+    from wbsa.io import write_json
+
+    path = write_json({"a": float("nan"), "b": [np.inf, 1.0]}, tmp_path / "x.json")
+    assert strict_json(path.read_text()) == {"a": None, "b": [None, 1.0]}

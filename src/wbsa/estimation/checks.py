@@ -27,6 +27,8 @@ FLAGS: dict[str, str] = {
     "camera_assumed": "no camera was given; the preset of the image's size was assumed",
     "interval_unsure": "the model's calibration has too few subjects to promise the interval's level",
     "mixed_pixels": "many returns at the subject's outline lay between two surfaces; the area may be off",
+    "view_not_estimated": "the model estimates no view (a wbsa fit model); the stated one was used, the "
+                          "estimated azimuth is null",
 }
 #: Heights from the point cloud outside this range (m) mean a wrong depth scale or units.
 HUMAN_HEIGHT_M = (0.5, 2.5)

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 
 
@@ -101,18 +100,18 @@ def run_estimate(args: argparse.Namespace) -> int:
         write_mesh(est.surface, args.out_mesh)
     for name, text in est.flags.items():
         sys.stderr.write(f"warning: {name}: {text}\n")
+    from wbsa.strict_json import json_text
+
     if args.fhir:
         from wbsa.estimation.fhir import fhir_observation
 
-        print(json.dumps(fhir_observation(est, patient=args.patient), indent=2))
+        print(json_text(fhir_observation(est, patient=args.patient)))
     elif args.json:
-        print(json.dumps(est.to_dict(), indent=2))
+        print(json_text(est.to_dict()))
     else:
-        v = est.view
         print(f"WBSA {est.wbsa_m2:.3f} m²  ({100 * est.level:.0f} % interval {est.wbsa_lo_m2:.3f}–{est.wbsa_hi_m2:.3f} m²)"
               f"{'  [' + str(len(est.flags)) + ' warning(s)]' if est.flags else ''}")
-        print(f"view: azimuth {v.azimuth_deg:.0f}° ± {v.azimuth_sd_deg:.0f}° (mirror-equivalent), elevation "
-              f"{v.elevation_deg:.0f}° ± {v.elevation_sd_deg:.0f}°; subject {est.distance_m:.2f} m away, "
+        print(f"view: {est.view_text()}; subject {est.distance_m:.2f} m away, "
               f"{est.stature_m:.2f} m tall, VBSA {est.vbsa_m2:.3f} m² from {est.n_pixels} pixels [{est.model}]")
     return 0
 

@@ -75,11 +75,23 @@ class Estimate:
     def __repr__(self) -> str:
         flags = f", flags: {', '.join(self.flags)}" if self.flags else ""
         return (f"Estimate(WBSA {self.wbsa_m2:.3f} m² [{self.wbsa_lo_m2:.3f}–{self.wbsa_hi_m2:.3f}, "
-                f"{100 * self.level:.0f} %], azimuth {self.view.azimuth_deg:.0f}±{self.view.azimuth_sd_deg:.0f}°, "
-                f"elevation {self.view.elevation_deg:.0f}°, {self.distance_m:.2f} m{flags})")
+                f"{100 * self.level:.0f} %], {self.view_text()}, {self.distance_m:.2f} m{flags})")
+
+    def view_text(self) -> str:
+        """The view in words: the estimated one with its spread, or the stated one where none was estimated."""
+        v = self.view
+        if not np.isfinite(v.azimuth_deg):
+            return (f"azimuth {self.view_used[0]:.0f}° stated (not estimated), elevation {v.elevation_deg:.0f}° ± "
+                    f"{v.elevation_sd_deg:.0f}°")
+        return (f"azimuth {v.azimuth_deg:.0f}° ± {v.azimuth_sd_deg:.0f}° (mirror-equivalent), elevation "
+                f"{v.elevation_deg:.0f}° ± {v.elevation_sd_deg:.0f}°")
 
     def to_dict(self) -> dict:
-        """JSON-ready estimate, view and flags (without the mask and the surface)."""
+        """JSON-ready estimate, view and flags (without the mask and the surface).
+
+        A number that was not estimated is NaN here and ``null`` in the JSON (:func:`wbsa.strict_json.json_text`);
+        the flags say why (``view_not_estimated``).
+        """
         out = {k: getattr(self, k) for k in ("wbsa_m2", "wbsa_lo_m2", "wbsa_hi_m2", "level", "vbsa_m2", "stature_m",
                                              "distance_m", "n_pixels", "clothing_m", "method", "model", "camera")}
         out = {k: (round(v, 5) if isinstance(v, float) else v) for k, v in out.items()}
@@ -206,6 +218,12 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     view = prediction.view
     flags.update(checks.view_flags((azimuth_deg, elevation_deg), view))
     flags.update(prediction.flags)
+    if not np.isfinite(view.azimuth_deg):
+        flags["view_not_estimated"] = (f"this model estimates no azimuth; the stated {prediction.view_used[0]:g}° was "
+                                       "used (view.azimuth_deg is null)")
+    if not all(np.isfinite(v) for v in (prediction.wbsa_m2, prediction.lo_m2, prediction.hi_m2)):
+        raise WbsaError(f"the model gave no finite estimate ({prediction.wbsa_m2}); check the model file, or "
+                        "rebuild it")
     return Estimate(wbsa_m2=prediction.wbsa_m2, wbsa_lo_m2=prediction.lo_m2, wbsa_hi_m2=prediction.hi_m2, level=level,
                     vbsa_m2=m.vbsa_m2, stature_m=m.stature_m, distance_m=m.distance_m, n_pixels=m.n_pixels,
                     view=view, view_used=prediction.view_used, flags=flags, method=method, model=prediction.model_name,

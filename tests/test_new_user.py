@@ -178,3 +178,72 @@ def test_written_json_files_are_strict(tmp_path):
 
     path = write_json({"a": float("nan"), "b": [np.inf, 1.0]}, tmp_path / "x.json")
     assert strict_json(path.read_text()) == {"a": None, "b": [None, 1.0]}
+
+
+# --- 4. wbsa run overrides -----------------------------------------------------------------------------------
+
+def test_run_overrides_are_written_into_the_resolved_settings(tmp_path):
+    import tomllib
+
+    code, out, err = run_cli("run", "--print-config", "--n", "20", "--views", "front", "--k", "3", "--camera",
+                             "kinect-v2", "--distance", "2.5,3", "--title", "my small study")
+    assert code == 0, err
+    t = tomllib.loads(out)
+    assert t["population"]["n"] == 20 and t["scan"]["views"] == "front" and t["fit"]["k"] == 3
+    assert t["scan"]["camera"] == "kinect-v2" and t["scan"]["distances_m"] == [2.5, 3.0]
+    assert t["study"] == {"name": "my small study", "description": ""}  # not the demo's description
+    code, _, err = run_cli("run", "--print-config", "--n", "0")
+    assert_one_line_error(code, err, "[population] n")
+    code, _, err = run_cli("run", "--print-config", "--distance", "far")
+    assert_one_line_error(code, err, "--distance must be metres")
+
+
+def test_a_study_file_without_a_study_table_does_not_inherit_the_demo_title(tmp_path):
+    import tomllib
+
+    path = tmp_path / "mine.toml"
+    path.write_text("[population]\nn = 10\n")
+    code, out, err = run_cli("run", "--config", path, "--print-config")
+    assert code == 0, err
+    assert tomllib.loads(out)["study"] == {"name": "mine", "description": ""}
+    assert "demo" not in tomllib.loads(run_cli("run", "--print-config", "--n", "10")[1])["study"]["name"]
+    assert "demo" in tomllib.loads(run_cli("run", "--print-config")[1])["study"]["name"]  # the demo itself
+
+
+def test_a_view_set_with_angle_lists_is_refused_and_views_replace_inherited_lists(tmp_path):
+    import wbsa
+
+    path = tmp_path / "both.toml"
+    path.write_text('[population]\nn = 10\n[scan]\nviews = "front"\nazimuths_deg = [0, 30]\n')
+    code, _, err = run_cli("run", "--config", path, "--print-config")
+    assert_one_line_error(code, err, "views = 'front' and azimuths_deg contradict")
+    code, out, err = run_cli("run", "--config", path, "--views", "paper", "--print-config")  # the flag wins
+    assert code == 0 and 'views = "paper"' in out and "azimuths_deg = []" in out, err
+    angles = wbsa.Study.from_toml("default").replace(scan={"azimuths_deg": [0, 30]})
+    front = angles.replace(scan={"views": "front"})
+    assert len(front.settings.scan.view_list(4.3)) == 1
+
+
+def test_the_worker_count_recorded_is_the_one_used(tmp_path, monkeypatch):
+    """``--workers 1`` was recorded as 0; the pipeline's recorded settings are now those it ran with."""
+    import dataclasses
+
+    import wbsa.study.pipeline as pipeline
+
+    seen = {}
+
+    def stop(settings, out, run, *args):
+        seen["settings"], seen["run"] = settings, run
+        raise WbsaError("stopped before any work")
+
+    monkeypatch.setattr(pipeline, "_run_locked", stop)
+    from wbsa.study.settings import load_settings
+
+    settings = load_settings(None, {"population": {"n": 5}})
+    with pytest.raises(WbsaError, match="stopped"):
+        pipeline.run_study(settings, tmp_path / "s", workers=1, stream=None)
+    assert seen["run"].workers == 1 and seen["settings"].run.workers == 1
+    assert "workers = 1" in seen["settings"].to_toml()
+    with pytest.raises(WbsaError, match="stopped"):
+        pipeline.run_study(settings, tmp_path / "t", workers=0, stream=None)
+    assert seen["settings"].run.workers >= 1  # 0 = all cores, resolved

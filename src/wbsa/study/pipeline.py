@@ -163,6 +163,9 @@ def run_study(settings: StudySettings, out_dir: str | os.PathLike, *, workers: i
         run = dataclasses.replace(run, workers=int(workers))
     if show_progress is not None:
         run = dataclasses.replace(run, progress=show_progress)
+    if run.scheduler is None:  # the worker count used, recorded in study.toml and the report (0 = all cores)
+        run = dataclasses.replace(run, workers=run.n_workers)
+    settings = dataclasses.replace(settings, run=run)
     with folder_lock(out, "study folder"):  # creates the folder, or names why it cannot
         remove_stale_temporaries(out, all_of_them=True)
         return _run_locked(settings, out, run, log, scan_chunk_fn, t0)

@@ -247,3 +247,41 @@ def test_the_worker_count_recorded_is_the_one_used(tmp_path, monkeypatch):
     with pytest.raises(WbsaError, match="stopped"):
         pipeline.run_study(settings, tmp_path / "t", workers=0, stream=None)
     assert seen["settings"].run.workers >= 1  # 0 = all cores, resolved
+
+
+# --- 5. short reprs ------------------------------------------------------------------------------------------
+
+def test_objects_the_api_returns_print_short(tmp_path):
+    """Every object the public API returns prints a line (or a small table), its detail one attribute away."""
+    from pathlib import Path
+
+    import wbsa
+    from wbsa.camera import preset
+    from wbsa.study.pipeline import StageRun, StudyResult
+    from wbsa.study.stages import Stage
+
+    study = wbsa.Study.from_toml("default")
+    stage = Stage.create(tmp_path, "population", {"n": 300, "x": list(range(500))})
+    result = StudyResult(tmp_path, tmp_path / "report.html", tmp_path / "fits.parquet",
+                         [StageRun("population", stage, False, 3.2, 3.2, "300 subjects"),
+                          StageRun("fit", stage, True, 0.0, 9.0, "65 fits")], 12.5)
+    for obj in (study, study.settings, preset("kinect-v1"), wbsa.View(30, 0, 4.3), wbsa.SensorSettings(),
+                wbsa.TriangleMesh(*_box()), result, result.stages[0]):
+        assert "\n" not in repr(obj) and len(repr(obj)) < 260, repr(obj)
+    text = str(result)
+    assert len(text.splitlines()) == 4 and "reused" in text and "report.html" in text
+    assert "300 subjects" in repr(result.stages[0]) and "range" not in repr(result.stages[0])
+    assert "[population]" in study.settings.to_toml()  # the detail, one call away
+
+
+@pytest.mark.slow
+def test_the_estimator_model_prints_short(tmp_path):
+    from wbsa.estimation.model import EstimatorModel
+    from wbsa.estimation.train import TrainSettings, train_model
+
+    model = train_model(TrainSettings(n_random=32, n_survey=0, views_per_subject=2, calibration_fraction=0.5,
+                                      tree_iterations=50, tree_bags=2, seed=5))
+    model.save(tmp_path / "m.npz")
+    for obj in (model, EstimatorModel.load(tmp_path / "m.npz"), model.view, model.view.axis, model.residual):
+        assert "\n" not in repr(obj) and len(repr(obj)) < 260 and "array" not in repr(obj), repr(obj)
+    assert "calibration renders" in repr(model) and "ranges" in model.meta

@@ -238,6 +238,14 @@ class EstimatorModel:
     scores: np.ndarray
     meta: dict = field(default_factory=dict)
 
+    def __repr__(self) -> str:
+        trees = 0 if self.residual is None else len(self.residual.roots)
+        cal = self.meta.get("calibration", {})
+        mape = f", calibration MAPE {cal['wbsa_mape_pct']:.1f} %" if "wbsa_mape_pct" in cal else ""
+        return (f"EstimatorModel({self.name!r}: {self.meta.get('n_fit', '?')} fit and {len(self.scores)} calibration "
+                f"renders ({self.n_calibration_subjects} subjects), {len(self.coef)} regression terms, {trees} "
+                f"residual trees{mape}; .meta for the settings and ranges)")
+
     @property
     def name(self) -> str:
         """Short identifier (the file name, or ``default``)."""

@@ -48,6 +48,9 @@ class TreeEnsemble:
     roots: np.ndarray
     baseline: float
 
+    def __repr__(self) -> str:
+        return f"TreeEnsemble({len(self.roots)} trees, {len(self.feature)} nodes, baseline {self.baseline:.4g})"
+
     @classmethod
     def from_sklearn(cls, model) -> "TreeEnsemble":
         """From a fitted ``HistGradientBoostingRegressor`` or binary ``HistGradientBoostingClassifier``."""

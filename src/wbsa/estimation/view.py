@@ -91,6 +91,10 @@ class ViewModel:
     axis_sd_deg: float
     elevation_sd_deg: dict
 
+    def __repr__(self) -> str:
+        return (f"ViewModel(azimuth from the axis: {len(self.axis.roots)} trees, front/back: {len(self.front.roots)} "
+                f"trees; held-out azimuth s.d. {self.axis_sd_deg:.1f}°)")
+
     @classmethod
     def fit(cls, descriptors: np.ndarray, azimuth_deg: np.ndarray, *, seed: int = 0, max_iter: int = 150,
             axis_sd_deg: float | None = None, elevation_sd_deg: dict | None = None) -> "ViewModel":

@@ -83,6 +83,10 @@ class StageRun:
     original_seconds: float
     summary: str = ""
 
+    def __repr__(self) -> str:
+        how = "reused" if self.reused else f"{self.seconds:.1f} s"
+        return f"StageRun({self.name}: {self.summary or 'done'}; {how}; {self.stage.path.name})"
+
 
 @dataclass
 class StudyResult:
@@ -105,6 +109,19 @@ class StudyResult:
     fits_path: Path
     stages: list[StageRun] = field(default_factory=list)
     seconds: float = 0.0
+
+    def __repr__(self) -> str:
+        reused = sum(r.reused for r in self.stages)
+        return (f"StudyResult({self.out_dir}: report {self.report_path.name}, {len(self.stages)} stages "
+                f"({reused} reused), {self.seconds:.1f} s)")
+
+    def __str__(self) -> str:
+        """A small table: one line per stage (name, what it did, time), then the report's path."""
+        lines = [repr(self)]
+        for r in self.stages:
+            lines.append(f"  {r.name:<12} {'reused' if r.reused else f'{r.seconds:.1f} s':>9}  {r.summary}")
+        lines.append(f"  report: {self.report_path}")
+        return "\n".join(lines)
 
 
 class _Log:

@@ -100,6 +100,14 @@ class StudySettings:
     source: str = "default"
     base_dir: str = "."
 
+    def __repr__(self) -> str:
+        s = self.scan
+        views = (f"{len(s.view_list(s.distances_m[0]))} views" if s.azimuths_deg or s.elevations_deg
+                 else f"views {s.views}")
+        return (f"StudySettings({self.study.name!r}: {self.population.n} {self.population.kind} subjects, camera "
+                f"{s.camera}, {views}, distances {list(s.distances_m)} m, k = {self.fit.k}; from {self.source}; "
+                f".to_toml() for every key)")
+
     def to_dict(self) -> dict[str, dict[str, Any]]:
         """The settings as TOML-ready tables (without ``source`` and ``base_dir``)."""
         return {name: to_table(getattr(self, name)) for name in SECTIONS}

@@ -274,14 +274,196 @@ def test_objects_the_api_returns_print_short(tmp_path):
     assert "[population]" in study.settings.to_toml()  # the detail, one call away
 
 
-@pytest.mark.slow
-def test_the_estimator_model_prints_short(tmp_path):
-    from wbsa.estimation.model import EstimatorModel
+@pytest.fixture(scope="module")
+def tiny_model(tmp_path_factory):
+    """A small trained estimator model file (about 30 s)."""
     from wbsa.estimation.train import TrainSettings, train_model
 
     model = train_model(TrainSettings(n_random=32, n_survey=0, views_per_subject=2, calibration_fraction=0.5,
                                       tree_iterations=50, tree_bags=2, seed=5))
-    model.save(tmp_path / "m.npz")
-    for obj in (model, EstimatorModel.load(tmp_path / "m.npz"), model.view, model.view.axis, model.residual):
+    path = tmp_path_factory.mktemp("tiny") / "tiny.npz"
+    model.save(path)
+    return path
+
+
+@pytest.mark.slow
+def test_the_estimator_model_prints_short(tiny_model):
+    from wbsa.estimation.model import EstimatorModel
+
+    model = EstimatorModel.load(tiny_model)
+    for obj in (model, model.view, model.view.axis, model.residual):
         assert "\n" not in repr(obj) and len(repr(obj)) < 260 and "array" not in repr(obj), repr(obj)
     assert "calibration renders" in repr(model) and "ranges" in model.meta
+
+
+# --- 6. the estimator's bad inputs ---------------------------------------------------------------------------
+
+def _tiff_header(path, width, height):
+    """A little-endian TIFF whose header announces width x height 32-bit float pixels (the data is absent)."""
+    import struct
+
+    entries = [(256, 4, 1, width), (257, 4, 1, height), (258, 3, 1, 32), (259, 3, 1, 1), (262, 3, 1, 1),
+               (273, 4, 1, 8), (277, 3, 1, 1), (278, 4, 1, height), (279, 4, 1, min(4 * width * height, 2**32 - 1)),
+               (339, 3, 1, 3)]
+    ifd = struct.pack("<H", len(entries)) + b"".join(struct.pack("<HHII", *e) for e in entries) + b"\0\0\0\0"
+    path.write_bytes(b"II*\0" + struct.pack("<I", 8) + ifd)
+    return path
+
+
+@pytest.mark.parametrize("make,fragment", [
+    (lambda p: _tiff_header(p / "bomb.tiff", 100_000, 100_000), "above wbsa's limit"),
+    (lambda p: _tiff_header(p / "big.tiff", 9_000, 9_000), "9000 x 9000 pixels"),
+    (lambda p: (np.lib.format.open_memmap(p / "big.npy", mode="w+", dtype=np.float32, shape=(9_000, 9_000)),
+                p / "big.npy")[1], "9000 x 9000 pixels"),
+    (lambda p: (p / "t.npy").write_bytes(b"\x93NUMPY\x01\x00") and p / "t.npy", "not a readable .npy"),
+    (lambda p: (p / "bomb.exr").write_bytes(b"\x76\x2f\x31\x01\x02\0\0\0" + b"dataWindow\0box2i\0"
+                                            + np.array([16], "<i4").tobytes()
+                                            + np.array([0, 0, 99_999, 99_999], "<i4").tobytes() + b"\0")
+     and p / "bomb.exr", "100000 x 100000 pixels"),
+])
+def test_depth_images_are_refused_from_their_header_whatever_the_format(tmp_path, make, fragment):
+    import time
+
+    path = make(tmp_path)
+    t = time.perf_counter()
+    code, _, err = run_cli("estimate", path, "--camera", "kinect-v2", "--model", tmp_path / "none.npz")
+    assert_one_line_error(code, err, fragment)
+    assert time.perf_counter() - t < 2.0  # from the header, not after decoding
+    with pytest.raises(WbsaError, match=fragment.split(" x ")[0]):
+        import wbsa
+
+        wbsa.estimate(path, "kinect-v2")
+
+
+def test_what_is_not_a_file_is_named_truthfully(tmp_path):
+    import os
+
+    os.mkfifo(tmp_path / "pipe.png")
+    (tmp_path / "dir.png").mkdir()
+    os.symlink(tmp_path / "loop.png", tmp_path / "loop.png")
+    for path, fragment in ((tmp_path / "pipe.png", "is a FIFO"), (tmp_path / "dir.png", "is a folder"),
+                           (tmp_path / "loop.png", "loop of symbolic links"), ("/dev/zero", "is a device"),
+                           (tmp_path / "missing.png", "does not exist")):
+        code, _, err = run_cli("estimate", path, "--camera", "kinect-v2")
+        assert_one_line_error(code, err, fragment)
+
+
+@pytest.mark.parametrize("argv,fragment", [
+    (["--json", "--fhir"], "give one of them"),
+    (["--fhir", "--patient", ""], "--patient needs a FHIR reference"),
+    (["--mask-out", ""], "--mask-out needs a file name"),
+    (["--mask-out", "m.jpg"], "must end in .png"),
+    (["--out-mesh", "x.stl"], "must end in .ply or .obj"),
+    (["--mask-out", "same.png", "--out-mesh", "same.png"], "must end in .ply or .obj"),
+    (["--mask-out", "FILE/m.png"], "is a file, not a folder"),
+])
+def test_outputs_are_checked_before_any_work(tmp_path, monkeypatch, argv, fragment):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "FILE").write_text("x")
+    code, _, err = run_cli("estimate", "missing.png", "--camera", "kinect-v2", *argv)  # refused before reading
+    assert_one_line_error(code, err, fragment)
+
+
+def test_outputs_are_written_as_a_set(body_depth, fit_model, tmp_path, monkeypatch):
+    import wbsa.core.mesh_io as mesh_io
+
+    monkeypatch.setenv("WBSA_CACHE_DIR", "/nonexistent/wbsa-cache")
+    _, depth = body_depth
+    base = ["estimate", depth, "--camera", "kinect-v2", "--model", fit_model, "--azimuth", "0", "--no-segment",
+            "--mask-out", tmp_path / "m.png", "--out-mesh", tmp_path / "s.ply"]
+
+    def full_disk(*args, **kwargs):
+        raise WbsaError("no space left on the disk writing s.ply; free some space")
+
+    monkeypatch.setattr(mesh_io, "write_mesh", full_disk)
+    code, out, err = run_cli(*base, "--json")
+    assert_one_line_error(code, err.splitlines()[-1] + "\n", "no space left")
+    assert out == "" and sorted(p.name for p in tmp_path.iterdir()) == []  # no mask, no temporaries
+    monkeypatch.undo()
+    monkeypatch.setenv("WBSA_CACHE_DIR", "/nonexistent/wbsa-cache")
+    code, out, err = run_cli(*base, "--json")
+    assert code == 0 and (tmp_path / "m.png").is_file() and (tmp_path / "s.ply").is_file(), err
+    code, _, err = run_cli("estimate", depth, "--camera", "kinect-v2", "--model", fit_model, "--azimuth", "0",
+                           "--pick", "99999,99999")
+    assert_one_line_error(code, err, "lies outside the 512 x 424 depth image")
+
+
+def test_the_api_refuses_arguments_of_the_wrong_kind():
+    import wbsa
+
+    depth = np.full((424, 512), 2.0)
+    for kwargs, fragment in (({"depth": depth.astype(complex)}, "complex"), ({"model": object()}, "model must be"),
+                             ({"level": "0.95"}, "interval level"), ({"clothing_m": "0.01"}, "clothes' layer"),
+                             ({"depth_scale": "1000"}, "depth_scale")):
+        args = {"depth": depth, "camera": "kinect-v2", **kwargs}
+        with pytest.raises(WbsaError, match=fragment):
+            wbsa.estimate(args.pop("depth"), args.pop("camera"), **args)
+
+
+def test_an_absurd_depth_scale_gives_no_raw_numpy_warning(body_depth, capfd):
+    import warnings
+
+    _, depth = body_depth
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        code, _, err = run_cli("estimate", depth, "--camera", "kinect-v2", "--depth-scale", "1e-300")
+    assert_one_line_error(code, err)
+    assert "RuntimeWarning" not in capfd.readouterr().err
+
+
+@pytest.mark.parametrize("change,fragment", [
+    ({"intrinsic_matrix": [1e-300, 0, 0, 0, 1e-300, 0, 256, 212, 1]}, "field of view"),
+    ({"intrinsic_matrix": [0, 0, 0, 0, 365, 0, 256, 212, 1]}, "check the camera's intrinsics"),
+    ({"max_range_m": "4.5"}, "max_range_m must be a finite number of metres"),
+    ({"min_range_m": [0.5]}, "min_range_m must be a finite number of metres"),
+    ({"width": "512"}, "width must be a whole number"),
+])
+def test_intrinsics_json_is_checked(tmp_path, change, fragment):
+    cam = {"width": 512, "height": 424, "intrinsic_matrix": [365.0, 0, 0, 0, 365.0, 0, 255.5, 211.5, 1],
+           "min_range_m": 0.5, "max_range_m": 4.5, **change}
+    (tmp_path / "cam.json").write_text(json.dumps(cam))
+    code, _, err = run_cli("estimate", tmp_path / "missing.png", "--camera", tmp_path / "cam.json")
+    assert_one_line_error(code, err, fragment)
+    assert "--fx" not in err
+
+
+def _rewrite(src, dst, change):
+    with np.load(src, allow_pickle=False) as z:
+        arrays = {k: z[k] for k in z.files}
+    change(arrays)
+    np.savez(dst, **arrays)
+    return dst
+
+
+def _meta(change):
+    def edit(arrays):
+        meta = json.loads(str(arrays["meta_json"]))
+        change(meta)
+        arrays["meta_json"] = np.array(json.dumps(meta))
+    return edit
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("edit,fragment", [
+    (lambda a: a.pop("coef"), "the member coef is missing"),
+    (lambda a: a.pop("view_axis_left"), "view_axis_left is missing"),
+    (lambda a: a.update(scores=np.array(["a", "b"])), "scores is a <U1 array"),
+    (_meta(lambda m: m.update(ranges=[1, 2])), "meta ranges is a list"),
+    (lambda a: a.update(view_axis_roots=a["view_axis_roots"] + 10**6), "view_axis_roots points outside"),
+    (lambda a: a.update(scale=np.zeros_like(a["scale"])), "scale holds"),
+    (lambda a: a.update(scores=-a["scores"]), "calibration scores must be positive"),
+    (lambda a: a.update(scores=np.zeros_like(a["scores"])), "calibration scores must be positive"),
+    (lambda a: a.update(view_axis_sd_deg=np.array([-3.0])), "view_axis_sd_deg must be 1 positive"),
+    (_meta(lambda m: m["ranges"].update(vbsa_m2=[float("nan"), 1.0])), "trained range of vbsa_m2"),
+])
+def test_a_broken_model_file_is_refused_in_one_line(tiny_model, body_depth, tmp_path, edit, fragment):
+    path = _rewrite(tiny_model, tmp_path / "broken.npz", edit)
+    code, _, err = run_cli("estimate", body_depth[1], "--camera", "kinect-v2", "--model", path)
+    assert_one_line_error(code, err, fragment, "broken.npz")
+
+
+@pytest.mark.parametrize("content", [b"", b"PK\x03\x04 truncated", b"not a zip at all"])
+def test_an_empty_truncated_or_corrupt_model_file_is_refused_in_one_line(tmp_path, body_depth, content):
+    (tmp_path / "m.npz").write_bytes(content)
+    code, _, err = run_cli("estimate", body_depth[1], "--camera", "kinect-v2", "--model", tmp_path / "m.npz")
+    assert_one_line_error(code, err, "is not a wbsa estimator model")

@@ -60,12 +60,14 @@ def check_height(stature_m: float) -> None:
                         "the depth scale (units per metre) or the camera intrinsics are probably wrong")
 
 
+def is_real_number(value: object) -> bool:
+    """Whether ``value`` is a real number (int, float or a NumPy real scalar; not a bool, str or complex)."""
+    return (isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_)))
+
+
 def check_clothing(clothing_m: float) -> None:
     """Raise if a stated layer of clothes is not a thickness of 0 to :data:`MAX_CLOTHING_M` metres."""
-    try:
-        ok = math.isfinite(float(clothing_m)) and 0.0 <= float(clothing_m) <= MAX_CLOTHING_M
-    except (TypeError, ValueError):
-        ok = False
+    ok = is_real_number(clothing_m) and math.isfinite(float(clothing_m)) and 0.0 <= float(clothing_m) <= MAX_CLOTHING_M
     if not ok:
         raise WbsaError(f"the clothes' layer {clothing_m!r} m must be a thickness of 0 to {MAX_CLOTHING_M:g} m "
                         "(0 for none or tight-fitting, 0.01 for 1 cm; on the command line --clothing-cm 1)")

@@ -116,13 +116,19 @@ def _depth_array(depth, depth_scale: float | None) -> np.ndarray:
         from wbsa.core.depth_image import read_depth
 
         return read_depth(depth, depth_scale=depth_scale)
-    try:
-        arr = np.asarray(depth, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise WbsaError(f"depth must be a path or a 2-D array of metres, got {type(depth).__name__}") from None
-    if depth_scale is not None:
-        arr = arr / float(depth_scale)
-    return arr
+    from wbsa.core.depth_image import metres_from_units
+    from wbsa.estimation.checks import is_real_number
+
+    raw = np.asarray(depth) if not isinstance(depth, np.ndarray) else depth
+    if raw.dtype.kind not in "iuf":
+        raise WbsaError(f"depth must be a path or a 2-D array of real numbers (metres), got a {raw.dtype} "
+                        f"{type(depth).__name__}" + ("; give the real part (depth.real) if that is the depth"
+                                                     if raw.dtype.kind == "c" else ""))
+    if depth_scale is None:
+        return raw.astype(np.float64)
+    if not (is_real_number(depth_scale) and np.isfinite(depth_scale) and depth_scale > 0):
+        raise WbsaError(f"depth_scale must be a positive number of units per metre, e.g. 1000, got {depth_scale!r}")
+    return metres_from_units(raw, float(depth_scale)).astype(np.float64)
 
 
 def estimate(depth, camera, model=None, method: Method = "regression", *, azimuth_deg: float | None = None,
@@ -174,10 +180,18 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     from wbsa.estimation.predict import check_model_allows_clothing, load_any_model, predict_wbsa
     from wbsa.estimation.segment import segment_subject
 
-    if method not in METHODS:
+    from wbsa.estimation.model import EstimatorModel
+    from wbsa.analysis.model_file import WbsaModel
+
+    if not isinstance(method, str) or method not in METHODS:
         raise WbsaError(f"estimation method {method!r} is unknown; available: {', '.join(METHODS)}")
-    if not 0 < level < 1:
-        raise WbsaError(f"interval level {level} must lie in (0, 1), e.g. 0.95")
+    if not (checks.is_real_number(level) and 0 < level < 1):
+        raise WbsaError(f"interval level {level!r} must be a number in (0, 1), e.g. 0.95")
+    if not (model is None or isinstance(model, (str, os.PathLike, EstimatorModel, WbsaModel))):
+        raise WbsaError(f"model must be None (the default model), a model file path (.npz or .json), an "
+                        f"EstimatorModel or a WbsaModel, got {type(model).__name__}")
+    if segment is not None and not isinstance(segment, SegmentSettings):
+        raise WbsaError(f"segment must be SegmentSettings or None, got {type(segment).__name__}")
     from wbsa.camera.views import check_angle
 
     if azimuth_deg is not None:

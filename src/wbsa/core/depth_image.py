@@ -213,10 +213,12 @@ def read_depth(path: str | os.PathLike, *, depth_scale: float | None = None) -> 
         A missing file, an unknown type, more than one channel, or an unreadable file.
     """
     path = Path(path)
-    check_depth_path(path)
+    if os.path.lexists(path):  # a folder, FIFO, device or link loop is named as such, whatever its suffix
+        check_depth_path(path)
     suffix = path.suffix.lower()
     if suffix not in DEPTH_SUFFIXES:
         raise WbsaError(f"cannot read depth from {path.name}: use a {', '.join(DEPTH_SUFFIXES)} file")
+    check_depth_path(path)
     if isinstance(depth_scale, bool) or not (depth_scale is None or isinstance(depth_scale, (int, float, np.number))):
         raise WbsaError(f"depth scale must be a number of units per metre, e.g. 1000, got {depth_scale!r}")
     if depth_scale is not None and not (np.isfinite(depth_scale) and depth_scale > 0):

@@ -467,3 +467,51 @@ def test_an_empty_truncated_or_corrupt_model_file_is_refused_in_one_line(tmp_pat
     (tmp_path / "m.npz").write_bytes(content)
     code, _, err = run_cli("estimate", body_depth[1], "--camera", "kinect-v2", "--model", tmp_path / "m.npz")
     assert_one_line_error(code, err, "is not a wbsa estimator model")
+
+
+# --- 7. not a person -----------------------------------------------------------------------------------------
+
+def _in_room(mesh, azimuth_deg, distance_m=3.0):
+    """A depth image (Kinect v2, noisy, 12° above) of ``mesh`` standing in a room, a wall 0.8 m behind."""
+    from wbsa.camera import MeshScene, View, preset
+    from wbsa.estimation.room import compose_room
+    from wbsa.sensor.settings import SensorSettings
+    from wbsa.simulate import simulate_view
+
+    room = compose_room(mesh, float(azimuth_deg), wall_behind_m=0.8)
+    return simulate_view(MeshScene(room.mesh, surroundings=True), preset("kinect-v2"),
+                         View(float(azimuth_deg), 12.0, distance_m), sensor=SensorSettings(noise="nguyen2012"), seed=4,
+                         keep_frame=True, target=room.subject_center).frame.depth_m
+
+
+def _post():
+    import open3d as o3d
+
+    from wbsa.core.mesh import TriangleMesh
+
+    cyl = o3d.geometry.TriangleMesh.create_cylinder(0.06, 1.7, 24, 4)
+    cyl.translate((0.0, 0.0, 0.85))
+    return TriangleMesh.from_any(cyl)
+
+
+@pytest.mark.slow
+def test_objects_that_are_not_a_standing_person_are_flagged_and_people_are_not(fit_model, body_model, monkeypatch):
+    import wbsa
+    from wbsa.core.mesh import TriangleMesh
+    from wbsa.estimation import SegmentSettings
+
+    monkeypatch.setenv("WBSA_CACHE_DIR", "/nonexistent/wbsa-cache")
+
+    def flags(mesh, az):
+        return wbsa.estimate(_in_room(mesh, az), "kinect-v2", fit_model, azimuth_deg=az,
+                             segment=SegmentSettings(pick="center")).flags
+
+    board = TriangleMesh(*_box((0.45, 0.02, 1.69)))
+    for mesh, az in ((board, 0), (board, 45), (board, 90), (_post(), 0), (TriangleMesh(*_box((1.2, 0.1, 2.0))), 90)):
+        assert "not_a_person" in flags(mesh, az), (az, mesh)
+    people = wbsa.population(n=3, seed=1, posture="arms-down")  # the narrowest, fullest silhouettes
+    child = wbsa.body(gender=1.0, age=0.15, height=0.3)  # a young child in anny's A-pose
+    assert 0.8 < float(np.ptp(np.asarray(child.vertices)[:, 2])) < 1.4
+    for mesh in (*(wbsa.body(people, i) for i in range(3)), child):
+        for az in (0, 90, 135):
+            assert "not_a_person" not in flags(mesh, az), az

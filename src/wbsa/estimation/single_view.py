@@ -220,6 +220,7 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
                                        + "; ".join(c.describe() for c in seg.others))
     m = measure_subject(depth_m, mask, intrinsics, floor, mixed)
     checks.check_height(m.stature_m)
+    flags.update(checks.person_shape_flags(m.stature_m, m.width_m, m.silhouette_m2))
     flags.update(checks.mixed_pixel_flags(m.mixed_share))
     if m.touches_border:
         flags["cut_off"] = "subject pixels on the image border; step back or re-aim the camera"

@@ -196,6 +196,45 @@ def _incomplete(final: Path, detail: str) -> str:
     return f"cannot write {final}: {detail}; check the disk (is it full?) and run the command again"
 
 
+def check_output_file(path: str | os.PathLike, suffixes: tuple[str, ...], what: str) -> Path:
+    """Check an output file name before any work: not empty, one of ``suffixes``, not a folder, in a folder
+    that is one (or can be made) and can be written.
+
+    Parameters
+    ----------
+    path : path-like
+    suffixes : tuple of str
+        Allowed suffixes, lower case with the dot (``('.png',)``).
+    what : str
+        How the message names the output (a flag, e.g. ``--mask-out``).
+
+    Returns
+    -------
+    Path
+
+    Raises
+    ------
+    WbsaError
+        One line naming ``what``, the problem and the fix.
+    """
+    text = os.fspath(path)
+    if not str(text).strip():
+        raise WbsaError(f"{what} needs a file name, got an empty one; give e.g. out{suffixes[0]}")
+    path = Path(text)
+    if path.suffix.lower() not in suffixes:
+        raise WbsaError(f"{what} {path.name} must end in {' or '.join(suffixes)} (the file is written in that "
+                        f"format; give e.g. {path.stem or 'out'}{suffixes[0]})")
+    if path.is_dir():
+        raise WbsaError(f"{what} {path} is a folder; give a file name")
+    parent = path.parent if str(path.parent) else Path(".")
+    existing = next((p for p in (parent, *parent.parents) if p.exists()), Path("."))
+    if not existing.is_dir():
+        raise WbsaError(f"{what} {path}: {existing} is a file, not a folder; give another path")
+    if not os.access(existing, os.W_OK | os.X_OK):
+        raise WbsaError(f"{what} {path}: the folder {existing} cannot be written (permissions); give another path")
+    return path
+
+
 def default_verifier(path: Path) -> Callable[[Path], None] | None:
     """The re-read check of a file type: Parquet (footer and rows) and PNG (decodes); None for others."""
     suffix = path.suffix.lower()

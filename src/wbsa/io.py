@@ -7,7 +7,6 @@ pieces of that path so callers need one import. :func:`read_table` reads and val
 
 from __future__ import annotations
 
-import json
 import os
 import re
 import shutil
@@ -117,8 +116,11 @@ def _without_timestamps(path: Path) -> None:
 
 
 def write_json(obj: object, path: str | os.PathLike) -> Path:
-    """Write ``obj`` atomically as indented JSON."""
-    return write_text(json.dumps(obj, indent=2, default=_json_default) + "\n", path)
+    """Write ``obj`` atomically as indented, strict JSON (a non-finite number as ``null``:
+    :func:`wbsa.strict_json.json_text`)."""
+    from wbsa.strict_json import json_text
+
+    return write_text(json_text(obj) + "\n", path)
 
 
 def relative_path(path: str | os.PathLike, start: str | os.PathLike) -> str:
@@ -137,18 +139,6 @@ def write_run_log(log: dict, data_path: str | os.PathLike) -> Path:
     """Write the run information of a data file (timings) beside it as ``<name>.log.json``."""
     data_path = Path(data_path)
     return write_json(log, data_path.with_name(data_path.name + ".log.json"))
-
-
-def _json_default(o: object) -> object:
-    import numpy as np
-
-    if isinstance(o, np.generic):
-        return o.item()
-    if isinstance(o, np.ndarray):
-        return o.tolist()
-    if isinstance(o, Path):
-        return str(o)
-    raise TypeError(f"not JSON serialisable: {type(o).__name__}")
 
 
 def read_table(path: str | os.PathLike, required: list[str] | tuple[str, ...] = (), what: str = "table") -> pd.DataFrame:

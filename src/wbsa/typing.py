@@ -43,7 +43,7 @@ EdgePixels = Literal["kept", "mixed", "dropped"]
 #: nothing (a render of the body alone, as of a 3-D body scan).
 TestScene = Literal["room", "alone"]
 #: Units and up axis of a mesh file (:func:`wbsa.simulate.target.to_body_frame`).
-MeshUnits = Literal["m", "cm", "mm"]
+MeshUnits = Literal["m", "cm", "mm", "in"]
 MeshUp = Literal["z", "y"]
 #: Camera presets (:data:`wbsa.camera.presets.CAMERAS` has one record per name, in this order).
 PresetName = Literal["kinect-v1", "kinect-v2", "tum", "azure-kinect-nfov", "azure-kinect-wfov", "realsense-d435",

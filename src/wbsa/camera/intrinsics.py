@@ -67,8 +67,15 @@ class Intrinsics:
                 raise WbsaError(f"camera {key} must be a number, got {getattr(self, key)!r}") from None
             object.__setattr__(self, key, value)
         if not (math.isfinite(self.fx) and self.fx > 0 and math.isfinite(self.fy) and self.fy > 0):
-            raise WbsaError(f"camera focal lengths must be positive, got fx={self.fx:g}, fy={self.fy:g}; "
-                            f"check --fx/--fy")
+            raise WbsaError(f"camera focal lengths must be positive, got fx={self.fx:g}, fy={self.fy:g} pixels; "
+                            f"check the camera's intrinsics")
+        lo_deg, hi_deg = FIELD_OF_VIEW_RANGE_DEG
+        for axis, f, size in (("horizontal", self.fx, self.width), ("vertical", self.fy, self.height)):
+            fov = math.degrees(2.0 * math.atan(size / (2.0 * f)))
+            if not lo_deg <= fov <= hi_deg:
+                raise WbsaError(f"camera focal length {f:g} px gives a {axis} field of view of {fov:.3g}° over "
+                                f"{size} pixels, outside {lo_deg:g}–{hi_deg:g}°; check the camera's intrinsics "
+                                "(focal lengths in pixels, not millimetres)")
         if not math.isfinite(self.skew):
             raise WbsaError(f"camera skew must be finite, got {self.skew:g}")
         if not (0.0 <= self.cx <= self.width and 0.0 <= self.cy <= self.height):
@@ -168,12 +175,22 @@ class Intrinsics:
         K = m.reshape(3, 3).T  # Open3D stores the matrix column-major
         if abs(K[1, 0]) > 1e-12 or abs(K[2, 0]) > 1e-12 or abs(K[2, 1]) > 1e-12 or abs(K[2, 2] - 1.0) > 1e-12:
             raise WbsaError(f"{where}: intrinsic_matrix is not a pinhole K ([[fx, s, cx], [0, fy, cy], [0, 0, 1]])")
+        for key in ("width", "height", "min_range_m", "max_range_m"):
+            value = source.get(key)
+            if key in source and not (value is None and key.endswith("_m")) and (isinstance(value, bool) or not isinstance(value, (int, float))
+                                  or (key.endswith("_m") and value is not None and not math.isfinite(value))):
+                what = "a finite number of metres" if key.endswith("_m") else "a whole number of pixels"
+                raise WbsaError(f"{where}: {key} must be {what}, got {value!r}")
         max_range = source.get("max_range_m")
         return cls(
             width=width, height=height, fx=K[0, 0], fy=K[1, 1], cx=K[0, 2], cy=K[1, 2], skew=K[0, 1],
             name=str(source.get("name", "custom")), min_range_m=float(source.get("min_range_m") or 0.0),
             max_range_m=math.inf if max_range is None else float(max_range),
         )
+
+
+#: Fields of view (degrees, either axis) a depth camera can have; focal lengths beyond them are typing errors.
+FIELD_OF_VIEW_RANGE_DEG = (1.0, 170.0)
 
 
 @lru_cache(maxsize=16)

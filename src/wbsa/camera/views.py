@@ -15,7 +15,7 @@ from typing import Iterable, Sequence
 
 import numpy as np
 
-from wbsa.errors import WbsaError
+from wbsa.errors import SettingsError, WbsaError
 
 #: The paper's azimuths and elevations (degrees); ±90 elevation only at azimuth 0 (65 views).
 PAPER_AZIMUTHS_DEG = (0.0, 30.0, 45.0, 60.0, 90.0, 120.0, 135.0, 150.0, 180.0)
@@ -24,6 +24,55 @@ PAPER_ELEVATIONS_DEG = (0.0, 30.0, -30.0, 45.0, -45.0, 60.0, -60.0)
 PAPER_DISTANCE_M = 4.3
 
 VIEW_SPECS = ("paper", "sphere:N", "grid:STEP", "front")
+
+#: The range of a view angle a user gives (degrees): an azimuth within a full turn either way (−30 is 330, at the
+#: subject's right), an elevation from straight below to straight above. Angles computed inside wbsa (the
+#: Fibonacci sphere, random captures) may lie outside and are normalised by :class:`View`.
+ANGLE_RANGES_DEG = {"azimuth": (-360.0, 360.0), "elevation": (-90.0, 90.0)}
+_ANGLE_MEANING = {"azimuth": "0 = in front, 90 = at the subject's left, 180 = behind",
+                  "elevation": "+90 = straight above, -90 = straight below"}
+
+
+def check_angle(value: float, kind: str, name: str | None = None) -> float:
+    """A view angle a user gave, refused outside its range (:data:`ANGLE_RANGES_DEG`) instead of wrapped.
+
+    Parameters
+    ----------
+    value : float
+        Degrees.
+    kind : {'azimuth', 'elevation'}
+    name : str, optional
+        What the message calls it (a flag, a settings field); default ``kind``.
+
+    Returns
+    -------
+    float
+        ``value`` as a float.
+
+    Raises
+    ------
+    SettingsError
+        If ``value`` is not a finite number in range; the message starts with ``name`` and names the range.
+
+    Examples
+    --------
+    >>> check_angle(-30, "azimuth")
+    -30.0
+    >>> check_angle(95, "elevation", "--elevation")
+    Traceback (most recent call last):
+    ...
+    wbsa.errors.SettingsError: --elevation must be -90 to 90 degrees (+90 = straight above, -90 = straight below), got 95
+    """
+    lo, hi = ANGLE_RANGES_DEG[kind]
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        v = math.nan
+    if not (math.isfinite(v) and lo <= v <= hi):
+        raise SettingsError(name or kind, f"must be {lo:g} to {hi:g} degrees ({_ANGLE_MEANING[kind]}), got {value!r}"
+                            if not isinstance(value, (int, float)) else
+                            f"must be {lo:g} to {hi:g} degrees ({_ANGLE_MEANING[kind]}), got {value:g}")
+    return v
 
 
 def normalise_angles(azimuth_deg: float, elevation_deg: float) -> tuple[float, float]:
@@ -122,7 +171,19 @@ def grid_views(step_deg: float, distance_m: float = PAPER_DISTANCE_M) -> list[Vi
 
 
 def parse_angles(text: str | Iterable[float], what: str = "angles") -> list[float]:
-    """Degrees from ``'0,30,90'`` or ``'0:180:30'`` (start:stop:step, stop included) or a sequence."""
+    """Degrees from ``'0,30,90'`` or ``'0:180:30'`` (start:stop:step, stop included) or a sequence.
+
+    ``what`` ``'azimuths'`` or ``'elevations'``: each angle is range-checked (:func:`check_angle`).
+    """
+    out = _parse_angles(text, what)
+    kind = {"azimuths": "azimuth", "elevations": "elevation"}.get(what)
+    if kind is not None:
+        for a in out:
+            check_angle(a, kind, what)
+    return out
+
+
+def _parse_angles(text: str | Iterable[float], what: str) -> list[float]:
     if not isinstance(text, str):
         return [float(x) for x in text]
     out: list[float] = []
@@ -160,7 +221,8 @@ def parse_views(spec: str | None = None, *, azimuths: str | Sequence[float] | No
         views over the sphere; ``grid:STEP``: azimuth and elevation every STEP degrees.
     azimuths, elevations : str or sequence of float, optional
         Degrees (``'0,30,90'``, ``'0:180:30'``); their product is taken, a missing one defaults to 0.
-        Any angle is accepted and normalised; exact duplicates after normalisation are dropped.
+        Azimuths in −360…360, elevations in −90…90 (:func:`check_angle`); they are normalised (azimuth in
+        [0, 360)) and exact duplicates after normalisation are dropped.
     distance_m : float
         Camera distance of every view.
 

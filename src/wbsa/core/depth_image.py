@@ -2,12 +2,18 @@
 
 from __future__ import annotations
 
+import contextlib
+import errno
 import os
+import stat
+import struct
+import warnings
 from pathlib import Path
+from typing import Iterator
 
 import numpy as np
 
-from wbsa.core.limits import check_image_size
+from wbsa.core.limits import MAX_IMAGE_PIXELS, check_image_size
 from wbsa.errors import WbsaError
 from wbsa.atomic import atomic_path, png_verifier
 
@@ -49,7 +55,7 @@ def depth_to_png_mm(depth_m: np.ndarray, *, depth_scale: float = MM_PER_M) -> np
 
 def png_mm_to_depth(units: np.ndarray, *, depth_scale: float = MM_PER_M) -> np.ndarray:
     """Decode 16-bit depth units into metres: (h, w) uint16 -> (h, w) float32, 0 = no return."""
-    return (np.asarray(units, dtype=np.float64) / depth_scale).astype(np.float32)
+    return metres_from_units(units, depth_scale)
 
 
 def write_depth_png(path: str | os.PathLike, depth_m: np.ndarray, *, depth_scale: float = MM_PER_M) -> Path:
@@ -83,17 +89,15 @@ def read_depth_png(path: str | os.PathLike, *, depth_scale: float = MM_PER_M) ->
         If the file is missing, not an image, not a single-channel 16-bit image, or larger than
         :data:`wbsa.core.limits.MAX_IMAGE_PIXELS` (checked from the header, before decoding).
     """
-    from PIL import Image, UnidentifiedImageError
+    from PIL import UnidentifiedImageError
 
     path = Path(path)
-    if not path.is_file():
-        raise WbsaError(f"depth image {path} does not exist; check the path")
+    check_depth_path(path)
     try:
-        with Image.open(path) as img:
-            check_image_size(img.width, img.height, f"depth image {path}")
+        with _open_image(path) as img:
             mode = img.mode
             units = np.asarray(img)
-    except (UnidentifiedImageError, OSError, Image.DecompressionBombError) as exc:
+    except (UnidentifiedImageError, OSError) as exc:
         raise WbsaError(f"{path} is not a readable image ({type(exc).__name__}); give a 16-bit depth PNG") from None
     if mode not in ("I;16", "I;16B", "I;16L", "I") or units.ndim != 2:
         raise WbsaError(f"{path} is a {mode} image, not a single-channel 16-bit depth image; "
@@ -105,6 +109,87 @@ def read_depth_png(path: str | os.PathLike, *, depth_scale: float = MM_PER_M) ->
 
 #: Depth file types :func:`read_depth` reads.
 DEPTH_SUFFIXES = (".png", ".npy", ".tif", ".tiff", ".exr")
+
+
+def check_depth_path(path: Path) -> None:
+    """Refuse a depth path that is not a regular file, saying what it is (missing, a folder, a FIFO or device,
+    a symbolic-link loop) rather than "does not exist" for all of them.
+
+    Raises
+    ------
+    WbsaError
+    """
+    try:
+        mode = os.stat(path).st_mode
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            raise WbsaError(f"depth image {path} is a loop of symbolic links; give the file itself") from None
+        if exc.errno in (errno.ENOENT, errno.ENOTDIR):
+            raise WbsaError(f"depth image {path} does not exist; check the path") from None
+        raise WbsaError(f"cannot read depth image {path} ({os.strerror(exc.errno or 0) or type(exc).__name__}); "
+                        "check the path and its permissions") from None
+    if stat.S_ISDIR(mode):
+        raise WbsaError(f"depth image {path} is a folder; give a {', '.join(DEPTH_SUFFIXES)} file")
+    if not stat.S_ISREG(mode):
+        kind = "a FIFO (named pipe)" if stat.S_ISFIFO(mode) else "a device" if (
+            stat.S_ISCHR(mode) or stat.S_ISBLK(mode)) else "a socket" if stat.S_ISSOCK(mode) else "not a regular file"
+        raise WbsaError(f"depth image {path} is {kind}, not a file; save the depth image to a file first")
+
+
+@contextlib.contextmanager
+def _open_image(path: Path) -> Iterator:
+    """Pillow's image of ``path`` (header read, pixels not yet decoded), refused above the pixel budget."""
+    from PIL import Image
+
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", Image.DecompressionBombWarning)  # wbsa's own, lower limit follows
+            img = Image.open(path)
+    except Image.DecompressionBombError:  # Pillow's limit: far above wbsa's
+        raise WbsaError(f"depth image {path} announces more than {2 * Image.MAX_IMAGE_PIXELS / 1e6:.0f} megapixels, "
+                        f"above wbsa's limit of {MAX_IMAGE_PIXELS / 1e6:.1f} megapixels; use a smaller image") from None
+    with img:
+        check_image_size(img.width, img.height, f"depth image {path}")
+        yield img
+
+
+def _npy_shape(path: Path) -> tuple[int, ...]:
+    """The shape in a ``.npy`` header (nothing else is read), refused above the pixel budget."""
+    try:
+        with open(path, "rb") as fh:
+            version = np.lib.format.read_magic(fh)
+            read = np.lib.format.read_array_header_1_0 if version == (1, 0) else np.lib.format.read_array_header_2_0
+            shape, _, _ = read(fh)
+    except (OSError, ValueError, SyntaxError) as exc:
+        raise WbsaError(f"{path} is not a readable .npy array ({type(exc).__name__}); save it with numpy.save") from None
+    dims = [int(d) for d in shape if int(d) != 1]
+    if len(dims) == 2:
+        check_image_size(dims[1], dims[0], f"depth image {path}")
+    elif int(np.prod(dims, dtype=np.float64)) > MAX_IMAGE_PIXELS:
+        raise WbsaError(f"{path} holds an array of shape {tuple(shape)}, not a single-channel depth image")
+    return tuple(shape)
+
+
+def _exr_size(path: Path) -> tuple[int, int]:
+    """(width, height) of an OpenEXR file's ``dataWindow``, read from its header alone (no OpenEXR needed)."""
+    with open(path, "rb") as fh:
+        head = fh.read(1 << 16)
+    if head[:4] != b"\x76\x2f\x31\x01":
+        raise WbsaError(f"{path} is not an OpenEXR file (wrong magic number)")
+    pos = 8
+    while pos < len(head) and head[pos] != 0:
+        try:
+            name_end = head.index(b"\0", pos)
+            type_end = head.index(b"\0", name_end + 1)
+            (size,) = struct.unpack_from("<i", head, type_end + 1)
+        except (ValueError, struct.error):
+            break
+        value = type_end + 5
+        if head[pos:name_end] == b"dataWindow" and size == 16 and value + 16 <= len(head):
+            x0, y0, x1, y1 = struct.unpack_from("<4i", head, value)
+            return x1 - x0 + 1, y1 - y0 + 1
+        pos = value + max(size, 0)
+    raise WbsaError(f"{path} has no readable dataWindow in its OpenEXR header; check the file")
 
 
 def read_depth(path: str | os.PathLike, *, depth_scale: float | None = None) -> np.ndarray:
@@ -128,22 +213,27 @@ def read_depth(path: str | os.PathLike, *, depth_scale: float | None = None) -> 
         A missing file, an unknown type, more than one channel, or an unreadable file.
     """
     path = Path(path)
+    if os.path.lexists(path):  # a folder, FIFO, device or link loop is named as such, whatever its suffix
+        check_depth_path(path)
     suffix = path.suffix.lower()
     if suffix not in DEPTH_SUFFIXES:
         raise WbsaError(f"cannot read depth from {path.name}: use a {', '.join(DEPTH_SUFFIXES)} file")
-    if not path.is_file():
-        raise WbsaError(f"depth image {path} does not exist; check the path")
+    check_depth_path(path)
+    if isinstance(depth_scale, bool) or not (depth_scale is None or isinstance(depth_scale, (int, float, np.number))):
+        raise WbsaError(f"depth scale must be a number of units per metre, e.g. 1000, got {depth_scale!r}")
     if depth_scale is not None and not (np.isfinite(depth_scale) and depth_scale > 0):
         raise WbsaError(f"depth scale {depth_scale} must be a positive number of units per metre, e.g. 1000")
     if suffix == ".png":
         return read_depth_png(path, depth_scale=depth_scale or MM_PER_M)
     if suffix == ".npy":
+        _npy_shape(path)  # the pixel budget, from the header
         try:
             arr = np.load(path, allow_pickle=False)
-        except (OSError, ValueError) as exc:
+        except (OSError, ValueError, EOFError) as exc:
             raise WbsaError(f"{path} is not a readable .npy array ({type(exc).__name__}); "
                             "save it with numpy.save") from None
     elif suffix == ".exr":
+        check_image_size(*_exr_size(path), f"depth image {path}")
         arr = _read_exr(path)
     else:
         arr = _read_tiff(path)
@@ -151,15 +241,35 @@ def read_depth(path: str | os.PathLike, *, depth_scale: float | None = None) -> 
     if arr.ndim != 2 or not (np.issubdtype(arr.dtype, np.floating) or np.issubdtype(arr.dtype, np.integer)):
         raise WbsaError(f"{path} holds a {arr.dtype} array of shape {arr.shape}, not a single-channel depth image")
     scale = depth_scale or (1.0 if np.issubdtype(arr.dtype, np.floating) else MM_PER_M)
-    depth = arr.astype(np.float64) / scale
-    return np.where(np.isfinite(depth) & (depth > 0), depth, 0.0).astype(np.float32)
+    return metres_from_units(arr, scale)
+
+
+def metres_from_units(arr: np.ndarray, units_per_m: float) -> np.ndarray:
+    """Depth values in units → float32 metres, 0 = no return (NaN, infinite, zero, negative, or beyond float32).
+
+    Parameters
+    ----------
+    arr : (h, w) int or float
+    units_per_m : float
+        Units per metre, positive.
+
+    Returns
+    -------
+    (h, w) float32
+        No NumPy warning is raised for values that overflow (an absurd scale such as 1e-300 gives huge
+        depths, which are "no return" here and refused later as an implausible height or an empty image).
+    """
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        depth = np.asarray(arr, dtype=np.float64) / units_per_m
+        ok = np.isfinite(depth) & (depth > 0) & (depth < np.finfo(np.float32).max)
+        return np.where(ok, depth, 0.0).astype(np.float32)
 
 
 def _read_tiff(path: Path) -> np.ndarray:
-    from PIL import Image, UnidentifiedImageError
+    from PIL import UnidentifiedImageError
 
     try:
-        with Image.open(path) as img:
+        with _open_image(path) as img:
             if img.mode not in ("F", "I", "I;16", "I;16B", "I;16L"):
                 raise WbsaError(f"{path} is a {img.mode} TIFF, not single-channel depth; save 32-bit float metres "
                                 "or 16-bit millimetres")

@@ -19,8 +19,6 @@ from wbsa.atomic import atomic_path
 WRITE_SUFFIXES = (".ply", ".obj")
 #: File types Open3D reads as triangle meshes.
 READ_SUFFIXES = (".ply", ".obj", ".stl", ".off", ".gltf", ".glb")
-#: A mesh taller or wider than this (m) is probably not in metres.
-_SUSPICIOUS_SIZE_M = 20.0
 
 
 @contextlib.contextmanager
@@ -42,9 +40,9 @@ def quiet_stderr() -> Iterator[None]:
         os.close(saved)
 
 
-def read_mesh(path: str | os.PathLike, metres_per_unit: float = 1.0) -> TriangleMesh:
-    """Read a triangle mesh file with Open3D (vertices as stored; a file over 20 m across at
-    ``metres_per_unit`` gets a warning on stderr: wbsa works in metres).
+def read_mesh(path: str | os.PathLike) -> TriangleMesh:
+    """Read a triangle mesh file with Open3D (vertices as stored, whatever their units; a person's mesh is
+    checked for its size by :func:`wbsa.simulate.target.check_person_size`).
 
     Raises
     ------
@@ -69,10 +67,6 @@ def read_mesh(path: str | os.PathLike, metres_per_unit: float = 1.0) -> Triangle
     if faces.shape[0] == 0:
         raise WbsaError(f"{path} has {vertices.shape[0]} vertices but no triangles (a point cloud?); "
                         f"give a triangle mesh")
-    size = float(np.max(vertices.max(axis=0) - vertices.min(axis=0))) if np.all(np.isfinite(vertices)) else 0.0
-    if size * metres_per_unit > _SUSPICIOUS_SIZE_M:
-        sys.stderr.write(f"warning: {path.name} is {size:g} units across; wbsa expects metres "
-                         f"(a millimetre mesh: wbsa view --units mm, or scale it by 0.001)\n")
     return TriangleMesh(vertices, faces.astype(np.int32))
 
 

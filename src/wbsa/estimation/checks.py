@@ -27,7 +27,17 @@ FLAGS: dict[str, str] = {
     "camera_assumed": "no camera was given; the preset of the image's size was assumed",
     "interval_unsure": "the model's calibration has too few subjects to promise the interval's level",
     "mixed_pixels": "many returns at the subject's outline lay between two surfaces; the area may be off",
+    "view_not_estimated": "the model estimates no view (a wbsa fit model); the stated one was used, the "
+                          "estimated azimuth is null",
+    "not_a_person": "the object's silhouette is not a standing person's (a board, a post, a wall?)",
 }
+#: The silhouette of a standing person (:func:`person_shape_flags`): the share of its bounding box
+#: (width × stature) it fills, and its width per metre of stature. Measured on rendered bodies in a room
+#: (Kinect v2, 3 m, 12° elevation; A-pose and arms-down adults and teenagers of 1.35–2.07 m, azimuths 0–180°):
+#: fill 0.22–0.63, width/stature 0.14–0.68; a 1.69 × 0.45 m board fills 0.93–0.94 (0.03 of its stature wide
+#: edge-on), a 1.7 m post of 0.12 m 0.82–0.84 (width 0.08 of its stature), a wall piece edge-on 0.06.
+PERSON_MAX_FILL = 0.75
+PERSON_MIN_WIDTH_PER_STATURE = 0.10
 #: Heights from the point cloud outside this range (m) mean a wrong depth scale or units.
 HUMAN_HEIGHT_M = (0.5, 2.5)
 #: Mixed returns beside the subject per pixel of its outline above which the estimate is flagged: on the
@@ -50,6 +60,33 @@ def check_image_size(depth: np.ndarray, camera) -> None:
                         "give the camera that took it (--camera PRESET or an intrinsics JSON)")
 
 
+def person_shape_flags(stature_m: float, width_m: float, silhouette_m2: float) -> dict[str, str]:
+    """``{"not_a_person": ...}`` if the segmented object's silhouette is not a standing person's.
+
+    Parameters
+    ----------
+    stature_m, width_m, silhouette_m2 : float
+        The object's height, width across the image and projected area (``SubjectMeasures``).
+
+    Returns
+    -------
+    dict
+        Empty for a person's shape; else the flag with the measures and the ranges of people.
+    """
+    if not (stature_m > 0 and width_m > 0):
+        return {}
+    fill = silhouette_m2 / (width_m * stature_m)
+    ratio = width_m / stature_m
+    if fill <= PERSON_MAX_FILL and ratio >= PERSON_MIN_WIDTH_PER_STATURE:
+        return {}
+    what = (f"fills {100 * fill:.0f} % of its {width_m:.2f} x {stature_m:.2f} m outline (a person at most "
+            f"{100 * PERSON_MAX_FILL:.0f} %)" if fill > PERSON_MAX_FILL else
+            f"is {width_m:.2f} m wide for {stature_m:.2f} m tall (a person at least {PERSON_MIN_WIDTH_PER_STATURE:g} "
+            "of the height)")
+    return {"not_a_person": f"the object {what}: a board, post or wall? the estimate is not a person's; check the "
+                            "segmentation (--mask-out) and pick the subject"}
+
+
 def check_height(stature_m: float) -> None:
     """Raise if a height measured on the point cloud cannot be a person's."""
     lo, hi = HUMAN_HEIGHT_M
@@ -58,12 +95,14 @@ def check_height(stature_m: float) -> None:
                         "the depth scale (units per metre) or the camera intrinsics are probably wrong")
 
 
+def is_real_number(value: object) -> bool:
+    """Whether ``value`` is a real number (int, float or a NumPy real scalar; not a bool, str or complex)."""
+    return (isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_)))
+
+
 def check_clothing(clothing_m: float) -> None:
     """Raise if a stated layer of clothes is not a thickness of 0 to :data:`MAX_CLOTHING_M` metres."""
-    try:
-        ok = math.isfinite(float(clothing_m)) and 0.0 <= float(clothing_m) <= MAX_CLOTHING_M
-    except (TypeError, ValueError):
-        ok = False
+    ok = is_real_number(clothing_m) and math.isfinite(float(clothing_m)) and 0.0 <= float(clothing_m) <= MAX_CLOTHING_M
     if not ok:
         raise WbsaError(f"the clothes' layer {clothing_m!r} m must be a thickness of 0 to {MAX_CLOTHING_M:g} m "
                         "(0 for none or tight-fitting, 0.01 for 1 cm; on the command line --clothing-cm 1)")

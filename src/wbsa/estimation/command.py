@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 
 
@@ -86,45 +85,73 @@ def run_estimate(args: argparse.Namespace) -> int:
     from wbsa.estimation.segment import SegmentSettings
     from wbsa.estimation.single_view import estimate
 
-    if args.patient and not args.fhir:
-        raise WbsaError("--patient goes with --fhir")
+    from wbsa.camera.intrinsics import resolve_camera
+
+    _check_outputs(args)
+    camera = None if args.camera == "auto" else resolve_camera(args.camera)  # checked before the image is read
     depth = read_depth(args.depth, depth_scale=args.depth_scale)
-    camera = auto_camera(depth.shape) if args.camera == "auto" else args.camera
+    camera = auto_camera(depth.shape) if camera is None else camera
     segment = None if args.no_segment else SegmentSettings(min_depth_m=args.min_depth, max_depth_m=args.max_depth,
                                                            pick=args.pick)
     est = estimate(depth, camera, args.model, args.method, azimuth_deg=args.azimuth, elevation_deg=args.elevation,
                    clothing_m=args.clothing_cm / 100.0, level=args.level, segment=segment)
     if args.camera == "auto":
         est.flags["camera_assumed"] = f"no --camera given; the {camera.name} preset fits the image size"
-    if args.mask_out:
-        _write_mask(args.mask_out, est.mask)
-    if args.out_mesh:
-        from wbsa.core.mesh_io import write_mesh
-
-        write_mesh(est.surface, args.out_mesh)
+    _write_outputs(args, est)
     for name, text in est.flags.items():
         sys.stderr.write(f"warning: {name}: {text}\n")
+    from wbsa.strict_json import json_text
+
     if args.fhir:
         from wbsa.estimation.fhir import fhir_observation
 
-        print(json.dumps(fhir_observation(est, patient=args.patient), indent=2))
+        print(json_text(fhir_observation(est, patient=args.patient)))
     elif args.json:
-        print(json.dumps(est.to_dict(), indent=2))
+        print(json_text(est.to_dict()))
     else:
-        v = est.view
         print(f"WBSA {est.wbsa_m2:.3f} m²  ({100 * est.level:.0f} % interval {est.wbsa_lo_m2:.3f}–{est.wbsa_hi_m2:.3f} m²)"
               f"{'  [' + str(len(est.flags)) + ' warning(s)]' if est.flags else ''}")
-        print(f"view: azimuth {v.azimuth_deg:.0f}° ± {v.azimuth_sd_deg:.0f}° (mirror-equivalent), elevation "
-              f"{v.elevation_deg:.0f}° ± {v.elevation_sd_deg:.0f}°; subject {est.distance_m:.2f} m away, "
+        print(f"view: {est.view_text()}; subject {est.distance_m:.2f} m away, "
               f"{est.stature_m:.2f} m tall, VBSA {est.vbsa_m2:.3f} m² from {est.n_pixels} pixels [{est.model}]")
     return 0
 
 
-def _write_mask(path: str, mask) -> None:
+def _check_outputs(args: argparse.Namespace) -> None:
+    """The output options, checked before any work: names, suffixes, folders, and options that contradict."""
+    from wbsa.atomic import check_output_file
+    from wbsa.core.mesh_io import WRITE_SUFFIXES
+    from wbsa.errors import WbsaError
+
+    if args.json and args.fhir:
+        raise WbsaError("--json and --fhir both print the result; give one of them")
+    if args.patient is not None and not args.fhir:
+        raise WbsaError("--patient goes with --fhir")
+    if args.patient is not None and not args.patient.strip():
+        raise WbsaError("--patient needs a FHIR reference such as Patient/123, got an empty one")
+    files = []
+    if args.mask_out is not None:
+        files.append(check_output_file(args.mask_out, (".png",), "--mask-out").resolve())
+    if args.out_mesh is not None:
+        files.append(check_output_file(args.out_mesh, WRITE_SUFFIXES, "--out-mesh").resolve())
+    if len(set(files)) < len(files):
+        raise WbsaError(f"--mask-out and --out-mesh name the same file {files[0]}; give two names")
+
+
+def _write_outputs(args: argparse.Namespace, est) -> None:
+    """The mask and the mesh as a set: both are written to temporaries and checked, then renamed; if either
+    fails, neither is put in place (an older file of either name is kept)."""
+    import contextlib
+
     import numpy as np
     from PIL import Image
 
-    from wbsa.io import atomic_path
+    from wbsa.atomic import atomic_path
+    from wbsa.core.mesh_io import write_mesh
 
-    with atomic_path(path) as tmp:
-        Image.fromarray(np.where(mask, 255, 0).astype(np.uint8)).save(tmp, format="PNG")
+    with contextlib.ExitStack() as stack:  # left in reverse: the mask is checked and renamed first
+        if args.out_mesh:
+            tmp = stack.enter_context(atomic_path(args.out_mesh, keep_suffix=True, verify=lambda _: None))
+            write_mesh(est.surface, tmp)  # written and checked on a temporary of its own, then onto tmp
+        if args.mask_out:
+            tmp = stack.enter_context(atomic_path(args.mask_out))
+            Image.fromarray(np.where(est.mask, 255, 0).astype(np.uint8)).save(tmp, format="PNG")

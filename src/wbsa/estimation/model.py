@@ -237,6 +237,14 @@ class EstimatorModel:
     scores: np.ndarray
     meta: dict = field(default_factory=dict)
 
+    def __repr__(self) -> str:
+        trees = 0 if self.residual is None else len(self.residual.roots)
+        cal = self.meta.get("calibration", {})
+        mape = f", calibration MAPE {cal['wbsa_mape_pct']:.1f} %" if "wbsa_mape_pct" in cal else ""
+        return (f"EstimatorModel({self.name!r}: {self.meta.get('n_fit', '?')} fit and {len(self.scores)} calibration "
+                f"renders ({self.n_calibration_subjects} subjects), {len(self.coef)} regression terms, {trees} "
+                f"residual trees{mape}; .meta for the settings and ranges)")
+
     @property
     def name(self) -> str:
         """Short identifier (the file name, or ``default``)."""
@@ -338,17 +346,24 @@ class EstimatorModel:
         """Read a model written by :meth:`save` (numbers only; no code is loaded)."""
         from wbsa.estimation.checks import check_finite_model
 
+        import zipfile
+
         path = Path(path)
         if not path.is_file():
             raise WbsaError(f"model file {path} does not exist; omit it to use the default model")
         try:
             with np.load(path, allow_pickle=False) as z:
                 arrays = {k: z[k] for k in z.files}
-            meta = json.loads(str(arrays.pop("meta_json")))
-        except (OSError, ValueError, KeyError, json.JSONDecodeError) as exc:
-            raise WbsaError(f"{path} is not a wbsa estimator model ({type(exc).__name__}); rebuild it") from None
-        if meta.get("format") != FORMAT or meta.get("version") != VERSION:
+            meta_json = arrays.pop("meta_json")
+            if meta_json.dtype.kind != "U" or meta_json.ndim != 0:
+                raise ValueError("meta_json is not a text")
+            meta = json.loads(str(meta_json))
+        except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile, json.JSONDecodeError) as exc:
+            raise WbsaError(f"{path} is not a wbsa estimator model ({type(exc).__name__}: it is empty, truncated or "
+                            "not a model file); rebuild it") from None
+        if not isinstance(meta, dict) or meta.get("format") != FORMAT or meta.get("version") != VERSION:
             raise WbsaError(f"{path} is not a {FORMAT} version {VERSION} file; rebuild it with this wbsa")
+        _check_members(arrays, meta, path)
         check_finite_model(arrays, str(path))
         for key in ("coef", "mean", "scale"):
             if arrays[key].shape != (DESIGN_TERMS,):
@@ -357,11 +372,57 @@ class EstimatorModel:
         if arrays["spread_coef"].shape != (SPREAD_TERMS,):
             raise WbsaError(f"{path} has {arrays['spread_coef'].size} spread terms, not {SPREAD_TERMS}; rebuild it "
                             "with this wbsa")
-        residual = TreeEnsemble.from_arrays(arrays, "residual_") if "residual_roots" in arrays else None
+        _check_values(arrays, meta, path)
+        residual = (TreeEnsemble.from_arrays(arrays, "residual_", str(path))
+                    if any(k.startswith("residual_") for k in arrays) else None)
         meta.setdefault("name", path.name)
-        return cls(ViewModel.from_arrays(arrays), arrays["mean"], arrays["scale"], arrays["coef"],
+        return cls(ViewModel.from_arrays(arrays, str(path)), arrays["mean"], arrays["scale"], arrays["coef"],
                    float(arrays["intercept"][0]), residual, arrays["spread_coef"], arrays["spread_range"],
                    np.sort(arrays["scores"]), meta)
+
+
+#: The members of a model file besides the trees' (name: how many numbers, or None for any number ≥ 1).
+_MEMBERS = {"mean": DESIGN_TERMS, "scale": DESIGN_TERMS, "coef": DESIGN_TERMS, "intercept": 1,
+            "spread_coef": SPREAD_TERMS, "spread_range": 2, "scores": None}
+
+
+def _check_members(arrays: dict, meta: dict, path: Path) -> None:
+    """Every member there, a 1-D array of real numbers (not text, not an object); ``meta`` holds dicts where
+    dicts belong."""
+    for name in _MEMBERS:
+        if name not in arrays:
+            raise WbsaError(f"{path}: the member {name} is missing; the model file is damaged, rebuild it")
+        a = arrays[name]
+        if a.ndim != 1 or a.dtype.kind not in "iuf" or a.size == 0:
+            raise WbsaError(f"{path}: {name} is a {a.dtype} array of shape {a.shape}, not a list of numbers; "
+                            "the model file is damaged, rebuild it")
+    for key in ("settings", "ranges", "calibration"):
+        if key in meta and not isinstance(meta[key], dict):
+            raise WbsaError(f"{path}: meta {key} is a {type(meta[key]).__name__}, not a table; the model file is "
+                            "damaged, rebuild it")
+
+
+def _check_values(arrays: dict, meta: dict, path: Path) -> None:
+    """The numbers a prediction divides by or scales with are positive; the trained ranges are finite."""
+    def bad(what: str) -> WbsaError:
+        return WbsaError(f"{path}: {what}; the model file is damaged, rebuild it")
+
+    if not np.all(arrays["scale"] > 0):
+        raise bad(f"scale holds {int(np.sum(arrays['scale'] <= 0))} numbers that are not positive")
+    if not arrays["spread_range"][0] <= arrays["spread_range"][1]:
+        raise bad("spread_range is reversed")
+    scores = arrays["scores"]
+    if np.any(scores < 0) or not np.any(scores > 0):
+        raise bad("the calibration scores must be positive (an interval's half-width per unit spread), got "
+                  f"{int(np.sum(scores < 0))} negative and {int(np.sum(scores == 0))} zero of {scores.size}")
+    for name, rng in meta.get("ranges", {}).items():
+        try:
+            lo, hi = (float(v) for v in rng)
+            ok = np.isfinite(lo) and np.isfinite(hi) and lo <= hi
+        except (TypeError, ValueError):
+            ok = False
+        if not ok:
+            raise bad(f"the trained range of {name} is {rng!r}, not two finite numbers low to high")
 
 
 def _json_default(o: object) -> object:

@@ -370,6 +370,10 @@ def seen_past(clusters: list[Cluster]) -> set[int]:
 
 
 def _choose(people: list[Cluster], pick, size: tuple[int, int], pixel_label: np.ndarray, pix: np.ndarray) -> Cluster:
+    w, h = size
+    if _is_pixel(pick) and not (0 <= pick[0] < w and 0 <= pick[1] < h):  # refused with one person in view too
+        raise WbsaError(f"pick pixel ({pick[0]}, {pick[1]}) lies outside the {w} x {h} depth image; "
+                        "give x,y of a pixel on the subject")
     if len(people) == 1:
         return people[0]
     if pick is None:
@@ -380,11 +384,7 @@ def _choose(people: list[Cluster], pick, size: tuple[int, int], pixel_label: np.
         return min(people, key=lambda c: c.distance_m)
     if pick == "largest":
         return max(people, key=lambda c: c.n_pixels)
-    w, h = size
     x, y = ((w - 1) / 2, (h - 1) / 2) if pick == "center" else pick
-    if not (0 <= x < w and 0 <= y < h):
-        raise WbsaError(f"pick pixel ({x}, {y}) lies outside the {w} x {h} depth image; "
-                        "give x,y of a pixel on the subject")
     # the object under the pixel (the operator aims at the subject), else the one whose middle is nearest
     hit = pixel_label[pix == int(round(y)) * w + int(round(x))]
     for c in people:

@@ -72,11 +72,23 @@ class Estimate:
     def __repr__(self) -> str:
         flags = f", flags: {', '.join(self.flags)}" if self.flags else ""
         return (f"Estimate(WBSA {self.wbsa_m2:.3f} m² [{self.wbsa_lo_m2:.3f}–{self.wbsa_hi_m2:.3f}, "
-                f"{100 * self.level:.0f} %], azimuth {self.view.azimuth_deg:.0f}±{self.view.azimuth_sd_deg:.0f}°, "
-                f"elevation {self.view.elevation_deg:.0f}°, {self.distance_m:.2f} m{flags})")
+                f"{100 * self.level:.0f} %], {self.view_text()}, {self.distance_m:.2f} m{flags})")
+
+    def view_text(self) -> str:
+        """The view in words: the estimated one with its spread, or the stated one where none was estimated."""
+        v = self.view
+        if not np.isfinite(v.azimuth_deg):
+            return (f"azimuth {self.view_used[0]:.0f}° stated (not estimated), elevation {v.elevation_deg:.0f}° ± "
+                    f"{v.elevation_sd_deg:.0f}°")
+        return (f"azimuth {v.azimuth_deg:.0f}° ± {v.azimuth_sd_deg:.0f}° (mirror-equivalent), elevation "
+                f"{v.elevation_deg:.0f}° ± {v.elevation_sd_deg:.0f}°")
 
     def to_dict(self) -> dict:
-        """JSON-ready estimate, view and flags (without the mask and the surface)."""
+        """JSON-ready estimate, view and flags (without the mask and the surface).
+
+        A number that was not estimated is NaN here and ``null`` in the JSON (:func:`wbsa.strict_json.json_text`);
+        the flags say why (``view_not_estimated``).
+        """
         out = {k: getattr(self, k) for k in ("wbsa_m2", "wbsa_lo_m2", "wbsa_hi_m2", "level", "vbsa_m2", "stature_m",
                                              "distance_m", "n_pixels", "clothing_m", "method", "model", "camera")}
         out = {k: (round(v, 5) if isinstance(v, float) else v) for k, v in out.items()}
@@ -101,13 +113,19 @@ def _depth_array(depth, depth_scale: float | None) -> np.ndarray:
         from wbsa.core.depth_image import read_depth
 
         return read_depth(depth, depth_scale=depth_scale)
-    try:
-        arr = np.asarray(depth, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise WbsaError(f"depth must be a path or a 2-D array of metres, got {type(depth).__name__}") from None
-    if depth_scale is not None:
-        arr = arr / float(depth_scale)
-    return arr
+    from wbsa.core.depth_image import metres_from_units
+    from wbsa.estimation.checks import is_real_number
+
+    raw = np.asarray(depth) if not isinstance(depth, np.ndarray) else depth
+    if raw.dtype.kind not in "iuf":
+        raise WbsaError(f"depth must be a path or a 2-D array of real numbers (metres), got a {raw.dtype} "
+                        f"{type(depth).__name__}" + ("; give the real part (depth.real) if that is the depth"
+                                                     if raw.dtype.kind == "c" else ""))
+    if depth_scale is None:
+        return raw.astype(np.float64)
+    if not (is_real_number(depth_scale) and np.isfinite(depth_scale) and depth_scale > 0):
+        raise WbsaError(f"depth_scale must be a positive number of units per metre, e.g. 1000, got {depth_scale!r}")
+    return metres_from_units(raw, float(depth_scale)).astype(np.float64)
 
 
 def estimate(depth, camera, model=None, method: Method = "regression", *, azimuth_deg: float | None = None,
@@ -152,21 +170,28 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
         a height that is not human (wrong depth scale), a broken model, an unknown method, a stated layer of
         clothes that is not 0–0.05 m, or one stated to a ``wbsa fit`` model.
     """
+    from wbsa.analysis.model_file import WbsaModel
     from wbsa.camera.presets import resolve_camera
+    from wbsa.camera.views import check_angle
     from wbsa.estimation import checks
     from wbsa.estimation.measure import measure_subject
     from wbsa.estimation.methods import Request, Subject, check_method, predictor_for
     from wbsa.estimation.mixed_pixels import repair_mixed_pixels
+    from wbsa.estimation.model import EstimatorModel
     from wbsa.estimation.segment import segment_subject
 
     check_method(method)
-    if not 0 < level < 1:
-        raise WbsaError(f"interval level {level} must lie in (0, 1), e.g. 0.95")
-    for name, value in (("azimuth_deg", azimuth_deg), ("elevation_deg", elevation_deg)):
-        if value is not None and not np.isfinite(value):
-            raise WbsaError(f"{name} must be a finite number of degrees, got {value!r}")
-    if elevation_deg is not None and not -90 <= elevation_deg <= 90:
-        raise WbsaError(f"elevation_deg {elevation_deg:g} must lie in [-90, 90]")
+    if not (checks.is_real_number(level) and 0 < level < 1):
+        raise WbsaError(f"interval level {level!r} must be a number in (0, 1), e.g. 0.95")
+    if not (model is None or isinstance(model, (str, os.PathLike, EstimatorModel, WbsaModel))):
+        raise WbsaError(f"model must be None (the default model), a model file path (.npz or .json), an "
+                        f"EstimatorModel or a WbsaModel, got {type(model).__name__}")
+    if segment is not None and not isinstance(segment, SegmentSettings):
+        raise WbsaError(f"segment must be SegmentSettings or None, got {type(segment).__name__}")
+    if azimuth_deg is not None:
+        azimuth_deg = check_angle(azimuth_deg, "azimuth", "azimuth_deg")
+    if elevation_deg is not None:
+        elevation_deg = check_angle(elevation_deg, "elevation", "elevation_deg")
     checks.check_clothing(clothing_m)
     request = Request(azimuth_deg, elevation_deg, float(clothing_m), level)
     intrinsics = resolve_camera(camera)
@@ -188,6 +213,7 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
                                        + "; ".join(c.describe() for c in seg.others))
     m = measure_subject(depth_m, mask, intrinsics, floor, mixed)
     checks.check_height(m.stature_m)
+    flags.update(checks.person_shape_flags(m.stature_m, m.width_m, m.silhouette_m2))
     flags.update(checks.mixed_pixel_flags(m.mixed_share))
     if m.touches_border:
         flags["cut_off"] = "subject pixels on the image border; step back or re-aim the camera"
@@ -198,6 +224,12 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     view = prediction.view
     flags.update(checks.view_flags((azimuth_deg, elevation_deg), view))
     flags.update(prediction.flags)
+    if not np.isfinite(view.azimuth_deg):
+        flags["view_not_estimated"] = (f"this model estimates no azimuth; the stated {prediction.view_used[0]:g}° was "
+                                       "used (view.azimuth_deg is null)")
+    if not all(np.isfinite(v) for v in (prediction.wbsa_m2, prediction.lo_m2, prediction.hi_m2)):
+        raise WbsaError(f"the model gave no finite estimate ({prediction.wbsa_m2}); check the model file, or "
+                        "rebuild it")
     return Estimate(wbsa_m2=prediction.wbsa_m2, wbsa_lo_m2=prediction.lo_m2, wbsa_hi_m2=prediction.hi_m2, level=level,
                     vbsa_m2=m.vbsa_m2, stature_m=m.stature_m, distance_m=m.distance_m, n_pixels=m.n_pixels,
                     view=view, view_used=prediction.view_used, flags=flags, method=method, model=prediction.model_name,

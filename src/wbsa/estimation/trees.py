@@ -12,6 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from wbsa.errors import WbsaError
+
 _FIELDS = ("feature", "threshold", "left", "right", "leaf", "missing_left", "value")
 
 
@@ -47,6 +49,9 @@ class TreeEnsemble:
     value: np.ndarray
     roots: np.ndarray
     baseline: float
+
+    def __repr__(self) -> str:
+        return f"TreeEnsemble({len(self.roots)} trees, {len(self.feature)} nodes, baseline {self.baseline:.4g})"
 
     @classmethod
     def from_sklearn(cls, model) -> "TreeEnsemble":
@@ -116,7 +121,42 @@ class TreeEnsemble:
         return out
 
     @classmethod
-    def from_arrays(cls, arrays, prefix: str) -> "TreeEnsemble":
-        """Inverse of :meth:`to_arrays`."""
-        return cls(*(np.asarray(arrays[f"{prefix}{f}"]) for f in _FIELDS), roots=np.asarray(arrays[f"{prefix}roots"]),
+    def from_arrays(cls, arrays, prefix: str, source: str = "the model") -> "TreeEnsemble":
+        """Inverse of :meth:`to_arrays`, checked: every member there, of its kind and length, every node and root
+        index inside the arrays, split features not negative.
+
+        Raises
+        ------
+        WbsaError
+            One line naming ``source`` (the file) and the member that is wrong.
+        """
+        def bad(name: str, what: str) -> WbsaError:
+            return WbsaError(f"{source}: {prefix}{name} {what}; the model file is damaged, rebuild it")
+
+        got = {}
+        for name, kinds in (("feature", "iu"), ("threshold", "f"), ("left", "iu"), ("right", "iu"), ("leaf", "b"),
+                            ("missing_left", "b"), ("value", "f"), ("roots", "iu"), ("baseline", "f")):
+            if f"{prefix}{name}" not in arrays:
+                raise bad(name, "is missing")
+            a = np.asarray(arrays[f"{prefix}{name}"])
+            if a.ndim != 1 or a.dtype.kind not in kinds:
+                raise bad(name, f"is a {a.dtype} array of shape {a.shape}, not a list of "
+                                f"{ {'iu': 'integers', 'f': 'numbers', 'b': 'booleans'}[kinds]}")
+            got[name] = a
+        m = len(got["feature"])
+        for name in _FIELDS:
+            if len(got[name]) != m:
+                raise bad(name, f"has {len(got[name])} entries, not the {m} nodes of {prefix}feature")
+        if len(got["baseline"]) != 1 or m == 0 or len(got["roots"]) == 0:
+            raise bad("baseline" if len(got["baseline"]) != 1 else "roots", "has the wrong size")
+        for name in ("left", "right", "roots"):
+            a = got[name] if name == "roots" else got[name][~got["leaf"]]
+            if a.size and (a.min() < 0 or a.max() >= m):
+                raise bad(name, f"points outside the {m} nodes (index {int(a.min() if a.min() < 0 else a.max())})")
+        split = got["feature"][~got["leaf"]]
+        if split.size and split.min() < 0:
+            raise bad("feature", "holds a negative feature index")
+        if not np.all(np.isfinite(got["value"])) or not np.all(np.isfinite(got["baseline"])):
+            raise bad("value", "holds numbers that are not finite")
+        return cls(*(got[f] for f in _FIELDS), roots=got["roots"],
                    baseline=float(np.asarray(arrays[f"{prefix}baseline"])[0]))

@@ -91,6 +91,10 @@ class ViewModel:
     axis_sd_deg: float
     elevation_sd_deg: dict
 
+    def __repr__(self) -> str:
+        return (f"ViewModel(azimuth from the axis: {len(self.axis.roots)} trees, front/back: {len(self.front.roots)} "
+                f"trees; held-out azimuth s.d. {self.axis_sd_deg:.1f}°)")
+
     def predict(self, descriptors: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """ψ̂ (n,), its standard deviation (n,) and P(front) (n,) of view descriptors (n, d).
 
@@ -117,11 +121,27 @@ class ViewModel:
         return out
 
     @classmethod
-    def from_arrays(cls, arrays) -> "ViewModel":
-        """Inverse of :meth:`to_arrays`."""
-        el = np.asarray(arrays["view_elevation_sd_deg"], dtype=float)
-        return cls(TreeEnsemble.from_arrays(arrays, "view_axis_"), TreeEnsemble.from_arrays(arrays, "view_front_"),
-                   float(np.asarray(arrays["view_axis_sd_deg"])[0]), {"floor": float(el[0]), "axis": float(el[1])})
+    def from_arrays(cls, arrays, source: str = "the model") -> "ViewModel":
+        """Inverse of :meth:`to_arrays`, checked (the spreads: positive finite degrees).
+
+        Raises
+        ------
+        WbsaError
+            One line naming ``source`` and the member that is wrong.
+        """
+        from wbsa.errors import WbsaError
+
+        spreads = {}
+        for name, size in (("view_axis_sd_deg", 1), ("view_elevation_sd_deg", 2)):
+            a = np.asarray(arrays.get(name, np.zeros(0)))
+            if a.shape != (size,) or a.dtype.kind not in "iuf" or not np.all(np.isfinite(a)) or not np.all(a > 0):
+                raise WbsaError(f"{source}: {name} must be {size} positive number(s) of degrees, got "
+                                f"{a.tolist() if a.size <= 4 else a.shape}; the model file is damaged, rebuild it")
+            spreads[name] = a.astype(float)
+        el = spreads["view_elevation_sd_deg"]
+        return cls(TreeEnsemble.from_arrays(arrays, "view_axis_", source),
+                   TreeEnsemble.from_arrays(arrays, "view_front_", source),
+                   float(spreads["view_axis_sd_deg"][0]), {"floor": float(el[0]), "axis": float(el[1])})
 
 
 #: An estimated azimuth spread (degrees) above which the estimate is flagged ``uncertain_view``.

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 
 from wbsa.formulae.validate import HEIGHT_RANGE_CM, WEIGHT_RANGE_KG
@@ -57,7 +56,9 @@ def handle(args: argparse.Namespace) -> int:
         values = {key: float(v) for key, v in bsa_all(args.height_cm, args.weight_kg, args.sex).items()}
     if args.json:
         payload = {"height_cm": args.height_cm, "weight_kg": args.weight_kg, "sex": args.sex, "bsa_m2": values}
-        sys.stdout.write(json.dumps(payload, indent=2) + "\n")
+        from wbsa.strict_json import json_text
+
+        sys.stdout.write(json_text(payload) + "\n")
         return 0
     rows = []
     for key, value in values.items():

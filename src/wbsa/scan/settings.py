@@ -79,9 +79,11 @@ class ScanSettings:
             check_field(math.isfinite(d) and d > 0, "distances_m", f"must be positive distances in metres, got {d:g}")
         check_field(len(set(self.distances_m)) == len(self.distances_m), "distances_m", "lists a distance twice")
         check_field(self.seed >= 0, "seed", f"must be 0 or more, got {self.seed}")
-        for name in ("azimuths_deg", "elevations_deg"):
+        from wbsa.camera.views import check_angle
+
+        for name, kind in (("azimuths_deg", "azimuth"), ("elevations_deg", "elevation")):
             for a in getattr(self, name):
-                check_field(math.isfinite(a), name, f"must be finite angles in degrees, got {a}")
+                check_angle(a, kind, name)
         if not (self.azimuths_deg or self.elevations_deg):
             try:
                 self.view_list(self.distances_m[0])

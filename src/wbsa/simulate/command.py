@@ -7,7 +7,6 @@ The argument helpers (:func:`add_camera_arguments`, :func:`add_view_arguments`, 
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 
@@ -181,8 +180,9 @@ def run_view(args: argparse.Namespace) -> int:
                          f"{blind[0]['azimuth_deg']:g}, elevation {blind[0]['elevation_deg']:g}, "
                          f"{blind[0]['distance_m']:g} m): visible area 0; move the camera closer\n")
     if args.json:
-        json.dump(rows[0] if len(rows) == 1 else rows, sys.stdout, indent=2)
-        sys.stdout.write("\n")
+        from wbsa.strict_json import json_text
+
+        sys.stdout.write(json_text(rows[0] if len(rows) == 1 else rows) + "\n")
     else:
         _print_rows(rows, intrinsics, out)
     return 0

@@ -160,6 +160,12 @@ def render(mesh: Any, camera: Any = "kinect-v1", view: Any = (0.0, 0.0, 4.3), *,
     SimulatedView
         ``.row`` (the measured areas), ``.frame`` / ``.depth_m`` and ``.surfaces``.
 
+    Raises
+    ------
+    WbsaError
+        For a camera, view or sensor of the wrong kind, and a mesh that is not a person's size in metres
+        (its longest side outside 0.4–2.8 m: the message names the units it looks like, e.g. millimetres).
+
     Examples
     --------
     >>> import numpy as np, wbsa
@@ -173,7 +179,6 @@ def render(mesh: Any, camera: Any = "kinect-v1", view: Any = (0.0, 0.0, 4.3), *,
     >>> seen.depth_m.shape
     (480, 640)
     """
-    import warnings
     from collections.abc import Mapping
 
     from wbsa.camera import MeshScene, View, resolve_camera
@@ -190,21 +195,28 @@ def render(mesh: Any, camera: Any = "kinect-v1", view: Any = (0.0, 0.0, 4.3), *,
         mesh = read_mesh(mesh)
     if not isinstance(view, View):
         try:
-            view = View(*(float(v) for v in view))
+            numbers = tuple(float(v) for v in view)
+            if len(numbers) not in (2, 3):
+                raise ValueError
         except (TypeError, ValueError):
             raise WbsaError(f"view must be a View or (azimuth_deg, elevation_deg[, distance_m]) in degrees and "
                             f"metres, got {view!r}") from None
+        from wbsa.camera.views import check_angle
+
+        view = View(check_angle(numbers[0], "azimuth", "view azimuth_deg"),
+                    check_angle(numbers[1], "elevation", "view elevation_deg"), *numbers[2:])
     if isinstance(reconstruct, str):
         reconstruct = (reconstruct,)
     if isinstance(sensor, Mapping):
         sensor = SensorSettings(**sensor)
     elif sensor is not None and not isinstance(sensor, SensorSettings):
         raise WbsaError(f"sensor must be SensorSettings or a dict of its fields, got {type(sensor).__name__}")
+    from wbsa.core.mesh import TriangleMesh
+    from wbsa.simulate.target import check_person_size
+
+    mesh = TriangleMesh.from_any(mesh)
+    check_person_size(mesh)
     scene = MeshScene(mesh)
-    size_m = float((scene.bbox_max - scene.bbox_min).max())
-    if size_m > 5.0:
-        warnings.warn(f"the mesh is {size_m:g} m across; wbsa expects metres (scale a millimetre mesh by 0.001)",
-                      stacklevel=2)
     return simulate_view(scene, intrinsics, view, sensor=sensor, seed=seed, reconstruct=tuple(reconstruct),
                          keep_frame=True, keep_surfaces=True)
 

@@ -23,6 +23,15 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="study settings: a .toml file or a shipped one (default, paper, distance-sweep, "
                         "reconstruction); default: the embedded default")
     p.add_argument("--out", default="runs/study", metavar="DIR", help="study folder (default runs/study)")
+    g = p.add_argument_group("overrides of the settings (written into the resolved study.toml)")
+    g.add_argument("--n", type=int, default=None, metavar="N", help="subjects in the population ([population] n)")
+    g.add_argument("--views", default=None, metavar="SET",
+                   help="view set ([scan] views): paper, front, sphere:N, grid:STEP; replaces angle lists")
+    g.add_argument("--k", type=int, default=None, metavar="K", help="cross-validation folds ([fit] k)")
+    g.add_argument("--camera", default=None, metavar="NAME|JSON", help="camera preset or intrinsics JSON ([scan] camera)")
+    g.add_argument("--distance", default=None, metavar="M[,M...]",
+                   help="camera distance(s) in metres ([scan] distances_m), e.g. 2.5 or 3.5,4.3")
+    g.add_argument("--title", default=None, metavar="TEXT", help="the study's name in the report ([study] name)")
     p.add_argument("--workers", type=int, default=None, metavar="N",
                    help="worker processes of the population and scan stages (default: [run] workers, 0 = all cores)")
     p.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
@@ -32,11 +41,44 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.set_defaults(func=handle)
 
 
+def overrides_from_args(args: argparse.Namespace) -> dict:
+    """``{table: {key: value}}`` of the override flags given (``--views`` also clears the angle lists).
+
+    Raises
+    ------
+    WbsaError
+        For a ``--distance`` that is not a list of numbers.
+    """
+    from wbsa.errors import WbsaError
+
+    out: dict[str, dict] = {}
+
+    def put(table: str, **keys) -> None:
+        out.setdefault(table, {}).update(keys)
+
+    if args.n is not None:
+        put("population", n=args.n)
+    if args.views is not None:
+        put("scan", views=args.views, azimuths_deg=[], elevations_deg=[])
+    if args.camera is not None:
+        put("scan", camera=args.camera)
+    if args.distance is not None:
+        try:
+            put("scan", distances_m=[float(d) for d in args.distance.split(",") if d.strip()])
+        except ValueError:
+            raise WbsaError(f"--distance must be metres, e.g. 2.5 or 3.5,4.3, got {args.distance!r}") from None
+    if args.k is not None:
+        put("fit", k=args.k)
+    if args.title is not None:
+        put("study", name=args.title)
+    return out
+
+
 def handle(args: argparse.Namespace) -> int:
     """Load and check the settings, run the study, print the report's path."""
     from wbsa.study.settings import load_settings
 
-    settings = load_settings(args.config)
+    settings = load_settings(args.config, overrides_from_args(args))
     if args.print_config:
         sys.stdout.write(settings.to_toml())
         return 0

@@ -83,6 +83,10 @@ class StageRun:
     original_seconds: float
     summary: str = ""
 
+    def __repr__(self) -> str:
+        how = "reused" if self.reused else f"{self.seconds:.1f} s"
+        return f"StageRun({self.name}: {self.summary or 'done'}; {how}; {self.stage.path.name})"
+
 
 @dataclass
 class StudyResult:
@@ -105,6 +109,19 @@ class StudyResult:
     fits_path: Path
     stages: list[StageRun] = field(default_factory=list)
     seconds: float = 0.0
+
+    def __repr__(self) -> str:
+        reused = sum(r.reused for r in self.stages)
+        return (f"StudyResult({self.out_dir}: report {self.report_path.name}, {len(self.stages)} stages "
+                f"({reused} reused), {self.seconds:.1f} s)")
+
+    def __str__(self) -> str:
+        """A small table: one line per stage (name, what it did, time), then the report's path."""
+        lines = [repr(self)]
+        for r in self.stages:
+            lines.append(f"  {r.name:<12} {'reused' if r.reused else f'{r.seconds:.1f} s':>9}  {r.summary}")
+        lines.append(f"  report: {self.report_path}")
+        return "\n".join(lines)
 
 
 class _Log:
@@ -163,6 +180,9 @@ def run_study(settings: StudySettings, out_dir: str | os.PathLike, *, workers: i
         run = dataclasses.replace(run, workers=int(workers))
     if show_progress is not None:
         run = dataclasses.replace(run, progress=show_progress)
+    if run.scheduler is None:  # the worker count used, recorded in study.toml and the report (0 = all cores)
+        run = dataclasses.replace(run, workers=run.n_workers)
+    settings = dataclasses.replace(settings, run=run)
     with folder_lock(out, "study folder"):  # creates the folder, or names why it cannot
         remove_stale_temporaries(out, all_of_them=True)
         return _run_locked(settings, out, run, log, scan_chunk_fn, t0)

@@ -100,6 +100,14 @@ class StudySettings:
     source: str = "default"
     base_dir: str = "."
 
+    def __repr__(self) -> str:
+        s = self.scan
+        views = (f"{len(s.view_list(s.distances_m[0]))} views" if s.azimuths_deg or s.elevations_deg
+                 else f"views {s.views}")
+        return (f"StudySettings({self.study.name!r}: {self.population.n} {self.population.kind} subjects, camera "
+                f"{s.camera}, {views}, distances {list(s.distances_m)} m, k = {self.fit.k}; from {self.source}; "
+                f".to_toml() for every key)")
+
     def to_dict(self) -> dict[str, dict[str, Any]]:
         """The settings as TOML-ready tables (without ``source`` and ``base_dir``)."""
         return {name: to_table(getattr(self, name)) for name in SECTIONS}
@@ -107,6 +115,8 @@ class StudySettings:
     def to_toml(self) -> str:
         """The full settings as a TOML document (every key; unset optional ones as comments): it reproduces the study."""
         tables = {name: to_table(getattr(self, name), keep_none=True) for name in SECTIONS}
+        if self.scan.azimuths_deg or self.scan.elevations_deg:  # the lists replace the view set: not both
+            del tables["scan"]["views"]
         return dump_toml(tables, header=f"wbsa study settings (resolved from {self.source})")
 
 
@@ -145,7 +155,7 @@ def _read_toml(path: Path, what: str) -> dict:
         raise WbsaError(f"cannot read study config {path} ({type(exc).__name__}); check the file") from None
 
 
-def load_settings(config: str | os.PathLike | None = None) -> StudySettings:
+def load_settings(config: str | os.PathLike | None = None, overrides: dict | None = None) -> StudySettings:
     """Read study settings.
 
     Parameters
@@ -153,7 +163,11 @@ def load_settings(config: str | os.PathLike | None = None) -> StudySettings:
     config : path or name, optional
         A TOML file, or the name of a shipped study (``default``, ``paper``, ``distance-sweep``,
         ``reconstruction``). ``None``: the embedded default. A file only needs the keys that differ
-        from the embedded default.
+        from the embedded default; its ``[study]`` (name, description) is its own: a file without one is
+        named after the file, with no description (never the demo's).
+    overrides : dict, optional
+        ``{table: {key: value}}`` laid over the file (``wbsa run --n/--views/...``), checked like it. Overrides
+        of the embedded default study name it ``wbsa study`` unless they give ``[study] name``.
 
     Returns
     -------
@@ -167,12 +181,18 @@ def load_settings(config: str | os.PathLike | None = None) -> StudySettings:
     default_path = shipped_config_path("default")
     base = _read_toml(default_path, "the embedded default study config")
     if config is None or str(config) == "default":
-        return settings_from_dict(base, source="default", base_dir=str(default_path.parent))
-    text = str(config)
-    path = shipped_config_path(text) if text in SHIPPED_CONFIGS else Path(text)
-    user = _read_toml(path, str(path))
-    return settings_from_dict(merge_tables(base, user), source=str(path), base_dir=str(path.parent),
-                              user=user)
+        path, user, source = default_path, {}, "default"
+    else:
+        text = str(config)
+        path = shipped_config_path(text) if text in SHIPPED_CONFIGS else Path(text)
+        user, source = _read_toml(path, str(path)), str(path)
+    if user or overrides:  # the demo's title and description describe the demo only
+        own = {"name": "wbsa study" if source == "default" else path.stem}
+        base = {**base, "study": own}
+    if overrides:
+        user = merge_tables(user, overrides)
+        source += " with command-line overrides"
+    return settings_from_dict(merge_tables(base, user), source=source, base_dir=str(path.parent), user=user)
 
 
 def merge_tables(base: dict, override: dict) -> dict:
@@ -210,10 +230,26 @@ def settings_from_dict(tables: dict, source: str = "<dict>", base_dir: str = "."
         moved += [f"[{name}] {key} is now {MOVED_KEYS[name, key]}" for key in value if (name, key) in MOVED_KEYS]
     if moved:
         raise WbsaError(f"{source}: {', '.join(moved)}; move {'it' if len(moved) == 1 else 'them'} there")
+    tables = _views_or_angles(tables, (user if user is not None else tables).get("scan", {}), source)
     sections = {name: from_table(cls, tables.get(name, {}), name, source) for name, cls in SECTIONS.items()}
     settings = StudySettings(**sections, source=source, base_dir=base_dir)
     validate_settings(settings)
     return settings
+
+
+def _views_or_angles(tables: dict, user_scan: dict, source: str) -> dict:
+    """``tables`` with the view set the user gave winning over inherited angle lists; both given is refused.
+
+    ``[scan] views`` is ignored where ``azimuths_deg`` or ``elevations_deg`` is given: a user's ``views`` with
+    an angle list would silently not be used, and a ``views`` given over a study with angle lists neither.
+    """
+    angles = [k for k in ("azimuths_deg", "elevations_deg") if user_scan.get(k)]
+    if "views" in user_scan and angles:
+        raise WbsaError(f"{source}: [scan] views = {user_scan['views']!r} and {' and '.join(angles)} contradict "
+                        "(the angle lists replace the view set); give one of them")
+    if "views" in user_scan and isinstance(tables.get("scan"), dict):
+        tables = {**tables, "scan": {**tables["scan"], "azimuths_deg": [], "elevations_deg": []}}
+    return tables
 
 
 def validate_settings(settings: StudySettings) -> None:

@@ -275,15 +275,9 @@ def test_objects_the_api_returns_print_short(tmp_path):
 
 
 @pytest.fixture(scope="module")
-def tiny_model(tmp_path_factory):
-    """A small trained estimator model file (about 30 s)."""
-    from wbsa.estimation.train import TrainSettings, train_model
-
-    model = train_model(TrainSettings(n_random=32, n_survey=0, views_per_subject=2, calibration_fraction=0.5,
-                                      tree_iterations=50, tree_bags=2, seed=5))
-    path = tmp_path_factory.mktemp("tiny") / "tiny.npz"
-    model.save(path)
-    return path
+def tiny_model(small_estimator_model):
+    """The run's small trained estimator model file (tests/conftest.py)."""
+    return small_estimator_model
 
 
 @pytest.mark.slow
@@ -474,7 +468,7 @@ def test_an_empty_truncated_or_corrupt_model_file_is_refused_in_one_line(tmp_pat
 def _in_room(mesh, azimuth_deg, distance_m=3.0):
     """A depth image (Kinect v2, noisy, 12° above) of ``mesh`` standing in a room, a wall 0.8 m behind."""
     from wbsa.camera import MeshScene, View, preset
-    from wbsa.estimation.room import compose_room
+    from wbsa.training.room import compose_room
     from wbsa.sensor.settings import SensorSettings
     from wbsa.simulate import simulate_view
 

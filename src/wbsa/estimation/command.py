@@ -80,12 +80,11 @@ def auto_camera(depth_shape: tuple[int, int]):
 
 def run_estimate(args: argparse.Namespace) -> int:
     """Handler of ``wbsa estimate``."""
+    from wbsa.camera.presets import resolve_camera
     from wbsa.core.depth_image import read_depth
     from wbsa.errors import WbsaError
     from wbsa.estimation.segment import SegmentSettings
     from wbsa.estimation.single_view import estimate
-
-    from wbsa.camera.intrinsics import resolve_camera
 
     _check_outputs(args)
     camera = None if args.camera == "auto" else resolve_camera(args.camera)  # checked before the image is read

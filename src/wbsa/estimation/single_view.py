@@ -48,6 +48,8 @@ class Estimate:
         which the measures cut in training too (the VBSA is that of these pixels).
     surface : wbsa.core.TriangleMesh
         The reconstructed visible surface (camera frame, metres).
+    body : wbsa.bodyfit.BodyFit or None
+        With ``method="body-fit"``: the whole body fitted to the image (its meshes, stature, mass, posture).
     """
 
     wbsa_m2: float
@@ -68,6 +70,7 @@ class Estimate:
     mask: np.ndarray = field(repr=False, compare=False)
     surface: object = field(repr=False, compare=False)
     measured_mask: np.ndarray = field(repr=False, compare=False, default=None)
+    body: object = field(repr=False, compare=False, default=None)
 
     def __repr__(self) -> str:
         flags = f", flags: {', '.join(self.flags)}" if self.flags else ""
@@ -234,4 +237,5 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
                     vbsa_m2=m.vbsa_m2, stature_m=m.stature_m, distance_m=m.distance_m, n_pixels=m.n_pixels,
                     view=view, view_used=prediction.view_used, flags=flags, method=method, model=prediction.model_name,
                     camera=intrinsics.name, clothing_m=float(clothing_m),
-                    mask=mask & np.isfinite(depth_m) & (depth_m > 0), surface=m.surface, measured_mask=m.mask)
+                    mask=mask & np.isfinite(depth_m) & (depth_m > 0), surface=m.surface, measured_mask=m.mask,
+                    body=prediction.body)

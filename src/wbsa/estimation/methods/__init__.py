@@ -65,8 +65,8 @@ class Request:
 
 @dataclass(frozen=True)
 class Prediction:
-    """WBSA and its interval (m²), the view estimated and the view used (degrees), the model's name and its
-    flags."""
+    """WBSA and its interval (m²), the view estimated and the view used (degrees), the model's name, its flags and,
+    for a method that fits a whole body, the fitted body."""
 
     wbsa_m2: float
     lo_m2: float
@@ -75,6 +75,7 @@ class Prediction:
     view_used: tuple[float, float]
     model_name: str
     flags: dict[str, str] = field(default_factory=dict)
+    body: object = None
 
 
 class Predictor(Protocol):

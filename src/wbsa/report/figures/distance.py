@@ -6,7 +6,7 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from wbsa.report.data import nearest_view, select
-from wbsa.report.figures.style import DM2, FigureUnavailable, new_figure
+from wbsa.report.figures.style import DM2, LEGEND_FONTSIZE, FigureUnavailable, new_figure
 
 
 def distance_effect(fits: pd.DataFrame, scan: pd.DataFrame, *, model: str, vbsa_column: str, camera: str,
@@ -46,7 +46,7 @@ def distance_effect(fits: pd.DataFrame, scan: pd.DataFrame, *, model: str, vbsa_
     for ax in (a, b, c):
         ax.set_xlabel("camera distance D (m)")
         ax.grid(True, alpha=0.3)
-    a.legend(fontsize=8)
+    a.legend(fontsize=LEGEND_FONTSIZE)
     fig.suptitle(f"camera distance, all subjects, {model}, VBSA only ({vbsa_column}, {camera})", fontsize=10)
     return fig
 

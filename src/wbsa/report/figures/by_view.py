@@ -78,7 +78,7 @@ def group_errors(fits: pd.DataFrame, *, model: str, vbsa_column: str, distance_m
     el = float(els[np.argmin(np.abs(els - elevation_deg))])
     sub = sub[np.abs(sub["elevation_deg"] - el) < 1e-6]
     labels = [p for p in predictor_labels if (sub["predictors"] == p).any()]
-    fig = new_figure(5.0 * len(labels), 4.7, dpi)  # + the legend under the panels
+    fig = new_figure(min(5.0 * len(labels), 12.0), 4.7, dpi)  # + the legend under the panels; at most the page
     axes = np.atleast_1d(fig.subplots(1, len(labels), squeeze=False)[0])
     # one colour per group in every panel, so one legend under the panels names them all
     groups = list(dict.fromkeys(sub["group"]))

@@ -31,7 +31,7 @@ def reconstruction_by_view(scan: pd.DataFrame, fits: pd.DataFrame, *, model: str
     sc = sc[np.abs(sc["elevation_deg"] - el) < 1e-6]
     if "fits_in_frame" in sc:
         sc = sc[sc["fits_in_frame"].fillna(False).astype(bool)]
-    fig = new_figure(13.0, 4.0, dpi)
+    fig = new_figure(12.0, 4.0, dpi)  # 1200 px: shown at its own size on the page
     a, b, c = fig.subplots(1, 3)
     for i, col in enumerate(cols):
         rel = 100.0 * (sc[col] - sc[reference_column]) / sc[reference_column]

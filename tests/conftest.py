@@ -38,3 +38,20 @@ def small_estimator_model(tmp_path_factory):
     path = tmp_path_factory.mktemp("model") / "small.npz"
     model.save(path)
     return path
+
+
+@pytest.fixture(scope="session")
+def default_report(tmp_path_factory):
+    """The report of ``wbsa run`` with the embedded default study at 24 subjects (the paper's 65 views, Kinect v1
+    at 4.3 m, every figure family but reconstruction and distance): its path. About 30 s on two busy cores."""
+    import contextlib
+    import io
+
+    from wbsa.cli import main
+
+    out = tmp_path_factory.mktemp("default-study") / "run"
+    err = io.StringIO()
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(err):
+        code = main(["run", "--n", "24", "--out", str(out), "--no-progress"])
+    assert code == 0, err.getvalue()
+    return out / "report.html"

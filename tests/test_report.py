@@ -301,3 +301,118 @@ def test_formulae_grid_is_one_readable_panel_with_the_table_numbers(data):
     row, col = labels.index("Du Bois & Du Bois"), groups.index("all subjects")
     cell = [t for t in ax.texts if t.get_position() == (col, row)]
     assert cell and cell[0].get_text() == f"{want:.2f}"
+
+
+# ---------------------------------------------------------------- counting axes, scanned views, legends at 1280 px
+def _ticks_shown(axis) -> list[float]:
+    lo, hi = sorted(axis.get_view_interval())
+    return [float(t) for t in axis.get_majorticklocs() if lo - 1e-9 <= t <= hi + 1e-9]
+
+
+def test_axes_that_count_tick_whole_numbers_only(data):
+    from wbsa.report.figures.by_view import model_comparison
+
+    # two views: a plain axis would tick the view numbers at 1.25, 1.5, 1.75
+    fits = data.fits[(data.fits["elevation_deg"] == 0.0) & data.fits["azimuth_deg"].isin([0.0, 90.0])]
+    ax = model_comparison(fits, vbsa_column="vbsa_visible_m2", distance_m=4.3, camera=data.camera).axes[1]
+    assert sorted({float(x) for c in ax.collections for x in c.get_offsets()[:, 0]}) == [1.0, 2.0]
+    ticks = _ticks_shown(ax.xaxis)
+    assert len(ticks) >= 2 and all(t.is_integer() for t in ticks), ticks
+    # six subjects: at most a few per histogram bin, counted in whole subjects
+    ax = wbsa_distribution(data.population.iloc[:6]).axes[0]
+    assert max(p.get_height() for p in ax.patches) <= 3
+    ticks = _ticks_shown(ax.yaxis)
+    assert len(ticks) >= 2 and all(t.is_integer() for t in ticks), ticks
+    few = data.residuals[data.residuals["subject_id"].isin(data.population["subject_id"].iloc[:6])]
+    fig = residual_diagnostics(few, pd.DataFrame(), view=(0, 0), model="linear", vbsa_column="vbsa_visible_m2",
+                               distance_m=4.3, camera=data.camera)
+    ticks = _ticks_shown(fig.axes[2].yaxis)
+    assert fig.axes[2].get_ylabel() == "subjects"
+    assert len(ticks) >= 2 and all(t.is_integer() for t in ticks), ticks
+
+
+def test_the_snapshot_view_is_the_scanned_view_nearest_the_asked_one(data):
+    from wbsa.report.snapshots import scanned_view
+
+    scan, cam = data.scan, data.camera
+    assert scanned_view(scan, (60.0, 60.0), distance_m=4.3, camera=cam) == (60.0, 60.0)  # scanned: kept
+    level = scan[scan["elevation_deg"] == 0.0]
+    assert scanned_view(level, (60.0, 60.0), distance_m=4.3, camera=cam) == (60.0, 0.0)
+    front = scan[(scan["azimuth_deg"] == 0.0) & (scan["elevation_deg"] == 0.0)]
+    assert scanned_view(front, (60.0, 60.0), distance_m=3.5, camera=cam) == (0.0, 0.0)
+    with pytest.raises(WbsaError, match="no view at D = 2 m"):
+        scanned_view(scan, (60.0, 60.0), distance_m=2.0, camera=cam)
+    with pytest.raises(WbsaError, match="no view"):
+        scanned_view(scan, (60.0, 60.0), distance_m=4.3, camera="another-camera")
+
+
+def test_the_snapshot_figure_renders_and_names_a_view_the_study_scanned(data, monkeypatch):
+    """The study scanned only the front at elevation 0; the settings ask for the paper's (60°, 60°)."""
+    import dataclasses
+
+    import wbsa.report.snapshots as snapshots
+    from wbsa.report.sections import SectionBuilder
+    from wbsa.report.settings import ReportSettings
+
+    rendered = []
+
+    def fake_render(population, subject_id, intrinsics, azimuth_deg, elevation_deg, distance_m):
+        rendered.append((azimuth_deg, elevation_deg, distance_m))
+        rng = np.random.default_rng(0)
+        return snapshots.Snapshot(subject_id, rng.normal(size=(50, 3)), np.ones((8, 4), np.float32),
+                                  rng.normal(size=(200, 3)))
+
+    monkeypatch.setattr(snapshots, "render_snapshot", fake_render)
+    pop = data.population.assign(p_gender=0.5, p_age=0.5, p_weight=0.5, p_height=0.5)
+    scan = data.scan[data.scan["elevation_deg"] == 0.0]
+    d = dataclasses.replace(data, population=pop, scan=scan)
+    builder = SectionBuilder(d, ReportSettings(snapshot_view_deg=(60.0, 60.0)))
+    fig = builder._draw_snapshots()
+    assert rendered == [(60.0, 0.0, d.distance_m)]
+    assert "θ = 60°, φ = 0°" in fig.axes[0].get_title()
+    assert "(60, 60)" not in fig.get_suptitle() and "φ = 60°" not in fig.get_suptitle()
+
+
+#: The report's content is 1200 px wide in a 1280 px window (measured in tests/test_report_browser.py); a wider
+#: figure is scaled down to it.
+PAGE_PX = 1200
+#: Smallest legible legend text on that page, px (the page's table text is 12.8 px).
+MIN_LEGEND_PX = 12.0
+
+
+def test_every_legend_is_legible_and_inside_its_figure_at_1280_px(data):
+    from wbsa.analysis.groups import GroupSpec
+    from wbsa.report.figures.by_view import model_comparison
+    from wbsa.report.figures.calibration import calibration_figure
+    from wbsa.report.figures.one_view import nonlinear_view
+    from wbsa.report.html import png_bytes
+
+    common = dict(vbsa_column="vbsa_visible_m2", distance_m=4.3, camera=data.camera)
+    figures = {
+        "calibration": calibration_figure(data.population, GroupSpec()),
+        "wbsa-distribution": wbsa_distribution(data.population),
+        "vbsa-wbsa": vbsa_wbsa_scatter(data.population, data.scan, data.fits, view=(0, 0), **common),
+        "view-all": coefficients_by_view(data.fits, group="all", model="linear", predictor_labels=data.predictor_labels,
+                                         **common),
+        "group-errors": group_errors(data.fits, model="linear", predictor_labels=data.predictor_labels, **common),
+        "models": model_comparison(data.fits, **common),
+        "nonlinear": nonlinear_view(data.population, data.scan, data.fits, view=(60, 60), **common),
+        "distance": distance_effect(data.fits, data.scan, model="linear", vbsa_column="vbsa_visible_m2",
+                                    camera=data.camera),
+        "reconstruction": reconstruction_by_view(data.scan, data.fits, model="linear",
+                                                 reference_column="vbsa_visible_m2", distance_m=4.3,
+                                                 camera=data.camera),
+    }
+    for name, fig in figures.items():
+        png_bytes(fig)  # lays the figure out as the report does
+        width_px, height_px = fig.get_size_inches() * fig.dpi
+        shown = min(1.0, PAGE_PX / width_px)
+        legends = list(fig.legends) + [ax.get_legend() for ax in fig.axes if ax.get_legend() is not None]
+        assert legends, name
+        for legend in legends:
+            texts = legend.get_texts() + ([legend.get_title()] if legend.get_title().get_text() else [])
+            for text in texts:
+                px = text.get_fontsize() * fig.dpi / 72 * shown
+                assert px >= MIN_LEGEND_PX, (name, text.get_text(), round(px, 1))
+            box = legend.get_window_extent()
+            assert box.x0 >= -1 and box.y0 >= -1 and box.x1 <= width_px + 1 and box.y1 <= height_px + 1, (name, box)

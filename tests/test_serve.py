@@ -9,23 +9,18 @@ from __future__ import annotations
 
 import io
 import json
-import os
-import shutil
 import socket
 import struct
 import threading
 import urllib.error
 import urllib.request
-import uuid
 import zlib
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-CHROMIUM = "/usr/bin/chromium"
-CHROMEDRIVER = "/usr/bin/chromedriver"
-ARTEFACTS = Path(os.environ.get("WBSA_TEST_ARTEFACTS", Path(__file__).resolve().parents[1] / "test-artefacts"))
+from helpers.browser import ARTEFACTS, headless_chromium
 
 
 # ---------------------------------------------------------------- frames, server, browser
@@ -76,21 +71,8 @@ def server(small_estimator_model, tmp_path_factory):
 @pytest.fixture(scope="module")
 def browser():
     """Headless Chromium (selenium + the Debian chromedriver) with a fresh profile, closed network features."""
-    from selenium import webdriver
-    from selenium.webdriver.chrome.service import Service
-
-    profile = Path(os.environ.get("TMPDIR", "/tmp")) / f"wbsa-chromium-{uuid.uuid4().hex}"
-    options = webdriver.ChromeOptions()
-    options.binary_location = CHROMIUM
-    for arg in ("--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-                "--disable-background-networking", "--disable-component-update", "--disable-sync",
-                "--disable-dev-shm-usage", f"--user-data-dir={profile}", "--window-size=1280,1900"):
-        options.add_argument(arg)
-    driver = webdriver.Chrome(service=Service(CHROMEDRIVER), options=options)
-    driver.set_page_load_timeout(30)
-    yield driver
-    driver.quit()
-    shutil.rmtree(profile, ignore_errors=True)
+    with headless_chromium(1280, 1900) as driver:
+        yield driver
 
 
 def _estimate(path, model, pick=None):

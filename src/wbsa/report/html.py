@@ -5,6 +5,7 @@ from __future__ import annotations
 import base64
 import html
 import io
+import re
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -19,13 +20,14 @@ figcaption { font-size: 0.9em; color: #444; margin-top: 0.4em; }
 table.data { border-collapse: collapse; font-size: 0.8em; margin: 0.8em 0; }
 table.data th, table.data td { border: 1px solid #ddd; padding: 2px 6px; text-align: right; }
 table.data th { background: #f3f3f3; } table.data td:first-child, table.data th:first-child { text-align: left; }
-.scroll { max-height: 32em; overflow: auto; display: inline-block; max-width: 100%; }
+.table-box { max-width: 100%; overflow-x: auto; }
+.scroll { max-height: 32em; overflow: auto; display: inline-block; }
 p.na { color: #a33; font-style: italic; } .meta { color: #666; font-size: 0.9em; }
 nav ul { columns: 2; font-size: 0.9em; } code { background: #f5f5f5; padding: 0 3px; }
 ul.claims li { margin: 0.3em 0; } table.nowrap td { white-space: nowrap; }
 @media print {
   body { max-width: none; margin: 0; font-size: 10pt; }
-  .scroll { max-height: none; overflow: visible; display: block; }
+  .scroll { max-height: none; overflow: visible; display: block; } .table-box { overflow: visible; }
   table.data { font-size: 8pt; } table.data thead { display: table-header-group; }
   table.data tr, figure { page-break-inside: avoid; break-inside: avoid; }
   nav { display: none; }
@@ -102,15 +104,21 @@ class Page:
               nowrap: bool = False) -> None:
         """A table with a numbered caption; floats to ``digits`` significant digits.
 
-        ``scroll`` puts it in a scroll box on screen (printed in full); ``nowrap`` keeps each cell on one line.
+        Every table sits in a box as wide as the page at most: a table wider than that scrolls sideways inside
+        its box, never the page. Column names may break after an underscore (``<wbr>``), so a table of many
+        ``snake_case`` columns narrows to the page first. ``scroll`` also caps the box's height on screen
+        (printed in full); ``nowrap`` keeps each body cell on one line.
         """
         self._n_tab += 1
         self.tables.append(tab_id)
         classes = "data nowrap" if nowrap else "data"
         body = format_table(df, digits).to_html(index=False, table_id=tab_id, classes=classes, border=0, escape=True,
                                                na_rep="")
+        body = re.sub(r"(<th(?:\s[^>]*)?>)(.*?)(</th>)", lambda m: m[1] + m[2].replace("_", "_<wbr>") + m[3], body,
+                      flags=re.S)
         cap = f"<p><b>Table {self._n_tab}.</b> {html.escape(caption)}</p>"
-        self.parts.append(cap + (f'<div class="scroll">{body}</div>' if scroll else body))
+        box = "table-box scroll" if scroll else "table-box"
+        self.parts.append(cap + f'<div class="{box}">{body}</div>')
 
     def render(self) -> str:
         """The whole page as one HTML string."""

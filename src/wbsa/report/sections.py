@@ -261,18 +261,19 @@ class SectionBuilder:
         d, p = self.d, self.page
         p.section("point-clouds", "Point clouds")
         self._figure("fig-snapshots", "point-cloud snapshots", self._draw_snapshots,
-                     "What one camera sees of one subject: its depth image and its point cloud looked at from four "
-                     "sides; grey is the skin the camera misses (paper Fig 8).")
+                     "What one camera sees of one subject at the scanned view nearest to [report] snapshot_view_deg: "
+                     "its depth image and its point cloud looked at from four sides; grey is the skin the camera "
+                     "misses (paper Fig 8).")
 
     def _draw_snapshots(self):
-        from wbsa.report.snapshots import pick_subject, render_snapshot, snapshot_intrinsics
+        from wbsa.report.snapshots import pick_subject, render_snapshot, scanned_view, snapshot_intrinsics
 
         d = self.d
-        az, el = (float(x) for x in self.s.snapshot_view_deg)
         missing = [c for c in ("p_gender", "p_age", "p_weight", "p_height") if c not in d.population.columns]
         if missing:
             raise FigureUnavailable(f"the population lacks the body parameters ({', '.join(missing)})")
         try:
+            az, el = scanned_view(d.scan, self.s.snapshot_view_deg, distance_m=d.distance_m, camera=d.camera)
             intr = snapshot_intrinsics(d.sources.scan_paths, d.camera)
             sid = pick_subject(d.population, self.s.snapshot_subject)
             snap = render_snapshot(d.population, sid, intr, az, el, d.distance_m)

@@ -20,7 +20,8 @@ class ReportSettings:
     nonlinear_view_deg : (float, float)
         View of the non-linearity figure (paper Fig 16: 60, 60).
     snapshot_view_deg : (float, float)
-        View whose point cloud the snapshots show (paper Fig 8: 60, 60).
+        View whose point cloud the snapshots show (paper Fig 8: 60, 60); the figure shows the scanned view
+        nearest to it (the study's own views only).
     snapshot_subject : int or None
         Subject of the snapshots; None (in a study file: the key left out) picks the subject with the
         median WBSA.

@@ -9,6 +9,7 @@ import numpy as np
 import pandas as pd
 
 from wbsa.errors import WbsaError
+from wbsa.report.data import nearest_view, select
 
 
 @dataclass(frozen=True)
@@ -63,6 +64,40 @@ def pick_subject(population: pd.DataFrame, subject_id: int | None = None) -> int
     w = population["wbsa_m2"].to_numpy(float)
     i = int(np.argmin(np.abs(w - np.nanmedian(w))))
     return int(population["subject_id"].iloc[i])
+
+
+def scanned_view(scan: pd.DataFrame, asked: tuple[float, float], *, distance_m: float,
+                 camera: str | None = None) -> tuple[float, float]:
+    """The view the study scanned nearest to ``asked`` (angular distance), at this distance and camera.
+
+    The snapshot figure re-renders one subject, so it could show any view; it shows only one the study
+    scanned, so that its point cloud is one of the study's measurements.
+
+    Parameters
+    ----------
+    scan : DataFrame
+        The scan table: ``azimuth_deg``, ``elevation_deg``, ``distance_m`` and optionally ``camera``.
+    asked : (float, float)
+        (azimuth, elevation) in degrees, e.g. ``[report] snapshot_view_deg``.
+    distance_m : float
+        The camera distance of the figure.
+    camera : str, optional
+        Keep only this camera's rows (where the table has a ``camera`` column).
+
+    Returns
+    -------
+    (float, float)
+        (azimuth, elevation) of a scanned view, in degrees.
+
+    Raises
+    ------
+    WbsaError
+        The scan has no view at this distance and camera.
+    """
+    rows = select(scan, distance_m=float(distance_m), camera=camera if "camera" in scan.columns else None)
+    if rows.empty:
+        raise WbsaError(f"the scan has no view at D = {float(distance_m):g} m" + (f" ({camera})" if camera else ""))
+    return nearest_view(rows, float(asked[0]), float(asked[1]))
 
 
 def render_snapshot(population: pd.DataFrame, subject_id: int, intrinsics, azimuth_deg: float, elevation_deg: float,

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.figure import Figure
 
-from wbsa.report.figures.style import FigureUnavailable, new_figure
+from wbsa.report.figures.style import LEGEND_FONTSIZE, FigureUnavailable, new_figure
 
 #: Normal quantile of the 95 % limits of agreement.
 LOA_Z = 1.96
@@ -89,7 +89,7 @@ def agreement_figure(truth_m2: np.ndarray, estimate_m2: np.ndarray, lower_m2: np
     ax.set_xlabel("mean of estimate and truth (m²)")
     ax.set_ylabel("estimate − truth (% of the mean)")
     ax.set_title("Bland–Altman: agreement with the true WBSA", fontsize=10)
-    ax.legend(loc="lower left", fontsize=8, frameon=False)
+    ax.legend(loc="lower left", fontsize=LEGEND_FONTSIZE, frameon=False)
 
     present = list(dict.fromkeys(groups.tolist()))
     names = present if order is None else [g for g in order if g in present] + [g for g in present if g not in order]

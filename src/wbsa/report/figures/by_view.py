@@ -12,7 +12,9 @@ from wbsa.report.figures.style import (
     DM2,
     GROUP_LABELS,
     FigureUnavailable,
+    LEGEND_FONTSIZE,
     angle_axis,
+    count_axis,
     elevation_colors,
     new_figure,
     predictors_title,
@@ -44,7 +46,7 @@ def coefficients_by_view(fits: pd.DataFrame, *, group: str, model: str, vbsa_col
     if not labels:
         raise FigureUnavailable(f"no {model} fits for group {group}")
     colors = elevation_colors(sorted(sub["elevation_deg"].unique()))
-    fig = new_figure(10.0, 3.3 * len(labels) + 0.4, dpi)
+    fig = new_figure(10.0, 3.3 * len(labels) + 1.0, dpi)  # + the legend under the panels
     axes = np.atleast_2d(fig.subplots(len(labels), 2, squeeze=False))
     for i, lab in enumerate(labels):
         part = sub[sub["predictors"] == lab]
@@ -55,7 +57,9 @@ def coefficients_by_view(fits: pd.DataFrame, *, group: str, model: str, vbsa_col
         axes[i, 1].set_title(f"{GROUP_LABELS.get(group, group)}, {predictors_title(lab)}: c1", fontsize=10)
         for ax in axes[i]:
             angle_axis(ax)
-    axes[0, 1].legend(fontsize=7, ncol=2, title="elevation", title_fontsize=7)
+    handles, names = axes[0, 1].get_legend_handles_labels()
+    fig.legend(handles, names, loc="outside lower center", ncol=min(len(names), 5), fontsize=LEGEND_FONTSIZE,
+               title="elevation", title_fontsize=LEGEND_FONTSIZE, frameon=False)
     n = int(sub["n"].median())
     fig.suptitle(f"{model} model, {vbsa_column}, D = {distance_m:g} m, {camera}, median n = {n}", fontsize=10)
     return fig
@@ -74,18 +78,25 @@ def group_errors(fits: pd.DataFrame, *, model: str, vbsa_column: str, distance_m
     el = float(els[np.argmin(np.abs(els - elevation_deg))])
     sub = sub[np.abs(sub["elevation_deg"] - el) < 1e-6]
     labels = [p for p in predictor_labels if (sub["predictors"] == p).any()]
-    fig = new_figure(5.0 * len(labels), 4.0, dpi)
+    fig = new_figure(min(5.0 * len(labels), 12.0), 4.7, dpi)  # + the legend under the panels; at most the page
     axes = np.atleast_1d(fig.subplots(1, len(labels), squeeze=False)[0])
+    # one colour per group in every panel, so one legend under the panels names them all
+    groups = list(dict.fromkeys(sub["group"]))
+    legend: dict[str, object] = {}
     for ax, lab in zip(axes, labels):
         part = sub[sub["predictors"] == lab]
-        for i, g in enumerate(dict.fromkeys(part["group"])):
+        for g in dict.fromkeys(part["group"]):
             pg = part[part["group"] == g].sort_values("azimuth_deg")
-            ax.plot(pg["azimuth_deg"], pg["cv_rmse_m2"] * DM2, marker="o", ms=3, color=f"C{i % 10}",
-                    label=f"{GROUP_LABELS.get(g, g)} (n ≈ {int(pg['n'].median())})")
+            name = f"{GROUP_LABELS.get(g, g)} (n ≈ {int(sub.loc[sub['group'] == g, 'n'].median())})"
+            (line,) = ax.plot(pg["azimuth_deg"], pg["cv_rmse_m2"] * DM2, marker="o", ms=3,
+                              color=f"C{groups.index(g) % 10}")
+            legend.setdefault(name, line)
         ax.set_ylabel("CV RMSE (dm²)")
         ax.set_title(f"{predictors_title(lab)}, φ = {el:g}°", fontsize=10)
         angle_axis(ax)
-    axes[-1].legend(fontsize=7)
+    if legend:
+        fig.legend(list(legend.values()), list(legend), loc="outside lower center",
+                   ncol=min(len(legend), 2 * len(labels)), fontsize=LEGEND_FONTSIZE, frameon=False)
     fig.suptitle(f"CV RMSE by group ({model} model fitted per group, D = {distance_m:g} m)", fontsize=10)
     return fig
 
@@ -108,17 +119,18 @@ def model_comparison(fits: pd.DataFrame, *, vbsa_column: str, distance_m: float,
     ax.set_ylabel("CV RMSE (dm²)")
     ax.set_title(f"all subjects, VBSA only, φ = {el:g}°", fontsize=10)
     angle_axis(ax)
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=LEGEND_FONTSIZE)
     ref = sub[sub["model"] == models[0]].set_index(["azimuth_deg", "elevation_deg"])["cv_rmse_m2"]
     for i, m in enumerate(models[1:], start=1):
         other = sub[sub["model"] == m].set_index(["azimuth_deg", "elevation_deg"])["cv_rmse_m2"]
         ratio = (other / ref).dropna()
-        ax2.scatter(np.arange(len(ratio)), ratio.to_numpy(), s=12, color=f"C{i}", label=f"{m} / {models[0]}")
+        ax2.scatter(np.arange(1, len(ratio) + 1), ratio.to_numpy(), s=12, color=f"C{i}", label=f"{m} / {models[0]}")
     ax2.axhline(1.0, color="k", lw=0.8)
-    ax2.set_xlabel("view (sorted by azimuth, then elevation)")
+    ax2.set_xlabel("view number (sorted by azimuth, then elevation)")
+    count_axis(ax2.xaxis)
     ax2.set_ylabel(f"CV RMSE ratio to {models[0]} (–)")
     ax2.set_title("every view: below 1 = better than the first model", fontsize=10)
-    ax2.legend(fontsize=8)
+    ax2.legend(fontsize=LEGEND_FONTSIZE)
     ax2.grid(True, alpha=0.3)
     return fig
 

@@ -7,7 +7,7 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from wbsa.analysis.groups import GroupSpec
-from wbsa.report.figures.style import FigureUnavailable, new_figure
+from wbsa.report.figures.style import LEGEND_FONTSIZE, FigureUnavailable, new_figure
 
 #: Colours of the sexes, as in the WBSA distribution (Fig 5).
 SEX_COLORS = {"male": "#4C72B0", "female": "#DD8452"}
@@ -34,7 +34,8 @@ def _legend_below(fig: Figure, axes) -> None:
         for handle, label in zip(*ax.get_legend_handles_labels()):
             seen.setdefault(label, handle)
     if seen:
-        fig.legend(list(seen.values()), list(seen), loc="outside lower center", ncol=4, fontsize=7.5, frameon=False)
+        fig.legend(list(seen.values()), list(seen), loc="outside lower center", ncol=2, fontsize=LEGEND_FONTSIZE,
+                   frameon=False)
 
 
 def calibration_figure(population: pd.DataFrame, spec: GroupSpec = GroupSpec(), dpi: int = 100) -> Figure:

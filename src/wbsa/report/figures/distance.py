@@ -6,7 +6,7 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from wbsa.report.data import nearest_view, select
-from wbsa.report.figures.style import DM2, FigureUnavailable, new_figure
+from wbsa.report.figures.style import DM2, LEGEND_FONTSIZE, FigureUnavailable, new_figure
 
 
 def distance_effect(fits: pd.DataFrame, scan: pd.DataFrame, *, model: str, vbsa_column: str, camera: str,
@@ -22,7 +22,7 @@ def distance_effect(fits: pd.DataFrame, scan: pd.DataFrame, *, model: str, vbsa_
         have = sub[["azimuth_deg", "elevation_deg"]].drop_duplicates()
         wanted = [(0.0, 0.0), (90.0, 0.0), (60.0, 60.0), (180.0, 0.0), (0.0, 90.0)]
         views = list(dict.fromkeys(nearest_view(have, *v) for v in wanted))[:4]
-    fig = new_figure(13.0, 4.0, dpi)
+    fig = new_figure(12.0, 4.0, dpi)  # 1200 px: shown at its own size on the page
     a, b, c = fig.subplots(1, 3)
     for i, (az, el) in enumerate(views):
         part = select(sub, azimuth_deg=az, elevation_deg=el).sort_values("distance_m")
@@ -46,7 +46,7 @@ def distance_effect(fits: pd.DataFrame, scan: pd.DataFrame, *, model: str, vbsa_
     for ax in (a, b, c):
         ax.set_xlabel("camera distance D (m)")
         ax.grid(True, alpha=0.3)
-    a.legend(fontsize=8)
+    a.legend(fontsize=LEGEND_FONTSIZE)
     fig.suptitle(f"camera distance, all subjects, {model}, VBSA only ({vbsa_column}, {camera})", fontsize=10)
     return fig
 

@@ -7,7 +7,7 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from wbsa.report.data import nearest_view, select
-from wbsa.report.figures.style import DM2, FigureUnavailable, new_figure
+from wbsa.report.figures.style import DM2, LEGEND_FONTSIZE, FigureUnavailable, new_figure
 
 
 def view_table(population: pd.DataFrame, scan: pd.DataFrame, vbsa_column: str, azimuth_deg: float,
@@ -70,7 +70,7 @@ def vbsa_wbsa_scatter(population: pd.DataFrame, scan: pd.DataFrame, fits: pd.Dat
     ax.text(0.02, 0.98, f"{text}\nR² = {row['r2']:.4f}, n = {int(row['n'])}\n"
             f"CV RMSE = {row['cv_rmse_m2'] * DM2:.2f} dm², CV MAPE = {row['cv_mape_pct']:.2f} %",
             transform=ax.transAxes, va="top", fontsize=8.5, bbox=dict(boxstyle="round", fc="white", alpha=0.85))
-    ax.legend(loc="lower right", fontsize=8)
+    ax.legend(loc="lower right", fontsize=LEGEND_FONTSIZE)
     ax.grid(True, alpha=0.3)
     return fig
 
@@ -104,7 +104,7 @@ def nonlinear_view(population: pd.DataFrame, scan: pd.DataFrame, fits: pd.DataFr
     ax.set_xlabel(f"VBSA (dm²), {vbsa_column}")
     ax.set_ylabel("WBSA (dm²)")
     ax.set_title(f"θ = {az:g}°, φ = {el:g}°, D = {distance_m:g} m", fontsize=10)
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=LEGEND_FONTSIZE)
     ax.grid(True, alpha=0.3)
     resid = w - (lin["c0"] + lin["c1"] * v)
     ax2.scatter(w * DM2, resid * DM2, s=10, alpha=0.7)

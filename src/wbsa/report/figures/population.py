@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
-from wbsa.report.figures.style import DM2, FigureUnavailable, new_figure
+from wbsa.report.figures.style import DM2, LEGEND_FONTSIZE, FigureUnavailable, count_axis, new_figure
 
 
 def wbsa_distribution(population: pd.DataFrame, dpi: int = 100) -> Figure:
@@ -31,9 +31,10 @@ def wbsa_distribution(population: pd.DataFrame, dpi: int = 100) -> Figure:
             color=["#4C72B0", "#DD8452"][:len(parts)], edgecolor="white", linewidth=0.4)
     ax.set_xlabel("WBSA (dm²)")
     ax.set_ylabel("subjects")
+    count_axis(ax.yaxis)
     ax.set_title(f"WBSA of {w.size} subjects: mean {w.mean():.0f} dm², SD {w.std(ddof=1) if w.size > 1 else 0:.0f} dm²",
                  fontsize=10)
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=LEGEND_FONTSIZE)
     ax.grid(True, alpha=0.3)
     if "stature_m" in population:
         sc = ax2.scatter(population["stature_m"] * 100, population["wbsa_m2"] * DM2, s=6,

@@ -7,7 +7,7 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from wbsa.report.data import select
-from wbsa.report.figures.style import DM2, FigureUnavailable, angle_axis, new_figure
+from wbsa.report.figures.style import DM2, LEGEND_FONTSIZE, FigureUnavailable, angle_axis, new_figure
 
 
 def recon_columns(scan: pd.DataFrame) -> list[str]:
@@ -31,7 +31,7 @@ def reconstruction_by_view(scan: pd.DataFrame, fits: pd.DataFrame, *, model: str
     sc = sc[np.abs(sc["elevation_deg"] - el) < 1e-6]
     if "fits_in_frame" in sc:
         sc = sc[sc["fits_in_frame"].fillna(False).astype(bool)]
-    fig = new_figure(13.0, 4.0, dpi)
+    fig = new_figure(12.0, 4.0, dpi)  # 1200 px: shown at its own size on the page
     a, b, c = fig.subplots(1, 3)
     for i, col in enumerate(cols):
         rel = 100.0 * (sc[col] - sc[reference_column]) / sc[reference_column]
@@ -41,7 +41,7 @@ def reconstruction_by_view(scan: pd.DataFrame, fits: pd.DataFrame, *, model: str
     a.axhline(0, color="k", lw=0.8)
     a.set_ylabel(f"(reconstructed − {reference_column}) / ideal (%)")
     a.set_title(f"(a) reconstructed VBSA error, φ = {el:g}°", fontsize=10)
-    a.legend(fontsize=8)
+    a.legend(fontsize=LEGEND_FONTSIZE)
     sub = select(fits, group="all", model=model, predictors="vbsa", distance_m=float(distance_m), camera=camera)
     sub = sub[np.abs(sub["elevation_deg"] - el) < 1e-6]
     for i, col in enumerate([reference_column, *cols]):
@@ -55,7 +55,7 @@ def reconstruction_by_view(scan: pd.DataFrame, fits: pd.DataFrame, *, model: str
     b.set_title(f"(b) WBSA prediction error ({model}, all subjects)", fontsize=10)
     c.set_ylabel("c1, VBSA coefficient (–)")
     c.set_title("(c) VBSA coefficient", fontsize=10)
-    b.legend(fontsize=8)
+    b.legend(fontsize=LEGEND_FONTSIZE)
     for ax in (a, b, c):
         angle_axis(ax)
     return fig

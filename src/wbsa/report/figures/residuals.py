@@ -7,7 +7,7 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from wbsa.report.data import nearest_view, select
-from wbsa.report.figures.style import DM2, FigureUnavailable, new_figure
+from wbsa.report.figures.style import DM2, FigureUnavailable, count_axis, new_figure
 
 
 def residual_diagnostics(residuals: pd.DataFrame, qq: pd.DataFrame, *, view: tuple[float, float], model: str,
@@ -52,6 +52,7 @@ def residual_diagnostics(residuals: pd.DataFrame, qq: pd.DataFrame, *, view: tup
     c.hist(res, bins=min(30, max(5, int(np.sqrt(res.size)))), color="C0", edgecolor="white")
     c.set_xlabel("residual (dm²)")
     c.set_ylabel("subjects")
+    count_axis(c.yaxis)
     c.set_title("(c) residual histogram", fontsize=10)
     d.scatter(fitted, np.sqrt(np.abs(std)), s=8, alpha=0.7)
     d.set_xlabel("fitted WBSA (dm²)")

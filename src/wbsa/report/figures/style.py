@@ -1,4 +1,5 @@
-"""What every report figure shares: the dm² unit, group labels, the figure factory and axis styling.
+"""What every report figure shares: the dm² unit, group labels, the figure factory, axis styling and the
+legend font size.
 
 A figure function raises :class:`FigureUnavailable` when its data are not in the tables (e.g. no
 reconstruction columns), and the report then says why instead of showing the figure.
@@ -17,6 +18,11 @@ DM2 = 100.0
 GROUP_LABELS = {"all": "all subjects", "males": "males", "females": "females", "kids": "kids", "adults": "adults",
                 "small": "small stature", "normal": "normal stature", "big": "big stature", "obese": "obese (BMI ≥ 30)",
                 "underweight": "underweight adults (BMI < 18.5)", "tall": "tall (≥ 1.85 m)"}
+
+
+#: Font size of legend text, points. The figures are drawn at 100 dpi and shown at their own size on a page up to
+#: 1200 px wide (a 1280 px window), so 9 pt is 12.5 px on screen: as large as the page's table text (12.8 px).
+LEGEND_FONTSIZE = 9.0
 
 
 class FigureUnavailable(WbsaError):
@@ -57,3 +63,16 @@ def angle_axis(ax, label: str = "Azimuth θ (deg)") -> None:
     ax.set_xticks([0, 30, 45, 60, 90, 120, 135, 150, 180])
     ax.grid(True, alpha=0.3)
 
+
+
+def count_axis(axis) -> None:
+    """Tick an axis that counts (subjects, views) at whole numbers only.
+
+    Parameters
+    ----------
+    axis : matplotlib.axis.Axis
+        ``ax.xaxis`` or ``ax.yaxis``.
+    """
+    from matplotlib.ticker import MaxNLocator
+
+    axis.set_major_locator(MaxNLocator(integer=True))

@@ -47,6 +47,8 @@ MeshUnits = Literal["m", "cm", "mm"]
 MeshUp = Literal["z", "y"]
 #: A population's ``posture`` setting: a posture name, or ``mixed`` (a random name per subject).
 PostureChoice = Literal[Literal["a-pose", "mixed"], PostureName]
+#: Robust penalty of the body fit's point-to-surface residuals (:mod:`wbsa.bodyfit.objective`).
+RobustLoss = Literal["geman-mcclure", "huber"]
 
 POPULATION_KINDS: tuple[str, ...] = get_args(PopulationKind)
 NOISE_MODELS: tuple[str, ...] = get_args(NoiseModel)
@@ -65,3 +67,4 @@ EDGE_PIXELS: tuple[str, ...] = get_args(EdgePixels)
 TEST_SCENES: tuple[str, ...] = get_args(TestScene)
 MESH_UNITS: tuple[str, ...] = get_args(MeshUnits)
 MESH_UPS: tuple[str, ...] = get_args(MeshUp)
+ROBUST_LOSSES: tuple[str, ...] = get_args(RobustLoss)

@@ -1,0 +1,200 @@
+"""A differentiable anny body on a subset of its vertices, posed as :mod:`wbsa.bodies.posing` poses it.
+
+:class:`FitBody` is what the optimiser moves: phenotypes and local changes give the rest vertices through
+anny's linear blendshapes (:meth:`wbsa.bodies.body_model.BodyModel.coefficients`), restricted to a few
+thousand skin vertices spread evenly over the body (anny's 318 blendshapes over all 13,718 vertices are
+105 MB of float64 read at every step; the subset is a few MB of float32); the ten posture angles of
+:data:`wbsa.bodies.posture.ANGLE_COLUMNS` pose them by linear blend skinning with anny's weights, exactly
+as :func:`wbsa.bodies.posing.pose_vertices` does (the same pivots, axes and composition; tested against
+it), and the body is shifted to stand on z = 0. All in torch, batched over restarts.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from wbsa.bodies.body_model import LOCAL_CHANGE_COLUMNS, PHENOTYPE_COLUMNS, BodyModel
+from wbsa.bodies.posing import JOINT_BONES, SEGMENTS
+
+#: Number of phenotypes and of local changes a fit moves.
+N_PHENOTYPES = len(PHENOTYPE_COLUMNS)
+N_LOCAL = len(LOCAL_CHANGE_COLUMNS)
+#: Joints whose heads :class:`FitBody` needs, per side, in this order.
+_JOINTS = ("shoulder", "elbow", "wrist", "hip", "ankle")
+_SUFFIX = {"l": ".L", "r": ".R"}
+
+
+def even_vertex_subset(vertices: np.ndarray, faces: np.ndarray, spacing_m: float) -> np.ndarray:
+    """Indices of the skin vertices nearest to the centres of a ``spacing_m`` voxel grid, plus the soles and crown.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float64
+        A reference body at rest, standing on z = 0.
+    faces : (m, 3) int
+        Its skin triangles (only their vertices are chosen).
+    spacing_m : float
+
+    Returns
+    -------
+    (k,) intp, sorted
+        One vertex per occupied voxel; every vertex within 1 cm of the floor or of the top of the head is
+        added, so the lowest and highest points of any posed body are in the subset.
+    """
+    used = np.unique(np.asarray(faces).ravel())
+    p = vertices[used]
+    cell = np.floor(p / spacing_m).astype(np.int64)
+    centre = (cell + 0.5) * spacing_m
+    dist = np.linalg.norm(p - centre, axis=1)
+    order = np.lexsort((dist, cell[:, 2], cell[:, 1], cell[:, 0]))
+    key = cell[order]
+    first = np.ones(len(order), dtype=bool)
+    first[1:] = np.any(key[1:] != key[:-1], axis=1)
+    chosen = used[order[first]]
+    z = vertices[used, 2]
+    extremes = used[(z < z.min() + 0.01) | (z > z.max() - 0.01)]
+    return np.unique(np.concatenate([chosen, extremes])).astype(np.intp)
+
+
+class FitBody:
+    """anny's rest shape and the project's posing, differentiable, on a vertex subset.
+
+    Parameters
+    ----------
+    body_model : BodyModel
+    spacing_m : float
+        Voxel size of :func:`even_vertex_subset` (0.03 m gives about 2,000 vertices).
+    """
+
+    def __init__(self, body_model: BodyModel, spacing_m: float = 0.03) -> None:
+        import torch
+
+        from wbsa.bodies.anthropometry import reference_adult
+
+        self.torch = torch
+        self.body_model = body_model
+        anny = body_model.anny
+        ref = body_model.rest_bodies(reference_adult(0.0)).vertices[0]
+        self.index = even_vertex_subset(ref, body_model.skin_faces, spacing_m)
+        idx = torch.as_tensor(self.index)
+        self.template = anny.template_vertices[idx].to(torch.float32)
+        self.basis = anny.blendshapes[:, idx, :].to(torch.float32).reshape(anny.blendshapes.shape[0], -1).contiguous()
+        rig = body_model.rig
+        joint_ids = [rig.joints[s][j] for s in ("l", "r") for j in _JOINTS]
+        self.joint_template = anny.template_bone_heads[joint_ids].to(torch.float32)
+        self.joint_basis = anny.bone_heads_blendshapes[:, joint_ids, :].to(torch.float32).reshape(
+            anny.bone_heads_blendshapes.shape[0], -1)
+        dense = np.zeros((len(body_model.vertex_bone), 2 * len(SEGMENTS)))
+        for s, (rows, w) in enumerate(zip(rig.skin.rows, rig.skin.weights)):
+            dense[rig.skin.vertices[rows], s] = w
+        self.weights = torch.as_tensor(dense[self.index], dtype=torch.float32)
+        #: (k,) bool: subset vertices that belong to a limb moved by posing (weight > 0.5)
+        self.limb = self.weights.sum(1).numpy() > 0.5
+
+    def __len__(self) -> int:
+        return len(self.index)
+
+    def rest(self, params):
+        """Rest vertices ``(b, k, 3)`` and joints ``(b, 10, 3)`` (float32) of ``(b, 15)`` float64 body parameters."""
+        coeffs = self.body_model.coefficients(params).to(self.torch.float32)
+        b = coeffs.shape[0]
+        v = self.template[None] + (coeffs @ self.basis).reshape(b, -1, 3)
+        j = self.joint_template[None] + (coeffs @ self.joint_basis).reshape(b, -1, 3)
+        return v, j
+
+    def segment_transforms(self, joints, angles_rad):
+        """Per segment (:data:`~wbsa.bodies.posing.SEGMENTS`, left then right) ``R (b, 3, 3)`` and ``t (b, 3)``.
+
+        Mirrors :func:`wbsa.bodies.posing.segment_transforms`, batched.
+        """
+        torch = self.torch
+        b = joints.shape[0]
+        a = angles_rad.to(torch.float32).reshape(b, 2, 5)
+        out = []
+        for si, sign in enumerate((1.0, -1.0)):
+            abd, flex, rot, elbow, hip = (a[:, si, m] for m in range(5))
+            j = {name: joints[:, si * 5 + k] for k, name in enumerate(_JOINTS)}
+            upper, fore = j["elbow"] - j["shoulder"], j["wrist"] - j["elbow"]
+            fwd = torch.tensor([0.0, -sign, 0.0]).expand(b, 3)
+            base = rotation(fwd, abd) @ rotation(torch.tensor([-1.0, 0.0, 0.0]).expand(b, 3), flex)
+            twist = sign * unit(upper)
+            ua1 = about(j["shoulder"], base @ rotation(twist, rot / 2))
+            ua2 = about(j["shoulder"], base @ rotation(twist, rot))
+            forearm = then(ua2, about(j["elbow"], rotation(unit(torch.linalg.cross(upper, fore)), elbow)))
+            leg = about(j["hip"], rotation(fwd, hip))
+            foot = then(leg, about(j["ankle"], rotation(fwd, -hip)))
+            out += [ua1, ua2, forearm, leg, foot]
+        return out
+
+    def pose(self, rest, joints, angles_rad):
+        """Posed vertices ``(b, k, 3)`` standing on z = 0, and each vertex's blended rotation ``(b, k, 3, 3)``."""
+        torch = self.torch
+        transforms = self.segment_transforms(joints, angles_rad)
+        w = self.weights  # (k, s)
+        moved = rest.clone()
+        rot = torch.eye(3).expand(rest.shape[0], rest.shape[1], 3, 3).clone()
+        for s, (r, t) in enumerate(transforms):
+            ws = w[:, s]
+            sel = ws > 0
+            p = rest[:, sel]
+            moved[:, sel] = moved[:, sel] + ws[sel, None] * (p @ r.transpose(1, 2) + t[:, None] - p)
+            rot[:, sel] = rot[:, sel] + ws[sel, None, None] * (r[:, None] - torch.eye(3))
+        moved = moved - torch.stack([torch.zeros_like(moved[..., 0]), torch.zeros_like(moved[..., 0]),
+                                     moved[..., 2].min(dim=1, keepdim=True).values.expand_as(moved[..., 2])], dim=-1)
+        return moved, rot
+
+
+def rotation(axis, angle):
+    """Rodrigues: ``(b, 3, 3)`` rotations by ``angle (b,)`` about unit ``axis (b, 3)`` (right-hand rule)."""
+    import torch
+
+    x, y, z = axis[:, 0], axis[:, 1], axis[:, 2]
+    zero = torch.zeros_like(x)
+    k = torch.stack([zero, -z, y, z, zero, -x, -y, x, zero], dim=1).reshape(-1, 3, 3)
+    s, c = torch.sin(angle)[:, None, None], torch.cos(angle)[:, None, None]
+    return torch.eye(3, dtype=k.dtype) + s * k + (1.0 - c) * (k @ k)
+
+
+def unit(v):
+    return v / v.norm(dim=-1, keepdim=True)
+
+
+def about(pivot, rot):
+    """``x -> rot x + t`` turning by ``rot (b, 3, 3)`` about ``pivot (b, 3)``."""
+    return rot, pivot - (rot @ pivot[..., None])[..., 0]
+
+
+def then(outer, inner):
+    """``outer ∘ inner`` (inner first)."""
+    return outer[0] @ inner[0], (outer[0] @ inner[1][..., None])[..., 0] + outer[1]
+
+
+def yaw_matrix(yaw):
+    """``(b, 3, 3)`` rotations about +Z by ``yaw (b,)`` radians."""
+    import torch
+
+    c, s = torch.cos(yaw), torch.sin(yaw)
+    zero, one = torch.zeros_like(c), torch.ones_like(c)
+    return torch.stack([c, -s, zero, s, c, zero, zero, zero, one], dim=1).reshape(-1, 3, 3)
+
+
+def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """(b, n, 3) unit area-weighted vertex normals of ``(b, n, 3)`` vertices over ``(m, 3)`` faces."""
+    a, b, c = (vertices[:, faces[:, i]] for i in range(3))
+    face_n = np.cross(b - a, c - a)
+    out = np.zeros_like(vertices)
+    for i in range(3):
+        for d in range(3):
+            out[:, :, d] += np.stack([np.bincount(faces[:, i], weights=fn[:, d], minlength=vertices.shape[1])
+                                      for fn in face_n])
+    return out / np.maximum(np.linalg.norm(out, axis=-1, keepdims=True), 1e-12)
+
+
+def subset_rest_normals(fit_body: FitBody, params) -> np.ndarray:
+    """(b, k, 3) rest-pose unit normals of the subset vertices of ``(b, 15)`` body parameters (whole mesh, no grad)."""
+    import torch
+
+    model = fit_body.body_model
+    with torch.no_grad():
+        full = model.anny.get_rest_vertices(model.coefficients(params.detach().to(torch.float64))).numpy()
+    return vertex_normals(full, model.closed_faces)[:, fit_body.index]

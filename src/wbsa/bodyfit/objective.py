@@ -1,0 +1,158 @@
+"""The losses of the body fit: point-to-surface, silhouette, free space, priors (torch, batched over restarts).
+
+Every term is a mean of squared residuals in units of a scale, so the weights compare like with like:
+
+* **point-to-surface** (:meth:`Objective.data`): each observed point against its corresponding model vertex
+  (the nearest camera-facing one, refreshed every few steps), along that vertex's normal plus a tenth of
+  the tangential offset (point-to-plane ICP; the model vertices are ~3 cm apart, so point-to-point would
+  not settle), under a robust penalty of scale ``robust_scale_m`` (Geman–McClure: a stray return costs at
+  most 1);
+* **silhouette** (:meth:`Objective.silhouette`): how far each model vertex projects outside the subject's
+  mask beyond a tolerance (pixels turned into metres at the vertex's depth), scale 1 cm: no body where the
+  image shows none;
+* **free space** (:meth:`Objective.free_space`): a camera-facing vertex in front of the surface seen at its
+  pixel by more than 1 cm would hide it; scale 1 cm;
+* **priors**: the phenotypes stay near their start (weakly), the local changes near 0.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from wbsa.bodyfit.observation import Observation
+
+#: Scale (m) of the silhouette and free-space residuals; depth tolerance of the free-space term (m).
+SURFACE_SCALE_M = 0.01
+FREE_SPACE_TOLERANCE_M = 0.01
+#: Weight of the tangential part of a point-to-vertex offset against its normal part.
+TANGENTIAL_WEIGHT = 0.1
+
+
+class Objective:
+    """Losses of posed view-frame vertices against one :class:`Observation`.
+
+    Parameters
+    ----------
+    obs : Observation
+    robust_loss : {'geman-mcclure', 'huber'}
+    robust_scale_m, silhouette_tolerance_px : float
+    """
+
+    def __init__(self, obs: Observation, robust_loss: str, robust_scale_m: float, silhouette_tolerance_px: float):
+        import torch
+
+        self.torch = torch
+        f32 = torch.float32
+        self.obs = obs
+        self.points = torch.as_tensor(obs.points, dtype=f32)
+        self.basis = torch.as_tensor(obs.basis, dtype=f32)
+        self.origin = torch.as_tensor(obs.origin, dtype=f32)
+        self.camera = torch.as_tensor(obs.camera_position, dtype=f32)
+        self.fx, self.fy, self.cx, self.cy = (float(x) for x in obs.intrinsics)
+        self.skew = obs.skew
+        self.outside = torch.as_tensor(obs.outside_px)
+        self.depth = torch.as_tensor(obs.depth)
+        self.robust_loss = robust_loss
+        self.scale = float(robust_scale_m)
+        self.tolerance_px = float(silhouette_tolerance_px)
+
+    # -- geometry ---------------------------------------------------------------------------
+    def project(self, v):
+        """Crop pixel coordinates (row, col) and camera z of view-frame vertices ``(b, k, 3)``."""
+        p = v @ self.basis + self.origin
+        z = p[..., 2].clamp(min=0.05)
+        y = p[..., 1] / z
+        col = self.fx * p[..., 0] / z + self.skew * y + self.cx - self.obs.crop[1]
+        row = self.fy * y + self.cy - self.obs.crop[0]
+        return row, col, z
+
+    def _bilinear(self, image, row, col):
+        """``image`` at fractional (row, col) inside it (clamped), and the distance (px) the points lay outside."""
+        torch = self.torch
+        h, w = image.shape
+        r = row.clamp(0, h - 1.001)
+        c = col.clamp(0, w - 1.001)
+        beyond = (row - r).abs() + (col - c).abs()
+        r0, c0 = r.floor().long(), c.floor().long()
+        fr, fc = r - r0, c - c0
+        flat = image.reshape(-1)
+        i00 = flat[r0 * w + c0]
+        i01 = flat[r0 * w + c0 + 1]
+        i10 = flat[(r0 + 1) * w + c0]
+        i11 = flat[(r0 + 1) * w + c0 + 1]
+        top = i00 + fc * (i01 - i00)
+        bottom = i10 + fc * (i11 - i10)
+        return top + fr * (bottom - top), beyond
+
+    # -- terms --------------------------------------------------------------------------------
+    def robust(self, r2):
+        """Robust penalty of squared residuals in units of the scale (each point's cost)."""
+        if self.robust_loss == "huber":
+            r = r2.clamp(min=1e-12).sqrt()
+            return self.torch.where(r <= 1.0, 0.5 * r2, r - 0.5)
+        return r2 / (1.0 + r2)
+
+    def data(self, v, corr, normals):
+        """(b,) mean robust point-to-surface cost: observed points vs vertices ``corr (b, p)`` with ``normals (b, p, 3)``."""
+        matched = self.torch.gather(v, 1, corr[..., None].expand(-1, -1, 3))
+        d = self.points[None] - matched
+        along = (d * normals).sum(-1)
+        tangential = (d * d).sum(-1) - along * along
+        r2 = (along * along + TANGENTIAL_WEIGHT * tangential) / self.scale**2
+        return self.robust(r2).mean(1)
+
+    def residuals_m(self, v, corr, normals):
+        """(b, p) point-to-plane distances (m) of the observed points to their vertices."""
+        matched = self.torch.gather(v, 1, corr[..., None].expand(-1, -1, 3))
+        return ((self.points[None] - matched) * normals).sum(-1)
+
+    def silhouette(self, v):
+        """(b,) mean squared distance (in units of 1 cm) by which the vertices project outside the mask."""
+        row, col, z = self.project(v)
+        dist_px, beyond = self._bilinear(self.outside, row, col)
+        excess_px = (dist_px + beyond - self.tolerance_px).clamp(min=0.0)
+        metres = excess_px * z / self.fx
+        return (metres / SURFACE_SCALE_M).square().mean(1)
+
+    def free_space(self, v, facing):
+        """(b,) mean squared depth (units of 1 cm) by which camera-facing vertices ``facing (b, k)`` stand in
+        front of the surface seen at their pixel, beyond :data:`FREE_SPACE_TOLERANCE_M`."""
+        torch = self.torch
+        row, col, z = self.project(v)
+        h, w = self.depth.shape
+        r = row.detach().round().long().clamp(0, h - 1)
+        c = col.detach().round().long().clamp(0, w - 1)
+        seen = self.depth[r, c]
+        ok = facing & torch.isfinite(seen)
+        ahead = torch.where(ok, (seen - z - FREE_SPACE_TOLERANCE_M).clamp(min=0.0), torch.zeros_like(z))
+        return (ahead / SURFACE_SCALE_M).square().sum(1) / facing.sum(1).clamp(min=1)
+
+    # -- correspondences ------------------------------------------------------------------------
+    def correspondences(self, v: np.ndarray, normals: np.ndarray):
+        """Nearest camera-facing vertex of every observed point, per restart.
+
+        Parameters
+        ----------
+        v, normals : (b, k, 3) float
+            View-frame vertices and unit normals.
+
+        Returns
+        -------
+        corr : (b, p) int64 tensor
+        matched_normals : (b, p, 3) float32 tensor
+        facing : (b, k) bool tensor
+        """
+        from scipy.spatial import cKDTree
+
+        torch = self.torch
+        cam = self.obs.camera_position
+        facing = ((cam[None, None] - v) * normals).sum(-1) > 0
+        corr = np.empty((v.shape[0], len(self.obs.points)), dtype=np.int64)
+        for b in range(v.shape[0]):
+            ids = np.flatnonzero(facing[b])
+            if len(ids) < 10:
+                ids = np.arange(v.shape[1])
+            _, nearest = cKDTree(v[b, ids]).query(self.obs.points, workers=1)
+            corr[b] = ids[nearest]
+        n = np.take_along_axis(normals, corr[..., None], axis=1)
+        return torch.as_tensor(corr), torch.as_tensor(n, dtype=torch.float32), torch.as_tensor(facing)

@@ -1,0 +1,159 @@
+"""The batched fit: Adam over phenotypes, local changes, posture and placement of every start at once.
+
+One batch holds every restart, so a step costs one blendshape product and one skinning for all of them
+(the time of a fit is per-operation overhead, not arithmetic). Each restart keeps its own best state;
+the correspondences and normals are refreshed every ``refresh_every`` steps. The loop stops when the
+best loss stalls (converged), after ``steps`` steps (not converged) or at the deadline (its best so far,
+flagged by the caller).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from wbsa.bodies.body_model import PHENOTYPE_COLUMNS
+from wbsa.bodyfit.settings import ANGLE_LIMITS_DEG, BodyFitSettings
+
+_N_PH = len(PHENOTYPE_COLUMNS)
+#: Standard deviation (m) of the vertical shift of a body that stands on a seen floor.
+_FLOOR_SD_M = 0.01
+
+
+@dataclass(frozen=True)
+class Optimum:
+    """The best state of a batched fit.
+
+    Attributes
+    ----------
+    params : (15,) float64
+    angles_rad : (10,) float64
+    yaw_rad : float
+    shift_m : (3,) float64
+    loss : float
+    restart_losses : (b,) float64
+        Each restart's best loss.
+    residuals_m : (p,) float64
+        Point-to-plane distances of the observed points to the best body.
+    vertices : (k, 3) float64
+        The best body's subset vertices, view frame.
+    steps : int
+    converged, timed_out : bool
+    """
+
+    params: np.ndarray
+    angles_rad: np.ndarray
+    yaw_rad: float
+    shift_m: np.ndarray
+    loss: float
+    restart_losses: np.ndarray
+    residuals_m: np.ndarray
+    vertices: np.ndarray
+    steps: int
+    converged: bool
+    timed_out: bool
+
+
+def _limits(torch):
+    lo = np.radians([lo for lo, _ in ANGLE_LIMITS_DEG] * 2)
+    hi = np.radians([hi for _, hi in ANGLE_LIMITS_DEG] * 2)
+    return torch.as_tensor(lo, dtype=torch.float32), torch.as_tensor(hi, dtype=torch.float32)
+
+
+def optimise(fit_body, objective, starts, settings: BodyFitSettings, deadline: float) -> Optimum:
+    """Fit every start of ``starts`` (:class:`wbsa.bodyfit.init.Starts`) to ``objective``'s observation.
+
+    Parameters
+    ----------
+    fit_body : wbsa.bodyfit.model.FitBody
+    objective : wbsa.bodyfit.objective.Objective
+    starts : Starts
+    settings : BodyFitSettings
+    deadline : float
+        ``time.perf_counter()`` value at which to stop.
+    """
+    import torch
+
+    from wbsa.bodyfit.model import subset_rest_normals, yaw_matrix
+
+    f32, f64 = torch.float32, torch.float64
+    phen0 = torch.as_tensor(starts.params[:, :_N_PH], dtype=f64)
+    phen = phen0.clone().requires_grad_(True)
+    local = torch.as_tensor(starts.params[:, _N_PH:], dtype=f64).clone().requires_grad_(settings.local_changes)
+    angles = torch.as_tensor(starts.angles_rad, dtype=f32).clone().requires_grad_(True)
+    yaw = torch.as_tensor(starts.yaw_rad, dtype=f32).clone().requires_grad_(True)
+    shift = torch.as_tensor(starts.shift_m, dtype=f32).clone().requires_grad_(True)
+    lr = settings.learning_rate
+    groups = [{"params": [phen], "lr": lr}, {"params": [angles], "lr": 1.5 * lr},
+              {"params": [yaw], "lr": lr}, {"params": [shift], "lr": 0.25 * lr}]
+    if settings.local_changes:
+        groups.append({"params": [local], "lr": 2 * lr})
+    opt = torch.optim.Adam(groups)
+    base_lr = [g["lr"] for g in opt.param_groups]
+    lo, hi = _limits(torch)
+    floor_seen = objective.obs.floor_seen
+    b = phen.shape[0]
+    best_loss = np.full(b, np.inf)
+    best = [None] * b
+    history: list[float] = []
+    converged = timed_out = False
+    corr = normals = facing = None
+    step = 0
+
+    def body():
+        params = torch.cat([phen, local], dim=1)
+        rest, joints = fit_body.rest(params)
+        posed, rot = fit_body.pose(rest, joints, angles)
+        rz = yaw_matrix(yaw)
+        return params, posed, rot, rz, posed @ rz.transpose(1, 2) + shift[:, None]
+
+    for step in range(settings.steps):
+        if time.perf_counter() > deadline:
+            timed_out = True
+            break
+        if step % settings.refresh_every == 0:
+            with torch.no_grad():
+                params, posed, rot, rz, v = body()
+                n = torch.einsum("bkij,bkj->bki", rot, torch.as_tensor(subset_rest_normals(fit_body, params), dtype=f32))
+                n = n / n.norm(dim=-1, keepdim=True)
+                n = n @ rz.transpose(1, 2)
+                corr, normals, facing = objective.correspondences(v.numpy(), n.numpy())
+            if step and len(history) >= 2 and history[-2] - history[-1] < settings.tolerance * abs(history[-2]):
+                converged = True
+                break
+        for g, base in zip(opt.param_groups, base_lr):
+            g["lr"] = base * (1.0 - 0.8 * step / settings.steps)
+        params, posed, rot, rz, v = body()
+        loss = (objective.data(v, corr, normals)
+                + settings.silhouette_weight * objective.silhouette(v)
+                + settings.free_space_weight * objective.free_space(v, facing)
+                + settings.phenotype_prior_weight * ((phen - phen0) / 0.5).square().sum(1).to(f32)
+                + settings.local_change_prior_weight * local.square().sum(1).to(f32))
+        if floor_seen:
+            loss = loss + (shift[:, 2] / _FLOOR_SD_M).square() / len(objective.obs.points)
+        values = loss.detach().numpy().astype(np.float64)
+        for i in np.flatnonzero(values < best_loss):
+            best_loss[i] = values[i]
+            best[i] = (params[i].detach().numpy().copy(), angles[i].detach().numpy().astype(np.float64),
+                       float(yaw[i]), shift[i].detach().numpy().astype(np.float64), v[i].detach().numpy(),
+                       corr[i], normals[i])
+        if step % settings.refresh_every == settings.refresh_every - 1:
+            history.append(float(best_loss.min()))
+        opt.zero_grad(set_to_none=True)
+        loss.sum().backward()
+        opt.step()
+        with torch.no_grad():
+            phen.clamp_(0.0, 1.0)
+            phen[:, -3:].clamp_(min=0.02)
+            local.clamp_(-1.0, 1.0)
+            angles.copy_(torch.maximum(torch.minimum(angles, hi), lo))
+    i = int(np.argmin(best_loss))
+    params, ang, yaw_i, shift_i, verts, corr_i, normals_i = best[i]
+    with torch.no_grad():
+        res = objective.residuals_m(torch.as_tensor(verts, dtype=f32)[None], corr_i[None], normals_i[None])[0]
+    return Optimum(params=params, angles_rad=ang, yaw_rad=yaw_i, shift_m=shift_i, loss=float(best_loss[i]),
+                   restart_losses=best_loss, residuals_m=res.numpy().astype(np.float64),
+                   vertices=verts.astype(np.float64), steps=step + 1 if not (converged or timed_out) else step,
+                   converged=converged, timed_out=timed_out)

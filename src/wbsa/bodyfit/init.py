@@ -92,7 +92,7 @@ def first_guesses(fit_body, objective, n: int, azimuth_deg: float | None = None)
             angles[i, [5, 6, 7, 8]] = np.radians(ARM_STARTS[name])
         sex_i, arm_i = np.meshgrid(np.arange(2), np.arange(len(names)), indexing="ij")
         sex_i, arm_i = sex_i.ravel(), arm_i.ravel()
-        posed, rot = fit_body.pose(rest[sex_i], joints[sex_i], torch.as_tensor(angles[arm_i]))
+        posed, rot = fit_body.pose(rest[sex_i], joints[sex_i], torch.as_tensor(angles[arm_i]), rotations=True)
         normals = torch.einsum("bkij,bkj->bki", rot, torch.as_tensor(normals_rest[sex_i], dtype=torch.float32))
         labels, scores, shifts, combos = [], [], [], []
         mean_xy = obs.points[:, :2].mean(0)

@@ -126,22 +126,25 @@ class FitBody:
             out += [ua1, ua2, forearm, leg, foot]
         return out
 
-    def pose(self, rest, joints, angles_rad):
-        """Posed vertices ``(b, k, 3)`` standing on z = 0, and each vertex's blended rotation ``(b, k, 3, 3)``."""
+    def pose(self, rest, joints, angles_rad, rotations: bool = False):
+        """Posed vertices ``(b, k, 3)`` standing on z = 0 (and, with ``rotations``, each vertex's blended
+        rotation ``(b, k, 3, 3)``, for its normal).
+
+        Dense linear blend skinning: every segment's transform is applied to every vertex and blended by the
+        (mostly zero) weights; at a few thousand vertices this beats gathering the moving ones.
+        """
         torch = self.torch
         transforms = self.segment_transforms(joints, angles_rad)
-        w = self.weights  # (k, s)
-        moved = rest.clone()
-        rot = torch.eye(3).expand(rest.shape[0], rest.shape[1], 3, 3).clone()
-        for s, (r, t) in enumerate(transforms):
-            ws = w[:, s]
-            sel = ws > 0
-            p = rest[:, sel]
-            moved[:, sel] = moved[:, sel] + ws[sel, None] * (p @ r.transpose(1, 2) + t[:, None] - p)
-            rot[:, sel] = rot[:, sel] + ws[sel, None, None] * (r[:, None] - torch.eye(3))
-        moved = moved - torch.stack([torch.zeros_like(moved[..., 0]), torch.zeros_like(moved[..., 0]),
-                                     moved[..., 2].min(dim=1, keepdim=True).values.expand_as(moved[..., 2])], dim=-1)
-        return moved, rot
+        r = torch.stack([t[0] for t in transforms], dim=1)  # (b, s, 3, 3)
+        t = torch.stack([t[1] for t in transforms], dim=1)  # (b, s, 3)
+        moved = torch.einsum("bsij,bkj->bski", r, rest) + t[:, :, None] - rest[:, None]
+        posed = rest + torch.einsum("ks,bski->bki", self.weights, moved)
+        lowest = posed[..., 2].min(dim=1).values
+        posed = posed - torch.stack([torch.zeros_like(lowest), torch.zeros_like(lowest), lowest], dim=1)[:, None]
+        if not rotations:
+            return posed
+        blend = torch.eye(3) + torch.einsum("ks,bsij->bkij", self.weights, r - torch.eye(3))
+        return posed, blend
 
 
 def rotation(axis, angle):

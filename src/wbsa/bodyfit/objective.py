@@ -1,6 +1,6 @@
 """The losses of the body fit: point-to-surface, silhouette, free space, priors (torch, batched over restarts).
 
-Every term is a mean of squared residuals in units of a scale, so the weights compare like with like:
+Every term is a mean of robust penalties of residuals in units of a scale, so the weights compare like with like:
 
 * **point-to-surface** (:meth:`Objective.data`): each observed point against its corresponding model vertex
   (the nearest camera-facing one, refreshed every few steps), along that vertex's normal plus a tenth of
@@ -8,10 +8,10 @@ Every term is a mean of squared residuals in units of a scale, so the weights co
   not settle), under a robust penalty of scale ``robust_scale_m`` (Geman–McClure: a stray return costs at
   most 1);
 * **silhouette** (:meth:`Objective.silhouette`): how far each model vertex projects outside the subject's
-  mask beyond a tolerance (pixels turned into metres at the vertex's depth), scale 1 cm: no body where the
-  image shows none;
+  mask beyond a tolerance (pixels turned into metres at the vertex's depth), Huber with scale 1 cm: no body
+  where the image shows none;
 * **free space** (:meth:`Objective.free_space`): a camera-facing vertex in front of the surface seen at its
-  pixel by more than 1 cm would hide it; scale 1 cm;
+  pixel by more than 1 cm would hide it; Huber with scale 1 cm;
 * **priors**: the phenotypes stay near their start (weakly), the local changes near 0.
 """
 
@@ -26,6 +26,13 @@ SURFACE_SCALE_M = 0.01
 FREE_SPACE_TOLERANCE_M = 0.01
 #: Weight of the tangential part of a point-to-vertex offset against its normal part.
 TANGENTIAL_WEIGHT = 0.1
+
+
+def _huber(r):
+    """Huber's penalty of residuals ``r`` (≥ 0) in units of their scale: r²/2 up to 1, then r − 1/2."""
+    import torch
+
+    return torch.where(r <= 1.0, 0.5 * r * r, r - 0.5)
 
 
 class Objective:
@@ -92,13 +99,18 @@ class Objective:
             return self.torch.where(r <= 1.0, 0.5 * r2, r - 0.5)
         return r2 / (1.0 + r2)
 
-    def data(self, v, corr, normals):
-        """(b,) mean robust point-to-surface cost: observed points vs vertices ``corr (b, p)`` with ``normals (b, p, 3)``."""
+    def data(self, v, corr, normals, scale_m: float | None = None):
+        """(b,) mean robust point-to-surface cost: observed points vs vertices ``corr (b, p)`` with ``normals (b, p, 3)``.
+
+        ``scale_m`` overrides the robust scale (the fit anneals it from coarse to fine, so that points far from
+        a poor start still pull on it).
+        """
         matched = self.torch.gather(v, 1, corr[..., None].expand(-1, -1, 3))
         d = self.points[None] - matched
         along = (d * normals).sum(-1)
         tangential = (d * d).sum(-1) - along * along
-        r2 = (along * along + TANGENTIAL_WEIGHT * tangential) / self.scale**2
+        scale = self.scale if scale_m is None else scale_m
+        r2 = (along * along + TANGENTIAL_WEIGHT * tangential) / scale**2
         return self.robust(r2).mean(1)
 
     def residuals_m(self, v, corr, normals):
@@ -112,7 +124,7 @@ class Objective:
         dist_px, beyond = self._bilinear(self.outside, row, col)
         excess_px = (dist_px + beyond - self.tolerance_px).clamp(min=0.0)
         metres = excess_px * z / self.fx
-        return (metres / SURFACE_SCALE_M).square().mean(1)
+        return _huber(metres / SURFACE_SCALE_M).mean(1)
 
     def free_space(self, v, facing):
         """(b,) mean squared depth (units of 1 cm) by which camera-facing vertices ``facing (b, k)`` stand in
@@ -125,7 +137,7 @@ class Objective:
         seen = self.depth[r, c]
         ok = facing & torch.isfinite(seen)
         ahead = torch.where(ok, (seen - z - FREE_SPACE_TOLERANCE_M).clamp(min=0.0), torch.zeros_like(z))
-        return (ahead / SURFACE_SCALE_M).square().sum(1) / facing.sum(1).clamp(min=1)
+        return _huber(ahead / SURFACE_SCALE_M).sum(1) / facing.sum(1).clamp(min=1)
 
     # -- correspondences ------------------------------------------------------------------------
     def correspondences(self, v: np.ndarray, normals: np.ndarray):

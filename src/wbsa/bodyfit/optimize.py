@@ -20,6 +20,11 @@ from wbsa.bodyfit.settings import ANGLE_LIMITS_DEG, BodyFitSettings
 _N_PH = len(PHENOTYPE_COLUMNS)
 #: Standard deviation (m) of the vertical shift of a body that stands on a seen floor.
 _FLOOR_SD_M = 0.01
+#: Robust scale (m) of the point-to-surface term at the first step; it shrinks geometrically to the settings'
+#: ``robust_scale_m`` over the first :data:`_ANNEAL_SHARE` of the steps (graduated non-convexity).
+_START_SCALE_M = 0.10
+_ANNEAL_SHARE = 0.5
+_DEBUG = False
 
 
 @dataclass(frozen=True)
@@ -102,10 +107,11 @@ def optimise(fit_body, objective, starts, settings: BodyFitSettings, deadline: f
     corr = normals = facing = None
     step = 0
 
-    def body():
+    def body(rotations: bool = False):
         params = torch.cat([phen, local], dim=1)
         rest, joints = fit_body.rest(params)
-        posed, rot = fit_body.pose(rest, joints, angles)
+        posed = fit_body.pose(rest, joints, angles, rotations)
+        posed, rot = posed if rotations else (posed, None)
         rz = yaw_matrix(yaw)
         return params, posed, rot, rz, posed @ rz.transpose(1, 2) + shift[:, None]
 
@@ -115,18 +121,21 @@ def optimise(fit_body, objective, starts, settings: BodyFitSettings, deadline: f
             break
         if step % settings.refresh_every == 0:
             with torch.no_grad():
-                params, posed, rot, rz, v = body()
+                params, posed, rot, rz, v = body(rotations=True)
                 n = torch.einsum("bkij,bkj->bki", rot, torch.as_tensor(subset_rest_normals(fit_body, params), dtype=f32))
                 n = n / n.norm(dim=-1, keepdim=True)
                 n = n @ rz.transpose(1, 2)
                 corr, normals, facing = objective.correspondences(v.numpy(), n.numpy())
-            if step and len(history) >= 2 and history[-2] - history[-1] < settings.tolerance * abs(history[-2]):
+            annealed = step >= _ANNEAL_SHARE * settings.steps + 2 * settings.refresh_every
+            if annealed and history[-2] - history[-1] < settings.tolerance * abs(history[-2]):
                 converged = True
                 break
+        anneal = min(1.0, step / max(1.0, _ANNEAL_SHARE * settings.steps))
+        scale = _START_SCALE_M * (settings.robust_scale_m / _START_SCALE_M) ** anneal
         for g, base in zip(opt.param_groups, base_lr):
             g["lr"] = base * (1.0 - 0.8 * step / settings.steps)
         params, posed, rot, rz, v = body()
-        loss = (objective.data(v, corr, normals)
+        loss = (objective.data(v, corr, normals, scale) * (scale / settings.robust_scale_m) ** 2
                 + settings.silhouette_weight * objective.silhouette(v)
                 + settings.free_space_weight * objective.free_space(v, facing)
                 + settings.phenotype_prior_weight * ((phen - phen0) / 0.5).square().sum(1).to(f32)
@@ -134,13 +143,21 @@ def optimise(fit_body, objective, starts, settings: BodyFitSettings, deadline: f
         if floor_seen:
             loss = loss + (shift[:, 2] / _FLOOR_SD_M).square() / len(objective.obs.points)
         values = loss.detach().numpy().astype(np.float64)
+        if _DEBUG and step % settings.refresh_every == 0:
+            with torch.no_grad():
+                print(step, f"scale {scale:.3f}", "data", objective.data(v, corr, normals, scale).numpy().round(3),
+                      "sil", objective.silhouette(v).numpy().round(3), "free", objective.free_space(v, facing).numpy().round(3),
+                      "height", (v[..., 2].max(1).values - v[..., 2].min(1).values).numpy().round(3),
+                      "ph", phen[:, [0, 1, 3, 4]].detach().numpy().round(2).tolist())
         for i in np.flatnonzero(values < best_loss):
             best_loss[i] = values[i]
             best[i] = (params[i].detach().numpy().copy(), angles[i].detach().numpy().astype(np.float64),
-                       float(yaw[i]), shift[i].detach().numpy().astype(np.float64), v[i].detach().numpy(),
+                       float(yaw[i].detach()), shift[i].detach().numpy().astype(np.float64), v[i].detach().numpy(),
                        corr[i], normals[i])
         if step % settings.refresh_every == settings.refresh_every - 1:
             history.append(float(best_loss.min()))
+        if step < _ANNEAL_SHARE * settings.steps:  # the scale still changes: losses are not comparable
+            best_loss[:] = np.inf
         opt.zero_grad(set_to_none=True)
         loss.sum().backward()
         opt.step()

@@ -47,7 +47,7 @@ class BodyFit:
     flags : dict of str to str
         Named warnings (:data:`wbsa.bodyfit.fit.FLAGS`); empty when every check passed.
     seconds : float
-        Wall time of the fit.
+        Wall time of the fit (without loading anny, done once per process).
     steps, restarts : int
     rest_vertices : (n, 3) float64
         The fitted body at rest (anny's frame: +Z up, facing −Y, standing on z = 0).

@@ -229,7 +229,7 @@ def main() -> None:
 
     from bench_estimate import population
 
-    torch.set_num_threads(2)
+    torch.set_num_threads(1)
     t0 = time.perf_counter()
     pop = population(args.subjects, args.survey_share, args.seed)
     others = pop.iloc[np.roll(np.arange(len(pop)), 1)].reset_index(drop=True)

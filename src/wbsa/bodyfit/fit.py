@@ -47,7 +47,6 @@ def _models(spacing_m: float):
     from wbsa.bodies.body_model import BodyModel
     from wbsa.bodyfit.model import FitBody
 
-    torch.set_num_threads(min(2, torch.get_num_threads()))
     body_model = BodyModel()
     return body_model, FitBody(body_model, spacing_m), Anthropometer(body_model)
 
@@ -86,13 +85,7 @@ def fit_body(depth_m: np.ndarray, mask: np.ndarray, camera, floor, *, clothing_m
     """
     import torch
 
-    from wbsa.bodies.posing import pose_vertices
-    from wbsa.bodies.posture import ANGLE_COLUMNS
-    from wbsa.bodyfit.init import first_guesses
-    from wbsa.bodyfit.measures import measure_body
-    from wbsa.bodyfit.objective import Objective
-    from wbsa.bodyfit.observation import check_inputs, observe
-    from wbsa.bodyfit.optimize import optimise
+    from wbsa.bodyfit.observation import check_inputs
 
     if not (isinstance(clothing_m, (int, float)) and math.isfinite(clothing_m) and clothing_m >= 0):
         raise WbsaError(f"clothing_m must be a layer of 0 m or more, got {clothing_m!r}")
@@ -102,6 +95,26 @@ def fit_body(depth_m: np.ndarray, mask: np.ndarray, camera, floor, *, clothing_m
         raise WbsaError(f"azimuth_deg must be a finite number of degrees, got {azimuth_deg!r}")
     depth, mask = check_inputs(depth_m, mask, camera)
     body_model, fit_model, meter = _models(settings.vertex_spacing_m)  # once per process, not timed
+    threads = torch.get_num_threads()
+    torch.set_num_threads(settings.threads)
+    try:
+        return _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fit_model, meter)
+    finally:
+        torch.set_num_threads(threads)
+
+
+def _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fit_model, meter) -> BodyFit:
+    """:func:`fit_body` on checked inputs, with anny loaded."""
+    import torch
+
+    from wbsa.bodies.posing import pose_vertices
+    from wbsa.bodies.posture import ANGLE_COLUMNS
+    from wbsa.bodyfit.init import first_guesses
+    from wbsa.bodyfit.measures import measure_body
+    from wbsa.bodyfit.objective import Objective
+    from wbsa.bodyfit.observation import observe
+    from wbsa.bodyfit.optimize import optimise
+
     t0 = time.perf_counter()
     deadline = t0 + settings.time_budget_s
     rng = np.random.default_rng(np.random.SeedSequence([int(seed), 0xB0D7]))

@@ -103,28 +103,38 @@ class FitBody:
         return v, j
 
     def segment_transforms(self, joints, angles_rad):
-        """Per segment (:data:`~wbsa.bodies.posing.SEGMENTS`, left then right) ``R (b, 3, 3)`` and ``t (b, 3)``.
+        """Every segment's rigid transform, ``R (b, s, 3, 3)`` and ``t (b, s, 3)``.
 
-        Mirrors :func:`wbsa.bodies.posing.segment_transforms`, batched.
+        Segments in :data:`~wbsa.bodies.posing.SEGMENTS` order, left side then right. Mirrors
+        :func:`wbsa.bodies.posing.segment_transforms` (tested against it), with both sides and all seven
+        rotations of a side in one batched Rodrigues call (the cost of a step is the number of operations).
         """
         torch = self.torch
         b = joints.shape[0]
-        a = angles_rad.to(torch.float32).reshape(b, 2, 5)
-        out = []
-        for si, sign in enumerate((1.0, -1.0)):
-            abd, flex, rot, elbow, hip = (a[:, si, m] for m in range(5))
-            j = {name: joints[:, si * 5 + k] for k, name in enumerate(_JOINTS)}
-            upper, fore = j["elbow"] - j["shoulder"], j["wrist"] - j["elbow"]
-            fwd = torch.tensor([0.0, -sign, 0.0]).expand(b, 3)
-            base = rotation(fwd, abd) @ rotation(torch.tensor([-1.0, 0.0, 0.0]).expand(b, 3), flex)
-            twist = sign * unit(upper)
-            ua1 = about(j["shoulder"], base @ rotation(twist, rot / 2))
-            ua2 = about(j["shoulder"], base @ rotation(twist, rot))
-            forearm = then(ua2, about(j["elbow"], rotation(unit(torch.linalg.cross(upper, fore)), elbow)))
-            leg = about(j["hip"], rotation(fwd, hip))
-            foot = then(leg, about(j["ankle"], rotation(fwd, -hip)))
-            out += [ua1, ua2, forearm, leg, foot]
-        return out
+        a = angles_rad.to(torch.float32).reshape(2 * b, 5)  # (body, side) pairs
+        jt = joints.reshape(2 * b, 5, 3)
+        shoulder, elbow_j, wrist, hip_j, ankle = (jt[:, k] for k in range(5))
+        sign = torch.tensor([1.0, -1.0]).repeat(b)
+        abd, flex, rot, elbow, hip = (a[:, m] for m in range(5))
+        upper, fore = elbow_j - shoulder, wrist - elbow_j
+        zero = torch.zeros_like(sign)
+        fwd = torch.stack([zero, -sign, zero], dim=1)
+        back = torch.tensor([-1.0, 0.0, 0.0]).expand(2 * b, 3)
+        twist = sign[:, None] * unit(upper)
+        hinge = unit(torch.linalg.cross(upper, fore))
+        axes = torch.cat([fwd, back, twist, twist, hinge, fwd, fwd])
+        angles = torch.cat([abd, flex, rot / 2, rot, elbow, hip, -hip])
+        r_abd, r_flex, r_tw1, r_tw2, r_elbow, r_hip, r_foot = rotation(axes, angles).reshape(7, 2 * b, 3, 3)
+        base = r_abd @ r_flex
+        ua1 = about(shoulder, base @ r_tw1)
+        ua2 = about(shoulder, base @ r_tw2)
+        forearm = then(ua2, about(elbow_j, r_elbow))
+        leg = about(hip_j, r_hip)
+        foot = then(leg, about(ankle, r_foot))
+        segs = (ua1, ua2, forearm, leg, foot)
+        r = torch.stack([s[0] for s in segs], dim=1).reshape(b, 2 * len(segs), 3, 3)
+        t = torch.stack([s[1] for s in segs], dim=1).reshape(b, 2 * len(segs), 3)
+        return r, t
 
     def pose(self, rest, joints, angles_rad, rotations: bool = False):
         """Posed vertices ``(b, k, 3)`` standing on z = 0 (and, with ``rotations``, each vertex's blended
@@ -134,9 +144,7 @@ class FitBody:
         (mostly zero) weights; at a few thousand vertices this beats gathering the moving ones.
         """
         torch = self.torch
-        transforms = self.segment_transforms(joints, angles_rad)
-        r = torch.stack([t[0] for t in transforms], dim=1)  # (b, s, 3, 3)
-        t = torch.stack([t[1] for t in transforms], dim=1)  # (b, s, 3)
+        r, t = self.segment_transforms(joints, angles_rad)  # (b, s, 3, 3), (b, s, 3)
         moved = torch.einsum("bsij,bkj->bski", r, rest) + t[:, :, None] - rest[:, None]
         posed = rest + torch.einsum("ks,bski->bki", self.weights, moved)
         lowest = posed[..., 2].min(dim=1).values

@@ -11,7 +11,7 @@ Every term is a mean of robust penalties of residuals in units of a scale, so th
   mask beyond a tolerance (pixels turned into metres at the vertex's depth), Huber with scale 1 cm: no body
   where the image shows none;
 * **free space** (:meth:`Objective.free_space`): a camera-facing vertex in front of the surface seen at its
-  pixel by more than 1 cm would hide it; Huber with scale 1 cm;
+  pixel by more than 1 cm plus twice the depth noise would hide it; Huber with scale 1 cm;
 * **priors**: the phenotypes stay near their start (weakly), the local changes near 0.
 """
 
@@ -21,9 +21,14 @@ import numpy as np
 
 from wbsa.bodyfit.observation import Observation
 
-#: Scale (m) of the silhouette and free-space residuals; depth tolerance of the free-space term (m).
+#: Scale (m) of the silhouette and free-space residuals; depth tolerance of the free-space term (m), to which
+#: :data:`FREE_SPACE_NOISE_K` times the depth-noise envelope at the vertex's depth is added
+#: (:func:`wbsa.estimation.cloud.depth_noise_m`, the noisiest supported camera: 2 cm at 3.5 m), so that noise
+#: does not push the body back.
 SURFACE_SCALE_M = 0.01
 FREE_SPACE_TOLERANCE_M = 0.01
+FREE_SPACE_NOISE_K = 2.0
+_Q_STEP = 0.125 / (575.8 * 0.075)
 #: Weight of the tangential part of a point-to-vertex offset against its normal part.
 TANGENTIAL_WEIGHT = 0.1
 
@@ -136,7 +141,11 @@ class Objective:
         c = col.detach().round().long().clamp(0, w - 1)
         seen = self.depth[r, c]
         ok = facing & torch.isfinite(seen)
-        ahead = torch.where(ok, (seen - z - FREE_SPACE_TOLERANCE_M).clamp(min=0.0), torch.zeros_like(z))
+        z0 = z.detach()
+        noise = ((0.0012 + 0.0019 * (z0 - 0.4).square()).square()  # depth_noise_m, in torch
+                 + (_Q_STEP * z0.square()).square() / 12.0).sqrt()
+        tol = FREE_SPACE_TOLERANCE_M + FREE_SPACE_NOISE_K * noise
+        ahead = torch.where(ok, (seen - z - tol).clamp(min=0.0), torch.zeros_like(z))
         return _huber(ahead / SURFACE_SCALE_M).sum(1) / facing.sum(1).clamp(min=1)
 
     # -- correspondences ------------------------------------------------------------------------

@@ -21,6 +21,9 @@ ARM_STARTS = {"a-pose": (0.0, 0.0, 0.0, 0.0), "arms-down": (-32.0, 0.0, 0.0, -35
               "elbows-bent": (-25.0, 0.0, 10.0, 45.0)}
 #: Azimuths tried (degrees).
 YAW_STARTS = np.arange(0.0, 360.0, 30.0)
+#: anny's age parameter of the child starts (about 9 years): the random population stretches children to adult
+#: statures, and a child's head and limbs differ from an adult's of the same height.
+CHILD_AGE = 0.38
 #: Truncation (m) of the observed-to-model distances in the score.
 _TRUNCATE_M = 0.10
 
@@ -75,14 +78,14 @@ def first_guesses(fit_body, objective, n: int, azimuth_deg: float | None = None)
     stature = obs.top_m + 0.01  # the crown is rarely seen from below head height
     age = age_for_stature(stature)
     grid = np.linspace(0.0, 1.0, 11)
-    params = []
+
+    def sized(gender: float, age_param: float) -> np.ndarray:
+        v, _ = fit_body.rest(torch.as_tensor(base_params(gender, age_param, grid)))
+        heights = (v[..., 2].max(1).values - v[..., 2].min(1).values).numpy()
+        return base_params(gender, age_param, [float(np.interp(stature, heights, grid))])[0]
+
     with torch.no_grad():
-        for gender in (0.0, 1.0):
-            p = torch.as_tensor(base_params(gender, age, grid))
-            v, _ = fit_body.rest(p)
-            heights = (v[..., 2].max(1).values - v[..., 2].min(1).values).numpy()
-            params.append(base_params(gender, age, [float(np.interp(stature, heights, grid))])[0])
-        params = torch.as_tensor(np.stack(params))
+        params = torch.as_tensor(np.stack([sized(g, age) for g in (0.0, 1.0)]))
         rest, joints = fit_body.rest(params)
         normals_rest = subset_rest_normals(fit_body, params)
         names = list(ARM_STARTS)
@@ -118,10 +121,23 @@ def first_guesses(fit_body, objective, n: int, azimuth_deg: float | None = None)
     if azimuth_deg is not None:
         off = np.abs((YAW_STARTS[[y for _, y in combos]] - azimuth_deg + 180.0) % 360.0 - 180.0)
         scores = np.where(off <= 45.0, scores, np.inf)
-    order = np.argsort(scores, kind="stable")[:n]
-    chosen = [combos[i] for i in order]
-    return Starts(params=params.numpy()[[sex_i[c] for c, _ in chosen]],
-                  angles_rad=angles[[arm_i[c] for c, _ in chosen]],
-                  yaw_rad=np.radians(-YAW_STARTS[[y for _, y in chosen]]),
-                  shift_m=np.stack([shifts[i] for i in order]), score=scores[order],
-                  label=tuple(labels[i] for i in order))
+    ranked = np.argsort(scores, kind="stable")
+    # half the starts of each sex: the sexes differ most on the unseen side, the grid cannot tell them apart
+    by_sex = [[i for i in ranked if sex_i[combos[i][0]] == s and np.isfinite(scores[i])] for s in (0, 1)]
+    n_child = n // 3 if age >= CHILD_AGE + 0.1 else 0
+    order = []
+    for k in range(n - n_child):
+        first, second = by_sex[k % 2], by_sex[1 - k % 2]
+        pick = first if first else second
+        if pick:
+            order.append(pick.pop(0))
+    order = sorted(order, key=lambda i: scores[i])
+    # (grid index, parameters) of every start; the child starts copy the best views of the adult ones
+    picks = [(i, params.numpy()[sex_i[combos[i][0]]], labels[i]) for i in order]
+    with torch.no_grad():  # anny's children stretched to an adult's stature: another body from the same view
+        picks += [(i, sized(float(p[0]), CHILD_AGE), label + ", child") for i, p, label in picks[:n_child]]
+    return Starts(params=np.stack([p for _, p, _ in picks]),
+                  angles_rad=angles[[arm_i[combos[i][0]] for i, _, _ in picks]],
+                  yaw_rad=np.radians(-YAW_STARTS[[combos[i][1] for i, _, _ in picks]]),
+                  shift_m=np.stack([shifts[i] for i, _, _ in picks]), score=scores[[i for i, _, _ in picks]],
+                  label=tuple(label for _, _, label in picks))

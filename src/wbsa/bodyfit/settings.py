@@ -26,7 +26,8 @@ class BodyFitSettings:
     n_points : int
         Observed points kept (a seeded, even subsample of the subject's returns).
     restarts : int
-        Starting points fitted together in one batch; the best fit is kept.
+        Starting points fitted together in one batch; the best fit is kept. A third of them (from a stature of
+        1.3 m up) are children stretched to the stature (:data:`wbsa.bodyfit.init.CHILD_AGE`).
     steps : int
         Most optimiser steps.
     refresh_every : int
@@ -60,10 +61,10 @@ class BodyFitSettings:
 
     vertex_spacing_m: float = 0.035
     n_points: int = 2000
-    restarts: int = 4
-    steps: int = 150
+    restarts: int = 6
+    steps: int = 200
     refresh_every: int = 10
-    learning_rate: float = 0.02
+    learning_rate: float = 0.05
     robust_loss: RobustLoss = "geman-mcclure"
     robust_scale_m: float = 0.015
     silhouette_tolerance_px: float = 1.0
@@ -73,7 +74,7 @@ class BodyFitSettings:
     local_change_prior_weight: float = 0.01
     local_changes: bool = True
     time_budget_s: float = 30.0
-    tolerance: float = 0.002
+    tolerance: float = 0.0005
     density_model: DensityModel = "constant"
     density_kg_m3: float = 980.0
     threads: int = 1

@@ -121,7 +121,7 @@ def _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fi
     obs = observe(depth, mask, camera, floor, settings.n_points, rng)
     objective = Objective(obs, settings.robust_loss, settings.robust_scale_m, settings.silhouette_tolerance_px)
     with torch.no_grad():
-        starts = first_guesses(fit_model, objective, settings.restarts, azimuth_deg)
+        starts = first_guesses(fit_model, objective, settings.restarts, azimuth_deg, settings.child_starts)
     opt = optimise(fit_model, objective, starts, settings, deadline)
 
     body = measure_body(meter, opt.params, settings.density_model, settings.density_kg_m3)

@@ -67,7 +67,7 @@ def base_params(gender: float, age: float, p_height: np.ndarray) -> np.ndarray:
     return out
 
 
-def first_guesses(fit_body, objective, n: int, azimuth_deg: float | None = None) -> Starts:
+def first_guesses(fit_body, objective, n: int, azimuth_deg: float | None = None, child_starts: bool = False) -> Starts:
     """The ``n`` best starts of the grid (see the module docstring); a stated azimuth keeps them within 45° of it."""
     import torch
     from scipy.spatial import cKDTree
@@ -124,7 +124,7 @@ def first_guesses(fit_body, objective, n: int, azimuth_deg: float | None = None)
     ranked = np.argsort(scores, kind="stable")
     # half the starts of each sex: the sexes differ most on the unseen side, the grid cannot tell them apart
     by_sex = [[i for i in ranked if sex_i[combos[i][0]] == s and np.isfinite(scores[i])] for s in (0, 1)]
-    n_child = n // 3 if age >= CHILD_AGE + 0.1 else 0
+    n_child = n // 3 if child_starts and age >= CHILD_AGE + 0.1 else 0
     order = []
     for k in range(n - n_child):
         first, second = by_sex[k % 2], by_sex[1 - k % 2]

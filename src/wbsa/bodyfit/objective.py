@@ -5,8 +5,9 @@ Every term is a mean of robust penalties of residuals in units of a scale, so th
 * **point-to-surface** (:meth:`Objective.data`): each observed point against its corresponding model vertex
   (the nearest camera-facing one, refreshed every few steps), along that vertex's normal plus a tenth of
   the tangential offset (point-to-plane ICP; the model vertices are ~3 cm apart, so point-to-point would
-  not settle), under a robust penalty of scale ``robust_scale_m`` (Geman–McClure: a stray return costs at
-  most 1);
+  not settle), under a robust penalty of scale ``robust_scale_m`` or 1.5 times the depth noise measured on
+  the subject, whichever is more (Geman–McClure: a stray return costs at most 1; a scale under the noise
+  would treat good returns as strays and leave the body short of them);
 * **silhouette** (:meth:`Objective.silhouette`): how far each model vertex projects outside the subject's
   mask beyond a tolerance (pixels turned into metres at the vertex's depth), Huber with scale 1 cm: no body
   where the image shows none;
@@ -29,6 +30,8 @@ SURFACE_SCALE_M = 0.01
 FREE_SPACE_TOLERANCE_M = 0.01
 FREE_SPACE_NOISE_K = 2.0
 _Q_STEP = 0.125 / (575.8 * 0.075)
+#: The point-to-surface scale is at least this many times the depth noise measured on the subject.
+NOISE_SCALE_K = 1.5
 #: Weight of the tangential part of a point-to-vertex offset against its normal part.
 TANGENTIAL_WEIGHT = 0.1
 
@@ -65,7 +68,8 @@ class Objective:
         self.outside = torch.as_tensor(obs.outside_px)
         self.depth = torch.as_tensor(obs.depth)
         self.robust_loss = robust_loss
-        self.scale = float(robust_scale_m)
+        #: the robust scale: the settings', or 1.5 times the depth noise measured on the subject if more
+        self.scale = max(float(robust_scale_m), NOISE_SCALE_K * obs.noise_m)
         self.tolerance_px = float(silhouette_tolerance_px)
 
     # -- geometry ---------------------------------------------------------------------------

@@ -46,6 +46,8 @@ class Observation:
     floor_seen : bool
     n_returns : int
         The subject's returns before subsampling (floor cut applied).
+    noise_m : float
+        The depth noise measured on the subject (:func:`wbsa.estimation.measure.measured_depth_noise`), metres.
     """
 
     points: np.ndarray
@@ -60,6 +62,7 @@ class Observation:
     top_m: float
     floor_seen: bool
     n_returns: int
+    noise_m: float = 0.0
 
     def to_camera(self, points_f: np.ndarray) -> np.ndarray:
         """(k, 3) view-frame points in camera coordinates."""
@@ -126,6 +129,7 @@ def observe(depth_m: np.ndarray, mask: np.ndarray, camera, floor, n_points: int,
 
     from wbsa.core.backproject import ray_directions
     from wbsa.estimation.cloud import above_floor
+    from wbsa.estimation.measure import measured_depth_noise
 
     valid = mask & (depth_m > 0)
     rows, cols = np.nonzero(valid)
@@ -149,4 +153,5 @@ def observe(depth_m: np.ndarray, mask: np.ndarray, camera, floor, n_points: int,
     return Observation(points=pts_f, basis=basis, origin=origin, camera_position=-basis @ origin,
                        intrinsics=np.array([camera.fx, camera.fy, camera.cx, camera.cy], dtype=np.float64),
                        skew=float(getattr(camera, "skew", 0.0) or 0.0), outside_px=outside, depth=depth,
-                       crop=(int(r0), int(c0)), top_m=top, floor_seen=floor is not None, n_returns=n_returns)
+                       crop=(int(r0), int(c0)), top_m=top, floor_seen=floor is not None, n_returns=n_returns,
+                       noise_m=measured_depth_noise(depth_m, valid))

@@ -18,6 +18,9 @@ from wbsa.bodies.body_model import PHENOTYPE_COLUMNS
 from wbsa.bodyfit.settings import ANGLE_LIMITS_DEG, BodyFitSettings
 
 _N_PH = len(PHENOTYPE_COLUMNS)
+_AGE = PHENOTYPE_COLUMNS.index("p_age")
+#: The age prior counts as this many observed points' worth of squared residual (in SDs).
+_AGE_PRIOR_POINTS = 20.0
 #: Standard deviation (m) of the vertical shift of a body that stands on a seen floor.
 _FLOOR_SD_M = 0.01
 #: Robust scale (m) of the point-to-surface term at the first step; it shrinks geometrically to the settings'
@@ -131,15 +134,18 @@ def optimise(fit_body, objective, starts, settings: BodyFitSettings, deadline: f
                 converged = True
                 break
         anneal = min(1.0, step / max(1.0, _ANNEAL_SHARE * settings.steps))
-        scale = _START_SCALE_M * (settings.robust_scale_m / _START_SCALE_M) ** anneal
+        final = objective.scale
+        scale = max(final, _START_SCALE_M * (final / _START_SCALE_M) ** anneal)
         for g, base in zip(opt.param_groups, base_lr):
             g["lr"] = base * (1.0 - 0.8 * step / settings.steps)
         params, posed, rot, rz, v = body()
-        loss = (objective.data(v, corr, normals, scale) * (scale / settings.robust_scale_m) ** 2
+        loss = (objective.data(v, corr, normals, scale) * (scale / final) ** 2
                 + settings.silhouette_weight * objective.silhouette(v)
                 + settings.free_space_weight * objective.free_space(v, facing)
                 + settings.phenotype_prior_weight * ((phen - phen0) / 0.5).square().sum(1).to(f32)
-                + settings.local_change_prior_weight * local.square().sum(1).to(f32))
+                + settings.local_change_prior_weight * local.square().sum(1).to(f32)
+                + ((phen[:, _AGE] - phen0[:, _AGE]) / settings.age_prior_sd).square().to(f32) / len(objective.obs.points)
+                * _AGE_PRIOR_POINTS)
         if floor_seen:
             loss = loss + (shift[:, 2] / _FLOOR_SD_M).square() / len(objective.obs.points)
         values = loss.detach().numpy().astype(np.float64)

@@ -26,8 +26,10 @@ class BodyFitSettings:
     n_points : int
         Observed points kept (a seeded, even subsample of the subject's returns).
     restarts : int
-        Starting points fitted together in one batch; the best fit is kept. A third of them (from a stature of
-        1.3 m up) are children stretched to the stature (:data:`wbsa.bodyfit.init.CHILD_AGE`).
+        Starting points fitted together in one batch; the best fit is kept.
+    child_starts : bool
+        Make a third of the starts (from a stature of 1.3 m up) children stretched to the stature
+        (:data:`wbsa.bodyfit.init.CHILD_AGE`), as anny's random population has; off, a tall person is an adult.
     steps : int
         Most optimiser steps.
     refresh_every : int
@@ -43,7 +45,10 @@ class BodyFitSettings:
         Weights of the silhouette term (no body where the image shows none) and the free-space term (no
         body in front of a seen surface), against the point-to-surface term.
     phenotype_prior_weight, local_change_prior_weight : float
-        Weak quadratic pulls of the phenotypes towards their start and of the local changes towards 0.
+        Weak quadratic pulls of the phenotypes towards their start (SD 0.5) and of the local changes towards 0.
+    age_prior_sd : float
+        SD of the pull of anny's age parameter towards its start, the typical age of the measured stature
+        (:func:`wbsa.bodyfit.init.age_for_stature`): one view tells a child from a short adult poorly.
     local_changes : bool
         Fit anny's four local changes (waist, hips, belly, buttocks) besides the phenotypes.
     time_budget_s : float
@@ -62,6 +67,7 @@ class BodyFitSettings:
     vertex_spacing_m: float = 0.035
     n_points: int = 2000
     restarts: int = 6
+    child_starts: bool = False
     steps: int = 200
     refresh_every: int = 10
     learning_rate: float = 0.05
@@ -72,6 +78,7 @@ class BodyFitSettings:
     free_space_weight: float = 1.0
     phenotype_prior_weight: float = 0.01
     local_change_prior_weight: float = 0.01
+    age_prior_sd: float = 0.1
     local_changes: bool = True
     time_budget_s: float = 30.0
     tolerance: float = 0.0005
@@ -85,7 +92,7 @@ class BodyFitSettings:
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
                 raise SettingsError(name, f"must be a positive number, got {value!r}")
 
-        for name in ("vertex_spacing_m", "learning_rate", "robust_scale_m", "time_budget_s", "density_kg_m3",
+        for name in ("age_prior_sd", "vertex_spacing_m", "learning_rate", "robust_scale_m", "time_budget_s", "density_kg_m3",
                      "tolerance"):
             positive(name)
         for name in ("n_points", "restarts", "steps", "refresh_every", "threads"):

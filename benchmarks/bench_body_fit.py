@@ -11,9 +11,12 @@ and build, beside Du Bois and Mosteller given the TRUE height and mass.
 
     python benchmarks/bench_body_fit.py --subjects 20 --seed 1000 [--out fits.csv] [--model MODEL.npz]
     python benchmarks/bench_body_fit.py --subjects 20 --displace   # bodies outside anny's shape space
+    python benchmarks/bench_body_fit.py --calibrate --subjects 40 --seed 2000   # rebuild the interval calibration
 
 ``--displace``: each subject's skin gets seeded smooth local displacements of 1–3 cm (a few Gaussian bumps
 along the normals; truth: the displaced skin's own area), as fat or muscle that anny's shapes cannot make.
+``--calibrate``: fit these subjects (give a seed other than the benchmark's 1000 and training's 0, 1) and store
+the split-conformal bounds of the WBSA error (:mod:`wbsa.bodyfit.interval`) in ``src/wbsa/data``.
 ``--model``: also run the regression route (``wbsa.estimate``) on the same images and print it beside.
 """
 
@@ -115,7 +118,7 @@ def fit_chunk(population: pd.DataFrame, others: pd.DataFrame, first: int, seed: 
             row.update(error=str(exc), seconds=time.perf_counter() - t0)
             rows.append(row)
             continue
-        row.update(error="", seconds=fit.seconds, seg_seconds=time.perf_counter() - t0 - fit.seconds,
+        row.update(error="", seconds=fit.seconds, fit_lo_m2=fit.wbsa_lo_m2, fit_hi_m2=fit.wbsa_hi_m2, seg_seconds=time.perf_counter() - t0 - fit.seconds,
                    fit_wbsa_m2=fit.wbsa_m2, fit_stature_m=fit.stature_m, fit_mass_kg=fit.mass_kg,
                    fit_volume_m3=fit.volume_m3, fit_azimuth_deg=fit.azimuth_deg, fit_elevation_deg=fit.elevation_deg,
                    fit_distance_m=fit.distance_m, residual_m=fit.residual_m, inlier_share=fit.inlier_share,
@@ -168,6 +171,8 @@ def report(res: pd.DataFrame, wall_s: float, displace: bool) -> None:
     fb = (psi <= 30) | (psi >= 150)
     sd = float(np.std(err, ddof=1)) if len(err) > 1 else float("nan")
     stature_cm = 100 * np.abs(ok["fit_stature_m"] - ok["stature_m"])
+    inside = (ok["fit_lo_m2"] <= ok["wbsa_m2"]) & (ok["wbsa_m2"] <= ok["fit_hi_m2"])
+    coverage = f"{inside.mean():.3f} (n={len(ok)})" if ok["fit_lo_m2"].notna().all() else "missing (no calibration)"
     mass = 100 * np.abs(ok["fit_mass_kg"] / ok["mass_kg"] - 1)
     rows = [
         ("WBSA MAPE, all views, %", f"{np.mean(np.abs(err)):.2f}", "≤ 2.0" if displace else "≤ 1.0",
@@ -179,7 +184,7 @@ def report(res: pd.DataFrame, wall_s: float, displace: bool) -> None:
         ("Bland–Altman 95 % limits of agreement, %", f"{np.mean(err) - 1.96 * sd:+.2f} … {np.mean(err) + 1.96 * sd:+.2f}",
          "", None),
         ("largest |error|, %", f"{np.max(np.abs(err)):.2f}", "", None),
-        ("95 % interval coverage", "missing (no interval yet)", "0.93–0.97", None),
+        ("95 % interval coverage (split conformal, calibrated on seed 2000)", coverage, "0.93–0.97", None),
         ("stature error, median |err|, cm", f"{np.median(stature_cm):.2f}", "≤ 1.0",
          np.median(stature_cm) <= TARGETS["stature_cm"]),
         ("mass MAPE (constant 980 kg/m³, as the truth), %", f"{np.mean(mass):.2f}", "≤ 5", np.mean(mass) <= 5.0),
@@ -223,7 +228,10 @@ def main() -> None:
     ap.add_argument("--model", default=None, help="also run the regression route with this estimator model (.npz)")
     ap.add_argument("--time-budget", type=float, default=30.0, help="fit time budget per image, s (default 30)")
     ap.add_argument("--out", default=None, help="write the per-image results here (.csv)")
+    ap.add_argument("--calibrate", action="store_true", help="store the interval calibration from these fits")
     args = ap.parse_args()
+    if args.calibrate and args.seed in (0, 1, 1000):
+        ap.error("--calibrate needs subjects outside the benchmark and training: give another --seed, e.g. 2000")
 
     import torch
 
@@ -242,6 +250,15 @@ def main() -> None:
     print(f"\n{len(pop)} subjects ({(pop['population'] == 'survey').sum()} survey-matched), seed {args.seed}, images "
           f"{args.first}–{stop - 1}" + (", displaced skin (outside anny's shapes)" if args.displace else ""))
     report(res, time.perf_counter() - t0, args.displace)
+    if args.calibrate:
+        from wbsa.bodyfit.interval import calibrate, save
+
+        ok = res[res["error"] == ""]
+        command = (f"python benchmarks/bench_body_fit.py --calibrate --subjects {args.subjects} --seed {args.seed}"
+                   + (f" --survey-share {args.survey_share:g}" if args.survey_share != 0.4 else ""))
+        cal = calibrate((ok["fit_wbsa_m2"] / ok["wbsa_m2"] - 1).to_numpy(), 0.95, command)
+        print(f"\ninterval calibration: {cal.n} fits, relative error bounds {100 * cal.error_lo:+.2f} % … "
+              f"{100 * cal.error_hi:+.2f} %; written to {save(cal)}")
 
 
 if __name__ == "__main__":

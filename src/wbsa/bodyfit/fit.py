@@ -167,9 +167,14 @@ def _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fi
         flags["steep_view"] = f"elevation {elevation:.0f}°"
 
     m = body["measures"]
+    from wbsa.bodyfit.interval import load
+
+    cal = load()
+    lo, hi = cal.interval(float(m["wbsa_m2"])) if cal is not None else (math.nan, math.nan)
     tapes = {k: float(v) for k, v in m.items() if k.endswith("_circ_m") or k.endswith("_width_m")}
     return BodyFit(
-        wbsa_m2=float(m["wbsa_m2"]), stature_m=float(m["stature_m"]), volume_m3=float(m["volume_m3"]),
+        wbsa_m2=float(m["wbsa_m2"]), wbsa_lo_m2=lo, wbsa_hi_m2=hi, level=cal.level if cal is not None else math.nan,
+        stature_m=float(m["stature_m"]), volume_m3=float(m["volume_m3"]),
         mass_kg=float(m["mass_kg"]), bmi=float(m["bmi"]), tapes=tapes, sex="male" if body["male"] else "female",
         age_years=body["age_years"], parameters={k: float(v) for k, v in table.items()},
         posture_deg=dict(zip(ANGLE_COLUMNS, angles_deg.tolist())), azimuth_deg=azimuth, elevation_deg=elevation,

@@ -20,6 +20,10 @@ class BodyFit:
     wbsa_m2 : float
         Skin area of the fitted body at rest, measured as the population's ``wbsa_m2`` (anny's skin: the shell
         without eyeballs, tongue and the inner faces of eyes and mouth; fingers and toes included).
+    wbsa_lo_m2, wbsa_hi_m2 : float
+        The split-conformal interval of :mod:`wbsa.bodyfit.interval` (NaN when no calibration is stored).
+    level : float
+        Its coverage (NaN without one).
     stature_m, volume_m3, mass_kg, bmi : float
         Of the fitted body at rest; mass and BMI from the composition model of the settings
         (``density_model``; constant 980 kg/m³ by default, as the population tables).
@@ -58,6 +62,9 @@ class BodyFit:
     """
 
     wbsa_m2: float
+    wbsa_lo_m2: float
+    wbsa_hi_m2: float
+    level: float
     stature_m: float
     volume_m3: float
     mass_kg: float
@@ -84,7 +91,9 @@ class BodyFit:
 
     def __repr__(self) -> str:
         flags = f", flags: {', '.join(self.flags)}" if self.flags else ""
-        return (f"BodyFit(WBSA {self.wbsa_m2:.3f} m², stature {self.stature_m:.3f} m, mass {self.mass_kg:.1f} kg, "
+        interval = (f" [{self.wbsa_lo_m2:.3f}–{self.wbsa_hi_m2:.3f}, {100 * self.level:.0f} %]"
+                    if self.level == self.level else "")
+        return (f"BodyFit(WBSA {self.wbsa_m2:.3f} m²{interval}, stature {self.stature_m:.3f} m, mass {self.mass_kg:.1f} kg, "
                 f"{self.sex}, azimuth {self.azimuth_deg:.0f}°, residual {1000 * self.residual_m:.1f} mm, "
                 f"{self.seconds:.1f} s{flags})")
 
@@ -104,10 +113,11 @@ class BodyFit:
 
     def to_dict(self) -> dict:
         """JSON-ready measures, view, fit and flags (without the meshes)."""
-        out = {k: getattr(self, k) for k in ("wbsa_m2", "stature_m", "volume_m3", "mass_kg", "bmi", "sex", "age_years",
+        out = {k: getattr(self, k) for k in ("wbsa_m2", "wbsa_lo_m2", "wbsa_hi_m2", "level", "stature_m", "volume_m3", "mass_kg", "bmi", "sex", "age_years",
                                              "azimuth_deg", "elevation_deg", "distance_m", "residual_m", "inlier_share",
                                              "loss", "converged", "seconds", "steps", "restarts")}
-        out = {k: (round(v, 6) if isinstance(v, float) else v) for k, v in out.items()}
+        out = {k: (None if isinstance(v, float) and v != v else round(v, 6) if isinstance(v, float) else v)
+               for k, v in out.items()}
         for name in ("tapes", "parameters", "posture_deg"):
             out[name] = {k: round(float(v), 6) for k, v in getattr(self, name).items()}
         out["flags"] = dict(self.flags)

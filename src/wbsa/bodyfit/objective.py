@@ -11,6 +11,11 @@ Every term is a mean of robust penalties of residuals in units of a scale, so th
 * **silhouette** (:meth:`Objective.silhouette`): how far each model vertex projects outside the subject's
   mask beyond a tolerance (pixels turned into metres at the vertex's depth), Huber with scale 1 cm: no body
   where the image shows none;
+* **contour** (:meth:`Objective.contour`): each outline pixel of the subject against the projection of its
+  nearest model vertex on the body's outline (a vertex whose normal is near perpendicular to its viewing
+  ray), in metres at the pixel's depth, Geman–McClure with scale 1 cm: body wherever the image shows the
+  subject, measured across the outline, where the image is sharper (about a pixel, 5 mm at 3.5 m) than the
+  depth (2 cm of noise at 3.5 m);
 * **free space** (:meth:`Objective.free_space`): a camera-facing vertex in front of the surface seen at its
   pixel by more than 1 cm plus twice the depth noise would hide it; Huber with scale 1 cm;
 * **priors**: the phenotypes stay near their start (weakly), the local changes near 0.
@@ -32,6 +37,8 @@ FREE_SPACE_NOISE_K = 2.0
 _Q_STEP = 0.125 / (575.8 * 0.075)
 #: The point-to-surface scale is at least this many times the depth noise measured on the subject.
 NOISE_SCALE_K = 1.5
+#: A model vertex is on the body's outline when the cosine between its normal and its viewing ray is below this.
+OUTLINE_COS = 0.3
 #: Weight of the tangential part of a point-to-vertex offset against its normal part.
 TANGENTIAL_WEIGHT = 0.1
 
@@ -68,6 +75,9 @@ class Objective:
         self.outside = torch.as_tensor(obs.outside_px)
         self.depth = torch.as_tensor(obs.depth)
         self.robust_loss = robust_loss
+        self.contour_px = torch.as_tensor(obs.contour_px if obs.contour_px is not None else np.zeros((0, 2)), dtype=f32)
+        self.contour_depth = torch.as_tensor(obs.contour_depth if obs.contour_depth is not None else np.zeros(0),
+                                             dtype=f32)
         #: the robust scale: the settings', or 1.5 times the depth noise measured on the subject if more
         self.scale = max(float(robust_scale_m), NOISE_SCALE_K * obs.noise_m)
         self.tolerance_px = float(silhouette_tolerance_px)
@@ -151,6 +161,41 @@ class Objective:
         tol = FREE_SPACE_TOLERANCE_M + FREE_SPACE_NOISE_K * noise
         ahead = torch.where(ok, (seen - z - tol).clamp(min=0.0), torch.zeros_like(z))
         return _huber(ahead / SURFACE_SCALE_M).sum(1) / facing.sum(1).clamp(min=1)
+
+    def contour(self, v, corr):
+        """(b,) mean robust distance (scale 1 cm) of the outline pixels to their outline vertices ``corr (b, c)``."""
+        torch = self.torch
+        if corr is None or corr.shape[1] == 0:
+            return torch.zeros(v.shape[0])
+        row, col, _ = self.project(v)
+        idx = corr
+        dr = torch.gather(row, 1, idx) - self.contour_px[None, :, 0]
+        dc = torch.gather(col, 1, idx) - self.contour_px[None, :, 1]
+        metres = (dr.square() + dc.square() + 1e-9).sqrt() * self.contour_depth[None] / self.fx
+        r2 = (metres / SURFACE_SCALE_M).square()
+        return (r2 / (1.0 + r2)).mean(1)
+
+    def contour_correspondences(self, v: np.ndarray, normals: np.ndarray):
+        """Nearest outline vertex (in the image) of every outline pixel, per restart: ``(b, c)`` int64 tensor."""
+        from scipy.spatial import cKDTree
+
+        torch = self.torch
+        if self.contour_px.shape[0] == 0:
+            return None
+        with torch.no_grad():
+            row, col, _ = self.project(torch.as_tensor(v, dtype=torch.float32))
+        ray = v - self.obs.camera_position[None, None]
+        ray /= np.linalg.norm(ray, axis=-1, keepdims=True)
+        grazing = np.abs((ray * normals).sum(-1)) < OUTLINE_COS
+        corr = np.empty((v.shape[0], self.contour_px.shape[0]), dtype=np.int64)
+        pix = self.contour_px.numpy()
+        for b in range(v.shape[0]):
+            ids = np.flatnonzero(grazing[b])
+            if len(ids) < 10:
+                ids = np.arange(v.shape[1])
+            _, nearest = cKDTree(np.stack([row[b, ids].numpy(), col[b, ids].numpy()], 1)).query(pix, workers=1)
+            corr[b] = ids[nearest]
+        return torch.as_tensor(corr)
 
     # -- correspondences ------------------------------------------------------------------------
     def correspondences(self, v: np.ndarray, normals: np.ndarray):

@@ -14,6 +14,10 @@ import numpy as np
 
 from wbsa.errors import WbsaError
 
+#: Reach (pixels) of the nearest-surface depth map of the free-space term.
+_FREE_REACH_PX = 2
+#: Most outline pixels kept for the contour term.
+MAX_CONTOUR = 800
 #: Pixels of margin kept around the subject's mask in the silhouette's distance map.
 _PAD_PX = 24
 
@@ -38,7 +42,8 @@ class Observation:
     outside_px : (h', w') float32
         Distance (pixels) from each pixel of a crop around the mask to the nearest subject pixel; 0 on it.
     depth : (h', w') float32
-        The subject's z-depth on the same crop (metres), +inf off the subject.
+        The nearest subject depth within 2 pixels of each subject pixel of the same crop (metres), +inf off the
+        subject.
     crop : (int, int)
         Row and column of the crop's first pixel in the image.
     top_m : float
@@ -48,6 +53,11 @@ class Observation:
         The subject's returns before subsampling (floor cut applied).
     noise_m : float
         The depth noise measured on the subject (:func:`wbsa.estimation.measure.measured_depth_noise`), metres.
+    contour_px : (c, 2) float64
+        Crop (row, col) of the subject's outline pixels that border the background (not an occluder in front,
+        not the image border), a seeded subsample of at most :data:`MAX_CONTOUR`.
+    contour_depth : (c,) float64
+        Their depth (m).
     """
 
     points: np.ndarray
@@ -63,6 +73,8 @@ class Observation:
     floor_seen: bool
     n_returns: int
     noise_m: float = 0.0
+    contour_px: np.ndarray = None
+    contour_depth: np.ndarray = None
 
     def to_camera(self, points_f: np.ndarray) -> np.ndarray:
         """(k, 3) view-frame points in camera coordinates."""
@@ -148,10 +160,47 @@ def observe(depth_m: np.ndarray, mask: np.ndarray, camera, floor, n_points: int,
     c0, c1 = max(cols.min() - _PAD_PX, 0), min(cols.max() + _PAD_PX + 1, depth_m.shape[1])
     sub = valid[r0:r1, c0:c1]
     outside = ndimage.distance_transform_edt(~sub).astype(np.float32)
-    depth = np.where(sub, depth_m[r0:r1, c0:c1], np.inf).astype(np.float32)
+    # the nearest surface within 2 pixels: a vertex on an arm's outline that rounds onto the trunk behind it
+    # (or onto the floor) must not count as hiding it
+    depth = ndimage.maximum_filter(np.where(sub, -depth_m[r0:r1, c0:c1], -np.inf), size=2 * _FREE_REACH_PX + 1)
+    depth = np.where(sub, -depth, np.inf).astype(np.float32)
     top = float(np.quantile(pts_f[:, 2], 0.998))
+    contour_px, contour_depth = outline(depth_m[r0:r1, c0:c1], sub, (r0, c0), depth_m.shape, rng)
     return Observation(points=pts_f, basis=basis, origin=origin, camera_position=-basis @ origin,
                        intrinsics=np.array([camera.fx, camera.fy, camera.cx, camera.cy], dtype=np.float64),
                        skew=float(getattr(camera, "skew", 0.0) or 0.0), outside_px=outside, depth=depth,
                        crop=(int(r0), int(c0)), top_m=top, floor_seen=floor is not None, n_returns=n_returns,
-                       noise_m=measured_depth_noise(depth_m, valid))
+                       noise_m=measured_depth_noise(depth_m, valid), contour_px=contour_px,
+                       contour_depth=contour_depth)
+
+
+def outline(depth: np.ndarray, sub: np.ndarray, corner: tuple[int, int], shape: tuple[int, int],
+            rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """The subject's outline pixels on a crop that border background, and their depths.
+
+    An outline pixel (a subject pixel with a non-subject 4-neighbour) is kept when none of its non-subject
+    neighbours is nearer the camera than it by more than 5 cm (an occluder: the outline there is not the
+    body's) and it is not on the image border (the body may go on beyond it).
+    """
+    from scipy import ndimage
+
+    h, w = sub.shape
+    edge = sub & ~ndimage.binary_erosion(sub)
+    near = np.zeros_like(sub)
+    for dr, dc in ((1, 0), (-1, 0), (0, 1), (0, -1)):
+        shifted_sub = np.zeros_like(sub)
+        shifted_depth = np.zeros_like(depth)
+        rs, rd = (slice(dr, None), slice(None, h - dr)) if dr >= 0 else (slice(None, h + dr), slice(-dr, None))
+        cs, cd = (slice(dc, None), slice(None, w - dc)) if dc >= 0 else (slice(None, w + dc), slice(-dc, None))
+        shifted_sub[rd, cd] = sub[rs, cs]
+        shifted_depth[rd, cd] = depth[rs, cs]
+        occluder = ~shifted_sub & (shifted_depth > 0) & (shifted_depth < depth - 0.05)
+        near |= occluder
+    rows, cols = np.nonzero(edge & ~near)
+    r_img, c_img = rows + corner[0], cols + corner[1]
+    inside = (r_img > 0) & (c_img > 0) & (r_img < shape[0] - 1) & (c_img < shape[1] - 1)
+    rows, cols = rows[inside], cols[inside]
+    if len(rows) > MAX_CONTOUR:
+        keep = np.sort(rng.choice(len(rows), MAX_CONTOUR, replace=False))
+        rows, cols = rows[keep], cols[keep]
+    return np.stack([rows, cols], axis=1).astype(np.float64), depth[rows, cols].astype(np.float64)

@@ -129,6 +129,7 @@ def optimise(fit_body, objective, starts, settings: BodyFitSettings, deadline: f
                 n = n / n.norm(dim=-1, keepdim=True)
                 n = n @ rz.transpose(1, 2)
                 corr, normals, facing = objective.correspondences(v.numpy(), n.numpy())
+                contour_corr = objective.contour_correspondences(v.numpy(), n.numpy())
             annealed = step >= _ANNEAL_SHARE * settings.steps + 2 * settings.refresh_every
             if annealed and history[-2] - history[-1] < settings.tolerance * abs(history[-2]):
                 converged = True
@@ -141,6 +142,7 @@ def optimise(fit_body, objective, starts, settings: BodyFitSettings, deadline: f
         params, posed, rot, rz, v = body()
         loss = (objective.data(v, corr, normals, scale) * (scale / final) ** 2
                 + settings.silhouette_weight * objective.silhouette(v)
+                + settings.contour_weight * objective.contour(v, contour_corr)
                 + settings.free_space_weight * objective.free_space(v, facing)
                 + settings.phenotype_prior_weight * ((phen - phen0) / 0.5).square().sum(1).to(f32)
                 + settings.local_change_prior_weight * local.square().sum(1).to(f32)

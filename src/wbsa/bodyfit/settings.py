@@ -41,9 +41,10 @@ class BodyFitSettings:
         Scale of the robust penalty of the point-to-surface residuals.
     silhouette_tolerance_px : float
         Pixels a model vertex may project outside the subject's mask before it is penalised.
-    silhouette_weight, free_space_weight : float
-        Weights of the silhouette term (no body where the image shows none) and the free-space term (no
-        body in front of a seen surface), against the point-to-surface term.
+    silhouette_weight, contour_weight, free_space_weight : float
+        Weights of the silhouette term (no body where the image shows none), the contour term (the body's
+        outline on the subject's) and the free-space term (no body in front of a seen surface), against the
+        point-to-surface term.
     phenotype_prior_weight, local_change_prior_weight : float
         Weak quadratic pulls of the phenotypes towards their start (SD 0.5) and of the local changes towards 0.
     age_prior_sd : float
@@ -75,6 +76,7 @@ class BodyFitSettings:
     robust_scale_m: float = 0.015
     silhouette_tolerance_px: float = 1.0
     silhouette_weight: float = 1.0
+    contour_weight: float = 1.0
     free_space_weight: float = 1.0
     phenotype_prior_weight: float = 0.01
     local_change_prior_weight: float = 0.01
@@ -99,7 +101,7 @@ class BodyFitSettings:
             value = getattr(self, name)
             if not isinstance(value, int) or value < 1:
                 raise SettingsError(name, f"must be a whole number of at least 1, got {value!r}")
-        for name in ("silhouette_tolerance_px", "silhouette_weight", "free_space_weight", "phenotype_prior_weight",
+        for name in ("silhouette_tolerance_px", "silhouette_weight", "contour_weight", "free_space_weight", "phenotype_prior_weight",
                      "local_change_prior_weight"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):

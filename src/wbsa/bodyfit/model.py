@@ -11,6 +11,8 @@ it), and the body is shifted to stand on z = 0. All in torch, batched over resta
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from wbsa.bodies.body_model import LOCAL_CHANGE_COLUMNS, PHENOTYPE_COLUMNS, BodyModel
@@ -76,9 +78,8 @@ class FitBody:
         anny = body_model.anny
         ref = body_model.rest_bodies(reference_adult(0.0)).vertices[0]
         self.index = even_vertex_subset(ref, body_model.skin_faces, spacing_m)
-        idx = torch.as_tensor(self.index)
-        self.template = anny.template_vertices[idx].to(torch.float32)
-        self.basis = anny.blendshapes[:, idx, :].to(torch.float32).reshape(anny.blendshapes.shape[0], -1).contiguous()
+        self.template_full = anny.template_vertices.to(torch.float32)
+        self.basis_full = anny.blendshapes.to(torch.float32)  # (c, n, 3)
         rig = body_model.rig
         joint_ids = [rig.joints[s][j] for s in ("l", "r") for j in _JOINTS]
         self.joint_template = anny.template_bone_heads[joint_ids].to(torch.float32)
@@ -87,18 +88,48 @@ class FitBody:
         dense = np.zeros((len(body_model.vertex_bone), 2 * len(SEGMENTS)))
         for s, (rows, w) in enumerate(zip(rig.skin.rows, rig.skin.weights)):
             dense[rig.skin.vertices[rows], s] = w
-        self.weights = torch.as_tensor(dense[self.index], dtype=torch.float32)
-        #: (k,) bool: subset vertices that belong to a limb moved by posing (weight > 0.5)
-        self.limb = self.weights.sum(1).numpy() > 0.5
+        self.weights_full = torch.as_tensor(dense, dtype=torch.float32)
+        #: the vertex subset every step moves
+        self.subset = self.select(self.index)
+
+    def select(self, index: np.ndarray) -> "Selection":
+        """The blendshapes and skinning weights of the vertices ``index (m,)``."""
+        idx = self.torch.as_tensor(np.asarray(index, dtype=np.int64))
+        return Selection(np.asarray(index), self.template_full[idx],
+                         self.basis_full[:, idx, :].reshape(self.basis_full.shape[0], -1), self.weights_full[idx])
 
     def __len__(self) -> int:
         return len(self.index)
 
-    def rest(self, params):
-        """Rest vertices ``(b, k, 3)`` and joints ``(b, 10, 3)`` (float32) of ``(b, 15)`` float64 body parameters."""
+    def full_posed(self, params, angles_rad: np.ndarray, yaw_rad: np.ndarray, shift_m: np.ndarray) -> np.ndarray:
+        """(b, n, 3) float64 every vertex of every body, posed (:func:`wbsa.bodies.posing.pose_vertices`) and placed
+        (turned by ``yaw_rad (b,)``, shifted by ``shift_m (b, 3)``); no gradient."""
+        import anny.skinning.skinning as skinning
+
+        from wbsa.bodies.posing import pose_vertices
+
+        torch = self.torch
+        model = self.body_model
+        with torch.no_grad():
+            coeffs = model.coefficients(params.detach().to(torch.float64))
+            rest = model.anny.get_rest_vertices(coeffs).numpy()
+            heads = skinning.apply_linear_blendshape(model.anny.template_bone_heads, model.anny.bone_heads_blendshapes,
+                                                     coeffs).numpy()
+        out = np.empty_like(rest)
+        for b in range(len(rest)):
+            posed = pose_vertices(rest[b], heads[b], np.degrees(angles_rad[b]), model.rig)
+            c, s = np.cos(yaw_rad[b]), np.sin(yaw_rad[b])
+            rz = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+            out[b] = posed @ rz.T + shift_m[b]
+        return out
+
+    def rest(self, params, selection: "Selection | None" = None):
+        """Rest vertices ``(b, m, 3)`` of a selection (default the subset) and joints ``(b, 10, 3)`` (float32) of
+        ``(b, 15)`` float64 body parameters."""
+        sel = self.subset if selection is None else selection
         coeffs = self.body_model.coefficients(params).to(self.torch.float32)
         b = coeffs.shape[0]
-        v = self.template[None] + (coeffs @ self.basis).reshape(b, -1, 3)
+        v = sel.template[None] + (coeffs @ sel.basis).reshape(b, -1, 3)
         j = self.joint_template[None] + (coeffs @ self.joint_basis).reshape(b, -1, 3)
         return v, j
 
@@ -136,7 +167,7 @@ class FitBody:
         t = torch.stack([s[1] for s in segs], dim=1).reshape(b, 2 * len(segs), 3)
         return r, t
 
-    def pose(self, rest, joints, angles_rad, rotations: bool = False):
+    def pose(self, rest, joints, angles_rad, rotations: bool = False, selection: "Selection | None" = None):
         """Posed vertices ``(b, k, 3)`` standing on z = 0 (and, with ``rotations``, each vertex's blended
         rotation ``(b, k, 3, 3)``, for its normal).
 
@@ -145,14 +176,34 @@ class FitBody:
         """
         torch = self.torch
         r, t = self.segment_transforms(joints, angles_rad)  # (b, s, 3, 3), (b, s, 3)
+        weights = (self.subset if selection is None else selection).weights
         moved = torch.einsum("bsij,bkj->bski", r, rest) + t[:, :, None] - rest[:, None]
-        posed = rest + torch.einsum("ks,bski->bki", self.weights, moved)
+        posed = rest + torch.einsum("ks,bski->bki", weights, moved)
         lowest = posed[..., 2].min(dim=1).values
         posed = posed - torch.stack([torch.zeros_like(lowest), torch.zeros_like(lowest), lowest], dim=1)[:, None]
         if not rotations:
             return posed
-        blend = torch.eye(3) + torch.einsum("ks,bsij->bkij", self.weights, r - torch.eye(3))
+        blend = torch.eye(3) + torch.einsum("ks,bsij->bkij", weights, r - torch.eye(3))
         return posed, blend
+
+
+@dataclass(frozen=True)
+class Selection:
+    """Some vertices of anny's mesh, ready for :meth:`FitBody.rest` and :meth:`FitBody.pose`.
+
+    Attributes
+    ----------
+    index : (m,) int
+    template : (m, 3) float32 tensor
+    basis : (c, 3 m) float32 tensor
+    weights : (m, s) float32 tensor
+        Skinning weights on the posed segments.
+    """
+
+    index: np.ndarray
+    template: object
+    basis: object
+    weights: object
 
 
 def rotation(axis, angle):

@@ -118,24 +118,34 @@ class Objective:
             return self.torch.where(r <= 1.0, 0.5 * r2, r - 0.5)
         return r2 / (1.0 + r2)
 
-    def data(self, v, corr, normals, scale_m: float | None = None):
-        """(b,) mean robust point-to-surface cost: observed points vs vertices ``corr (b, p)`` with ``normals (b, p, 3)``.
+    def surface_points(self, v_all, tri, bary):
+        """The matched surface points ``(b, p, 3)`` and their unit triangle normals of vertices ``v_all (b, m, 3)``,
+        triangles ``tri (b, p, 3)`` (positions in ``v_all``) and barycentric weights ``bary (b, p, 3)``."""
+        torch = self.torch
+        b, p = tri.shape[:2]
+        corners = torch.gather(v_all, 1, tri.reshape(b, -1, 1).expand(-1, -1, 3)).reshape(b, p, 3, 3)
+        point = (bary[..., None] * corners).sum(2)
+        n = torch.linalg.cross(corners[:, :, 1] - corners[:, :, 0], corners[:, :, 2] - corners[:, :, 0])
+        return point, n / n.norm(dim=-1, keepdim=True).clamp(min=1e-12)
+
+    def data(self, v_all, tri, bary, scale_m: float | None = None):
+        """(b,) mean robust point-to-surface cost of the observed points against their closest surface points.
 
         ``scale_m`` overrides the robust scale (the fit anneals it from coarse to fine, so that points far from
         a poor start still pull on it).
         """
-        matched = self.torch.gather(v, 1, corr[..., None].expand(-1, -1, 3))
-        d = self.points[None] - matched
-        along = (d * normals).sum(-1)
+        point, n = self.surface_points(v_all, tri, bary)
+        d = self.points[None] - point
+        along = (d * n).sum(-1)
         tangential = (d * d).sum(-1) - along * along
         scale = self.scale if scale_m is None else scale_m
         r2 = (along * along + TANGENTIAL_WEIGHT * tangential) / scale**2
         return self.robust(r2).mean(1)
 
-    def residuals_m(self, v, corr, normals):
-        """(b, p) point-to-plane distances (m) of the observed points to their vertices."""
-        matched = self.torch.gather(v, 1, corr[..., None].expand(-1, -1, 3))
-        return ((self.points[None] - matched) * normals).sum(-1)
+    def residuals_m(self, v_all, tri, bary):
+        """(b, p) point-to-plane distances (m) of the observed points to their closest surface points."""
+        point, n = self.surface_points(v_all, tri, bary)
+        return ((self.points[None] - point) * n).sum(-1)
 
     def silhouette(self, v):
         """(b,) mean squared distance (in units of 1 cm) by which the vertices project outside the mask."""
@@ -198,31 +208,51 @@ class Objective:
         return torch.as_tensor(corr)
 
     # -- correspondences ------------------------------------------------------------------------
-    def correspondences(self, v: np.ndarray, normals: np.ndarray):
-        """Nearest camera-facing vertex of every observed point, per restart.
+    def correspondences(self, full: np.ndarray, skin_faces: np.ndarray, closed_faces: np.ndarray,
+                        subset: np.ndarray):
+        """Closest camera-facing skin point of every observed point on each whole posed body, and the subset's normals.
 
         Parameters
         ----------
-        v, normals : (b, k, 3) float
-            View-frame vertices and unit normals.
+        full : (b, n, 3) float64
+            Every vertex of every body, view frame (:meth:`wbsa.bodyfit.model.FitBody.full_posed`).
+        skin_faces, closed_faces : (m, 3) int
+        subset : (k,) int
+            The vertices the fit moves at every step.
 
         Returns
         -------
-        corr : (b, p) int64 tensor
-        matched_normals : (b, p, 3) float32 tensor
+        tri : (b, p, 3) int64
+            Vertex indices (whole mesh) of each point's triangle.
+        bary : (b, p, 3) float32 tensor
+            Its barycentric weights.
+        normals : (b, k, 3) float64
+            Unit normals of the subset vertices.
         facing : (b, k) bool tensor
+            Subset vertices facing the camera.
         """
-        from scipy.spatial import cKDTree
+        import open3d as o3d
+
+        from wbsa.bodyfit.model import vertex_normals
 
         torch = self.torch
         cam = self.obs.camera_position
-        facing = ((cam[None, None] - v) * normals).sum(-1) > 0
-        corr = np.empty((v.shape[0], len(self.obs.points)), dtype=np.int64)
-        for b in range(v.shape[0]):
-            ids = np.flatnonzero(facing[b])
-            if len(ids) < 10:
-                ids = np.arange(v.shape[1])
-            _, nearest = cKDTree(v[b, ids]).query(self.obs.points, workers=1)
-            corr[b] = ids[nearest]
-        n = np.take_along_axis(normals, corr[..., None], axis=1)
-        return torch.as_tensor(corr), torch.as_tensor(n, dtype=torch.float32), torch.as_tensor(facing)
+        normals = vertex_normals(full, closed_faces)[:, subset]
+        facing = ((cam[None, None] - full[:, subset]) * normals).sum(-1) > 0
+        pts = o3d.core.Tensor(np.ascontiguousarray(self.obs.points, dtype=np.float32))
+        tri = np.empty((full.shape[0], len(self.obs.points), 3), dtype=np.int64)
+        bary = np.empty((full.shape[0], len(self.obs.points), 3), dtype=np.float32)
+        for b in range(full.shape[0]):
+            a, e1, e2 = (full[b, skin_faces[:, i]] for i in range(3))
+            face_n = np.cross(e1 - a, e2 - a)
+            faces = skin_faces[((cam - (a + e1 + e2) / 3.0) * face_n).sum(1) > 0]
+            if len(faces) < 100:
+                faces = skin_faces
+            scene = o3d.t.geometry.RaycastingScene(nthreads=1)
+            scene.add_triangles(o3d.core.Tensor(np.ascontiguousarray(full[b], dtype=np.float32)),
+                                o3d.core.Tensor(np.ascontiguousarray(faces, dtype=np.uint32)))
+            hit = scene.compute_closest_points(pts, nthreads=1)
+            tri[b] = faces[hit["primitive_ids"].numpy().astype(np.int64)]
+            uv = hit["primitive_uvs"].numpy()
+            bary[b] = np.stack([1.0 - uv[:, 0] - uv[:, 1], uv[:, 0], uv[:, 1]], axis=1)
+        return tri, torch.as_tensor(bary), normals, torch.as_tensor(facing)

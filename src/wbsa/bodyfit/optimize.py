@@ -84,7 +84,7 @@ def optimise(fit_body, objective, starts, settings: BodyFitSettings, deadline: f
     """
     import torch
 
-    from wbsa.bodyfit.model import subset_rest_normals, yaw_matrix
+    from wbsa.bodyfit.model import yaw_matrix
 
     f32, f64 = torch.float32, torch.float64
     phen0 = torch.as_tensor(starts.params[:, :_N_PH], dtype=f64)
@@ -107,16 +107,17 @@ def optimise(fit_body, objective, starts, settings: BodyFitSettings, deadline: f
     best = [None] * b
     history: list[float] = []
     converged = timed_out = False
-    corr = normals = facing = None
+    tri = bary = facing = contour_corr = selection = None
     step = 0
 
-    def body(rotations: bool = False):
+    def body(selection):
         params = torch.cat([phen, local], dim=1)
-        rest, joints = fit_body.rest(params)
-        posed = fit_body.pose(rest, joints, angles, rotations)
-        posed, rot = posed if rotations else (posed, None)
-        rz = yaw_matrix(yaw)
-        return params, posed, rot, rz, posed @ rz.transpose(1, 2) + shift[:, None]
+        rest, joints = fit_body.rest(params, selection)
+        posed = fit_body.pose(rest, joints, angles, selection=selection)
+        return params, posed @ yaw_matrix(yaw).transpose(1, 2) + shift[:, None]
+
+    k = len(fit_body.subset.index)
+    model = fit_body.body_model
 
     for step in range(settings.steps):
         if time.perf_counter() > deadline:
@@ -124,12 +125,16 @@ def optimise(fit_body, objective, starts, settings: BodyFitSettings, deadline: f
             break
         if step % settings.refresh_every == 0:
             with torch.no_grad():
-                params, posed, rot, rz, v = body(rotations=True)
-                n = torch.einsum("bkij,bkj->bki", rot, torch.as_tensor(subset_rest_normals(fit_body, params), dtype=f32))
-                n = n / n.norm(dim=-1, keepdim=True)
-                n = n @ rz.transpose(1, 2)
-                corr, normals, facing = objective.correspondences(v.numpy(), n.numpy())
-                contour_corr = objective.contour_correspondences(v.numpy(), n.numpy())
+                full = fit_body.full_posed(torch.cat([phen, local], dim=1), angles.detach().numpy(), yaw.detach().numpy(),
+                                           shift.detach().numpy().astype(np.float64))
+                tri_full, bary, n, facing = objective.correspondences(full, model.skin_faces, model.closed_faces,
+                                                                     fit_body.subset.index)
+                extra = np.setdiff1d(np.unique(tri_full), fit_body.subset.index)
+                selection = fit_body.select(np.concatenate([fit_body.subset.index, extra]))
+                lookup = np.zeros(len(full[0]), dtype=np.int64)
+                lookup[selection.index] = np.arange(len(selection.index))
+                tri = torch.as_tensor(lookup[tri_full])
+                contour_corr = objective.contour_correspondences(full[:, fit_body.subset.index], n)
             annealed = step >= _ANNEAL_SHARE * settings.steps + 2 * settings.refresh_every
             if annealed and history[-2] - history[-1] < settings.tolerance * abs(history[-2]):
                 converged = True
@@ -139,8 +144,9 @@ def optimise(fit_body, objective, starts, settings: BodyFitSettings, deadline: f
         scale = max(final, _START_SCALE_M * (final / _START_SCALE_M) ** anneal)
         for g, base in zip(opt.param_groups, base_lr):
             g["lr"] = base * (1.0 - 0.8 * step / settings.steps)
-        params, posed, rot, rz, v = body()
-        loss = (objective.data(v, corr, normals, scale) * (scale / final) ** 2
+        params, v_all = body(selection)
+        v = v_all[:, :k]
+        loss = (objective.data(v_all, tri, bary, scale) * (scale / final) ** 2
                 + settings.silhouette_weight * objective.silhouette(v)
                 + settings.contour_weight * objective.contour(v, contour_corr)
                 + settings.free_space_weight * objective.free_space(v, facing)
@@ -153,15 +159,15 @@ def optimise(fit_body, objective, starts, settings: BodyFitSettings, deadline: f
         values = loss.detach().numpy().astype(np.float64)
         if _DEBUG and step % settings.refresh_every == 0:
             with torch.no_grad():
-                print(step, f"scale {scale:.3f}", "data", objective.data(v, corr, normals, scale).numpy().round(3),
+                print(step, f"scale {scale:.3f}", "data", objective.data(v_all, tri, bary, scale).numpy().round(3),
                       "sil", objective.silhouette(v).numpy().round(3), "free", objective.free_space(v, facing).numpy().round(3),
                       "height", (v[..., 2].max(1).values - v[..., 2].min(1).values).numpy().round(3),
                       "ph", phen[:, [0, 1, 3, 4]].detach().numpy().round(2).tolist())
         for i in np.flatnonzero(values < best_loss):
             best_loss[i] = values[i]
             best[i] = (params[i].detach().numpy().copy(), angles[i].detach().numpy().astype(np.float64),
-                       float(yaw[i].detach()), shift[i].detach().numpy().astype(np.float64), v[i].detach().numpy(),
-                       corr[i], normals[i])
+                       float(yaw[i].detach()), shift[i].detach().numpy().astype(np.float64),
+                       v_all[i].detach().numpy(), tri[i], bary[i])
         if step % settings.refresh_every == settings.refresh_every - 1:
             history.append(float(best_loss.min()))
         if step < _ANNEAL_SHARE * settings.steps:  # the scale still changes: losses are not comparable
@@ -175,10 +181,10 @@ def optimise(fit_body, objective, starts, settings: BodyFitSettings, deadline: f
             local.clamp_(-1.0, 1.0)
             angles.copy_(torch.maximum(torch.minimum(angles, hi), lo))
     i = int(np.argmin(best_loss))
-    params, ang, yaw_i, shift_i, verts, corr_i, normals_i = best[i]
+    params, ang, yaw_i, shift_i, verts, tri_i, bary_i = best[i]
     with torch.no_grad():
-        res = objective.residuals_m(torch.as_tensor(verts, dtype=f32)[None], corr_i[None], normals_i[None])[0]
+        res = objective.residuals_m(torch.as_tensor(verts, dtype=f32)[None], tri_i[None], bary_i[None])[0]
     return Optimum(params=params, angles_rad=ang, yaw_rad=yaw_i, shift_m=shift_i, loss=float(best_loss[i]),
                    restart_losses=best_loss, residuals_m=res.numpy().astype(np.float64),
-                   vertices=verts.astype(np.float64), steps=step + 1 if not (converged or timed_out) else step,
+                   vertices=verts[:k].astype(np.float64), steps=step + 1 if not (converged or timed_out) else step,
                    converged=converged, timed_out=timed_out)

@@ -44,7 +44,8 @@ class BodyFitSettings:
     silhouette_weight, contour_weight, free_space_weight : float
         Weights of the silhouette term (no body where the image shows none), the contour term (the body's
         outline on the subject's) and the free-space term (no body in front of a seen surface), against the
-        point-to-surface term.
+        point-to-surface term. The contour term is off by default: sensors drop returns near grazing angles, so
+        the outline seen lies inside the body's, and it pulled a body started at its truth 1.4 % smaller.
     phenotype_prior_weight, local_change_prior_weight : float
         Weak quadratic pulls of the phenotypes towards their start (SD 0.5) and of the local changes towards 0.
     age_prior_sd : float
@@ -76,7 +77,7 @@ class BodyFitSettings:
     robust_scale_m: float = 0.015
     silhouette_tolerance_px: float = 1.0
     silhouette_weight: float = 1.0
-    contour_weight: float = 1.0
+    contour_weight: float = 0.0
     free_space_weight: float = 1.0
     phenotype_prior_weight: float = 0.01
     local_change_prior_weight: float = 0.01

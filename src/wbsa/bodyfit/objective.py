@@ -13,7 +13,7 @@ Every term is a mean of robust penalties of residuals in units of a scale, so th
   where the image shows none;
 * **contour** (:meth:`Objective.contour`): each outline pixel of the subject against the projection of its
   nearest model vertex on the body's outline (a vertex whose normal is near perpendicular to its viewing
-  ray), in metres at the pixel's depth, Geman–McClure with scale 1 cm: body wherever the image shows the
+  ray), beyond the silhouette tolerance, in metres at the pixel's depth, Geman–McClure with scale 1 cm: body wherever the image shows the
   subject, measured across the outline, where the image is sharper (about a pixel, 5 mm at 3.5 m) than the
   depth (2 cm of noise at 3.5 m);
 * **free space** (:meth:`Objective.free_space`): a camera-facing vertex in front of the surface seen at its
@@ -173,7 +173,9 @@ class Objective:
         return _huber(ahead / SURFACE_SCALE_M).sum(1) / facing.sum(1).clamp(min=1)
 
     def contour(self, v, corr):
-        """(b,) mean robust distance (scale 1 cm) of the outline pixels to their outline vertices ``corr (b, c)``."""
+        """(b,) mean robust distance (scale 1 cm) of the outline pixels to their outline vertices ``corr (b, c)``,
+        beyond the silhouette tolerance (sensors drop the grazing returns at the outline: the outline seen lies
+        about a pixel inside the body's)."""
         torch = self.torch
         if corr is None or corr.shape[1] == 0:
             return torch.zeros(v.shape[0])
@@ -181,7 +183,8 @@ class Objective:
         idx = corr
         dr = torch.gather(row, 1, idx) - self.contour_px[None, :, 0]
         dc = torch.gather(col, 1, idx) - self.contour_px[None, :, 1]
-        metres = (dr.square() + dc.square() + 1e-9).sqrt() * self.contour_depth[None] / self.fx
+        px = ((dr.square() + dc.square() + 1e-9).sqrt() - self.tolerance_px).clamp(min=0.0)
+        metres = px * self.contour_depth[None] / self.fx
         r2 = (metres / SURFACE_SCALE_M).square()
         return (r2 / (1.0 + r2)).mean(1)
 

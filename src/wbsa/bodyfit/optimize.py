@@ -94,12 +94,18 @@ def optimise(fit_body, objective, starts, settings: BodyFitSettings, deadline: f
     yaw = torch.as_tensor(starts.yaw_rad, dtype=f32).clone().requires_grad_(True)
     shift = torch.as_tensor(starts.shift_m, dtype=f32).clone().requires_grad_(True)
     lr = settings.learning_rate
-    groups = [{"params": [phen], "lr": lr}, {"params": [angles], "lr": 1.5 * lr},
-              {"params": [yaw], "lr": lr}, {"params": [shift], "lr": 0.25 * lr}]
-    if settings.local_changes:
-        groups.append({"params": [local], "lr": 2 * lr})
-    opt = torch.optim.Adam(groups)
+
+    def adam():
+        groups = [{"params": [phen], "lr": lr}, {"params": [angles], "lr": 1.5 * lr},
+                  {"params": [yaw], "lr": lr}, {"params": [shift], "lr": 0.25 * lr}]
+        if settings.local_changes:
+            groups.append({"params": [local], "lr": 2 * lr})
+        return torch.optim.Adam(groups)
+
+    opt = adam()
     base_lr = [g["lr"] for g in opt.param_groups]
+    prune_step = int(round(settings.prune_at * settings.steps / settings.refresh_every)) * settings.refresh_every
+    values = None
     lo, hi = _limits(torch)
     floor_seen = objective.obs.floor_seen
     b = phen.shape[0]
@@ -123,6 +129,17 @@ def optimise(fit_body, objective, starts, settings: BodyFitSettings, deadline: f
         if time.perf_counter() > deadline:
             timed_out = True
             break
+        if step and step == prune_step and len(values) > settings.keep_restarts:
+            # the worst starts stop here: later steps and refreshes cost only the survivors
+            keep = torch.as_tensor(np.argsort(values, kind="stable")[:settings.keep_restarts])
+            with torch.no_grad():
+                phen = phen[keep].detach().clone().requires_grad_(True)
+                local = local[keep].detach().clone().requires_grad_(settings.local_changes)
+                angles, yaw, shift = (x[keep].detach().clone().requires_grad_(True) for x in (angles, yaw, shift))
+                phen0 = phen0[keep]
+            best_loss = best_loss[keep.numpy()]
+            best = [best[i] for i in keep.numpy()]
+            opt = adam()
         if step % settings.refresh_every == 0:
             with torch.no_grad():
                 full = fit_body.full_posed(torch.cat([phen, local], dim=1), angles.detach().numpy(), yaw.detach().numpy(),

@@ -27,6 +27,8 @@ class BodyFitSettings:
         Observed points kept (a seeded, even subsample of the subject's returns).
     restarts : int
         Starting points fitted together in one batch; the best fit is kept.
+    prune_at, keep_restarts : float, int
+        After this share of the steps only the ``keep_restarts`` restarts with the lowest loss go on.
     child_starts : bool
         Make a third of the starts (from a stature of 1.3 m up) children stretched to the stature
         (:data:`wbsa.bodyfit.init.CHILD_AGE`), as anny's random population has; off, a tall person is an adult.
@@ -69,6 +71,8 @@ class BodyFitSettings:
     vertex_spacing_m: float = 0.035
     n_points: int = 2000
     restarts: int = 6
+    prune_at: float = 0.3
+    keep_restarts: int = 2
     child_starts: bool = False
     steps: int = 200
     refresh_every: int = 10
@@ -98,7 +102,7 @@ class BodyFitSettings:
         for name in ("age_prior_sd", "vertex_spacing_m", "learning_rate", "robust_scale_m", "time_budget_s", "density_kg_m3",
                      "tolerance"):
             positive(name)
-        for name in ("n_points", "restarts", "steps", "refresh_every", "threads"):
+        for name in ("n_points", "restarts", "keep_restarts", "steps", "refresh_every", "threads"):
             value = getattr(self, name)
             if not isinstance(value, int) or value < 1:
                 raise SettingsError(name, f"must be a whole number of at least 1, got {value!r}")
@@ -109,6 +113,8 @@ class BodyFitSettings:
                 raise SettingsError(name, f"must be 0 or more, got {value!r}")
         if not 0.005 <= self.vertex_spacing_m <= 0.2:
             raise SettingsError("vertex_spacing_m", f"must be 0.005–0.2 m, got {self.vertex_spacing_m}")
+        if not 0.0 <= self.prune_at <= 1.0:
+            raise SettingsError("prune_at", f"must be a share of the steps in [0, 1], got {self.prune_at}")
         if self.robust_loss not in ROBUST_LOSSES:
             raise SettingsError("robust_loss", f"{self.robust_loss!r} is unknown; use one of {', '.join(ROBUST_LOSSES)}")
         if self.density_model not in DENSITY_MODELS:

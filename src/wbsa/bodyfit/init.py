@@ -24,6 +24,8 @@ YAW_STARTS = np.arange(0.0, 360.0, 30.0)
 #: anny's age parameter of the child starts (about 9 years): the random population stretches children to adult
 #: statures, and a child's head and limbs differ from an adult's of the same height.
 CHILD_AGE = 0.38
+#: anny's age parameter of the adult starts (about 30 years).
+ADULT_AGE = 0.8
 #: Truncation (m) of the observed-to-model distances in the score.
 _TRUNCATE_M = 0.10
 
@@ -57,6 +59,18 @@ def age_for_stature(stature_m: float) -> float:
     return float(np.interp(stature_m, [0.9, 1.1, 1.3, 1.45, 1.55], [0.2, 0.3, 0.4, 0.55, 0.8]))
 
 
+def start_ages(stature_m: float, child_starts: bool = False) -> list[float]:
+    """anny age parameters to start from: the stature's typical age, and an adult's (0.8) from 1.2 m up (a short
+    adult and a child of the same stature differ in shape; one view tells them apart only by fitting both);
+    with ``child_starts`` also a child (:data:`CHILD_AGE`) stretched to an adult stature."""
+    ages = [age_for_stature(stature_m)]
+    if stature_m >= 1.2 and ages[0] < ADULT_AGE:
+        ages.append(ADULT_AGE)
+    if child_starts and stature_m >= 1.3 and all(abs(a - CHILD_AGE) > 0.1 for a in ages):
+        ages.append(CHILD_AGE)
+    return ages
+
+
 def base_params(gender: float, age: float, p_height: np.ndarray) -> np.ndarray:
     """(g, 15) parameters of middle-build bodies of one sex and age at each ``p_height``."""
     row = dict.fromkeys(PHENOTYPE_COLUMNS, 0.5)
@@ -76,7 +90,7 @@ def first_guesses(fit_body, objective, n: int, azimuth_deg: float | None = None,
 
     obs = objective.obs
     stature = obs.top_m + 0.01  # the crown is rarely seen from below head height
-    age = age_for_stature(stature)
+    ages = start_ages(stature, child_starts)
     grid = np.linspace(0.0, 1.0, 11)
 
     def sized(gender: float, age_param: float) -> np.ndarray:
@@ -85,7 +99,8 @@ def first_guesses(fit_body, objective, n: int, azimuth_deg: float | None = None,
         return base_params(gender, age_param, [float(np.interp(stature, heights, grid))])[0]
 
     with torch.no_grad():
-        params = torch.as_tensor(np.stack([sized(g, age) for g in (0.0, 1.0)]))
+        kinds = [(g, a) for a in ages for g in (0.0, 1.0)]  # (gender, age) of each start body
+        params = torch.as_tensor(np.stack([sized(g, a) for g, a in kinds]))
         rest, joints = fit_body.rest(params)
         normals_rest = subset_rest_normals(fit_body, params)
         names = list(ARM_STARTS)
@@ -93,7 +108,7 @@ def first_guesses(fit_body, objective, n: int, azimuth_deg: float | None = None,
         for i, name in enumerate(names):
             angles[i, [0, 1, 2, 3]] = np.radians(ARM_STARTS[name])
             angles[i, [5, 6, 7, 8]] = np.radians(ARM_STARTS[name])
-        sex_i, arm_i = np.meshgrid(np.arange(2), np.arange(len(names)), indexing="ij")
+        sex_i, arm_i = np.meshgrid(np.arange(len(kinds)), np.arange(len(names)), indexing="ij")
         sex_i, arm_i = sex_i.ravel(), arm_i.ravel()
         posed, rot = fit_body.pose(rest[sex_i], joints[sex_i], torch.as_tensor(angles[arm_i]), rotations=True)
         normals = torch.einsum("bkij,bkj->bki", rot, torch.as_tensor(normals_rest[sex_i], dtype=torch.float32))
@@ -115,27 +130,25 @@ def first_guesses(fit_body, objective, n: int, azimuth_deg: float | None = None,
                 scores.append(data / objective.scale**2 + sil)
                 shifts.append(shift)
                 combos.append((c, y))
-                labels.append(f"{'male' if sex_i[c] == 0 else 'female'}, {names[arm_i[c]]}, azimuth "
+                gender, age = kinds[sex_i[c]]
+                labels.append(f"{'male' if gender == 0 else 'female'} (age {age:.2f}), {names[arm_i[c]]}, azimuth "
                               f"{YAW_STARTS[y]:.0f}°")
     scores = np.asarray(scores)
     if azimuth_deg is not None:
         off = np.abs((YAW_STARTS[[y for _, y in combos]] - azimuth_deg + 180.0) % 360.0 - 180.0)
         scores = np.where(off <= 45.0, scores, np.inf)
     ranked = np.argsort(scores, kind="stable")
-    # half the starts of each sex: the sexes differ most on the unseen side, the grid cannot tell them apart
-    by_sex = [[i for i in ranked if sex_i[combos[i][0]] == s and np.isfinite(scores[i])] for s in (0, 1)]
-    n_child = n // 3 if child_starts and age >= CHILD_AGE + 0.1 else 0
+    # starts of every body in turn (sex and age differ most on the unseen side; the grid cannot tell them apart)
+    by_kind = [[i for i in ranked if sex_i[combos[i][0]] == k and np.isfinite(scores[i])] for k in range(len(kinds))]
     order = []
-    for k in range(n - n_child):
-        first, second = by_sex[k % 2], by_sex[1 - k % 2]
-        pick = first if first else second
-        if pick:
-            order.append(pick.pop(0))
+    for j in range(n):
+        for k in range(len(kinds)):
+            queue = by_kind[(j + k) % len(kinds)]
+            if queue:
+                order.append(queue.pop(0))
+                break
     order = sorted(order, key=lambda i: scores[i])
-    # (grid index, parameters) of every start; the child starts copy the best views of the adult ones
     picks = [(i, params.numpy()[sex_i[combos[i][0]]], labels[i]) for i in order]
-    with torch.no_grad():  # anny's children stretched to an adult's stature: another body from the same view
-        picks += [(i, sized(float(p[0]), CHILD_AGE), label + ", child") for i, p, label in picks[:n_child]]
     return Starts(params=np.stack([p for _, p, _ in picks]),
                   angles_rad=angles[[arm_i[combos[i][0]] for i, _, _ in picks]],
                   yaw_rad=np.radians(-YAW_STARTS[[combos[i][1] for i, _, _ in picks]]),

@@ -69,9 +69,9 @@ class BodyFitSettings:
     """
 
     vertex_spacing_m: float = 0.035
-    n_points: int = 2000
+    n_points: int = 1500
     restarts: int = 6
-    prune_at: float = 0.3
+    prune_at: float = 0.25
     keep_restarts: int = 2
     child_starts: bool = False
     steps: int = 200

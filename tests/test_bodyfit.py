@@ -123,3 +123,17 @@ def test_settings_refuse_bad_values():
                 dict(density_model="bmi"), dict(vertex_spacing_m=1.0)):
         with pytest.raises(SettingsError):
             BodyFitSettings(**bad)
+
+
+def test_conformal_bounds_are_the_order_statistics_and_refuse_too_few():
+    from wbsa.bodyfit.interval import calibrate
+
+    errors = np.linspace(-0.05, 0.03, 39)
+    cal = calibrate(errors[::-1], 0.95, "cmd")
+    assert (cal.error_lo, cal.error_hi, cal.n) == (errors[0], errors[-1], 39)
+    lo, hi = cal.interval(2.0)
+    assert lo == pytest.approx(2.0 / 1.03) and hi == pytest.approx(2.0 / 0.95)
+    cal80 = calibrate(errors, 0.8, "cmd")  # k = floor(40 * 0.1) = 4 and ceil(40 * 0.9) = 36
+    assert (cal80.error_lo, cal80.error_hi) == (errors[3], errors[35])
+    with pytest.raises(WbsaError, match="too few"):
+        calibrate(errors[:10], 0.95, "cmd")

@@ -62,8 +62,8 @@ def calibrate(errors: np.ndarray, level: float, command: str) -> IntervalCalibra
     e = np.sort(np.asarray(errors, dtype=np.float64))
     n = len(e)
     alpha = 1.0 - level
-    k_lo = math.floor((n + 1) * alpha / 2)
-    k_hi = math.ceil((n + 1) * (1 - alpha / 2))
+    k_lo = math.floor((n + 1) * alpha / 2 + 1e-9)  # (the tolerance: 1 - 0.8 is 0.19999999999999996)
+    k_hi = math.ceil((n + 1) * (1 - alpha / 2) - 1e-9)
     if k_lo < 1 or k_hi > n:
         raise WbsaError(f"{n} calibration fits are too few for a {100 * level:g} % interval; need at least "
                         f"{math.ceil(2 / alpha) - 1}")

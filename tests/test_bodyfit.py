@@ -94,7 +94,7 @@ def test_a_fit_past_its_time_budget_returns_its_best_body_flagged(render):
     depth, mask, camera, floor, _ = render
     fit = fit_body(depth, mask, camera, floor, settings=BodyFitSettings(restarts=2, steps=500, time_budget_s=0.5))
     assert "time_budget" in fit.flags and not fit.converged
-    assert 1.0 < fit.wbsa_m2 < 3.0 and fit.seconds < 5.0
+    assert 1.0 < fit.wbsa_m2 < 3.0 and fit.seconds < 10.0  # the budget stops the steps; the start and measures remain
 
 
 def test_bad_inputs_give_one_line_errors(render):

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from wbsa.bodies.body_model import BODY_PARAMETER_COLUMNS, LOCAL_CHANGE_COLUMNS, PHENOTYPE_COLUMNS
+from wbsa.bodies.body_model import BODY_PARAMETER_COLUMNS, PHENOTYPE_COLUMNS
 
 
 def parameter_table(params: np.ndarray) -> pd.DataFrame:
@@ -47,8 +47,3 @@ def measure_body(anthropometer, params: np.ndarray, density_model: str, density_
                              np.array([male]), np.zeros(1))
     m["mass_kg"], m["bmi"] = float(comp.mass_kg[0]), float(comp.bmi[0])
     return {"rest": rest, "measures": m, "age_years": age, "male": male, "table": table}
-
-
-def local_change_dict(params: np.ndarray) -> dict[str, float]:
-    """The ``l_*`` entries of ``(15,)`` parameters."""
-    return dict(zip(LOCAL_CHANGE_COLUMNS, np.asarray(params)[len(PHENOTYPE_COLUMNS):].tolist()))

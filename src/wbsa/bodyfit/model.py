@@ -6,7 +6,8 @@ thousand skin vertices spread evenly over the body (anny's 318 blendshapes over 
 105 MB of float64 read at every step; the subset is a few MB of float32); the ten posture angles of
 :data:`wbsa.bodies.posture.ANGLE_COLUMNS` pose them by linear blend skinning with anny's weights, exactly
 as :func:`wbsa.bodies.posing.pose_vertices` does (the same pivots, axes and composition; tested against
-it), and the body is shifted to stand on z = 0. All in torch, batched over restarts.
+it), and the body is shifted to stand on z = 0. All in torch, batched over restarts. A :class:`Selection`
+adds any other vertices (the fit adds those of the triangles its observed points lie on).
 """
 
 from __future__ import annotations
@@ -16,14 +17,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from wbsa.bodies.body_model import LOCAL_CHANGE_COLUMNS, PHENOTYPE_COLUMNS, BodyModel
-from wbsa.bodies.posing import JOINT_BONES, SEGMENTS
+from wbsa.bodies.posing import SEGMENTS
 
 #: Number of phenotypes and of local changes a fit moves.
 N_PHENOTYPES = len(PHENOTYPE_COLUMNS)
 N_LOCAL = len(LOCAL_CHANGE_COLUMNS)
 #: Joints whose heads :class:`FitBody` needs, per side, in this order.
 _JOINTS = ("shoulder", "elbow", "wrist", "hip", "ankle")
-_SUFFIX = {"l": ".L", "r": ".R"}
 
 
 def even_vertex_subset(vertices: np.ndarray, faces: np.ndarray, spacing_m: float) -> np.ndarray:
@@ -65,7 +65,7 @@ class FitBody:
     ----------
     body_model : BodyModel
     spacing_m : float
-        Voxel size of :func:`even_vertex_subset` (0.03 m gives about 2,000 vertices).
+        Voxel size of :func:`even_vertex_subset` (0.035 m gives about 2,300 vertices).
     """
 
     def __init__(self, body_model: BodyModel, spacing_m: float = 0.03) -> None:

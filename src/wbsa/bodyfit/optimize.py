@@ -27,7 +27,6 @@ _FLOOR_SD_M = 0.01
 #: ``robust_scale_m`` over the first :data:`_ANNEAL_SHARE` of the steps (graduated non-convexity).
 _START_SCALE_M = 0.10
 _ANNEAL_SHARE = 0.5
-_DEBUG = False
 
 
 @dataclass(frozen=True)
@@ -174,12 +173,6 @@ def optimise(fit_body, objective, starts, settings: BodyFitSettings, deadline: f
         if floor_seen:
             loss = loss + (shift[:, 2] / _FLOOR_SD_M).square() / len(objective.obs.points)
         values = loss.detach().numpy().astype(np.float64)
-        if _DEBUG and step % settings.refresh_every == 0:
-            with torch.no_grad():
-                print(step, f"scale {scale:.3f}", "data", objective.data(v_all, tri, bary, scale).numpy().round(3),
-                      "sil", objective.silhouette(v).numpy().round(3), "free", objective.free_space(v, facing).numpy().round(3),
-                      "height", (v[..., 2].max(1).values - v[..., 2].min(1).values).numpy().round(3),
-                      "ph", phen[:, [0, 1, 3, 4]].detach().numpy().round(2).tolist())
         for i in np.flatnonzero(values < best_loss):
             best_loss[i] = values[i]
             best[i] = (params[i].detach().numpy().copy(), angles[i].detach().numpy().astype(np.float64),

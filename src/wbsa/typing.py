@@ -54,6 +54,8 @@ DepthTechnology = Literal["structured-light", "time-of-flight", "active-stereo",
 Method = Literal["regression"]
 #: A population's ``posture`` setting: a posture name, or ``mixed`` (a random name per subject).
 PostureChoice = Literal[Literal["a-pose", "mixed"], PostureName]
+#: Robust penalty of the body fit's point-to-surface residuals (:mod:`wbsa.bodyfit.objective`).
+RobustLoss = Literal["geman-mcclure", "huber"]
 
 POPULATION_KINDS: tuple[str, ...] = get_args(PopulationKind)
 NOISE_MODELS: tuple[str, ...] = get_args(NoiseModel)
@@ -75,3 +77,4 @@ DEPTH_TECHNOLOGIES: tuple[str, ...] = get_args(DepthTechnology)
 METHODS: tuple[str, ...] = get_args(Method)
 MESH_UNITS: tuple[str, ...] = get_args(MeshUnits)
 MESH_UPS: tuple[str, ...] = get_args(MeshUp)
+ROBUST_LOSSES: tuple[str, ...] = get_args(RobustLoss)

@@ -50,8 +50,9 @@ PresetName = Literal["kinect-v1", "kinect-v2", "tum", "azure-kinect-nfov", "azur
                      "realsense-d455", "phone-lidar"]
 #: How a depth camera measures: its depth noise and quantisation follow (:mod:`wbsa.camera.presets`).
 DepthTechnology = Literal["structured-light", "time-of-flight", "active-stereo", "lidar"]
-#: Estimation routes of ``wbsa estimate`` (:mod:`wbsa.estimation.methods`).
-Method = Literal["regression"]
+#: Estimation routes of ``wbsa estimate`` (:mod:`wbsa.estimation.methods`): the regression on the image's
+#: measures, the whole body fitted to the view, or both side by side.
+Method = Literal["regression", "body-fit", "both"]
 #: A population's ``posture`` setting: a posture name, or ``mixed`` (a random name per subject).
 PostureChoice = Literal[Literal["a-pose", "mixed"], PostureName]
 #: Robust penalty of the body fit's point-to-surface residuals (:mod:`wbsa.bodyfit.objective`).

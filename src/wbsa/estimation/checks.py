@@ -12,6 +12,7 @@ import math
 
 import numpy as np
 
+from wbsa.bodyfit.fit import FLAGS as BODY_FIT_FLAGS
 from wbsa.errors import WbsaError
 
 #: Every flag an estimate can carry, with what it means.
@@ -30,6 +31,9 @@ FLAGS: dict[str, str] = {
     "view_not_estimated": "the model estimates no view (a wbsa fit model); the stated one was used, the "
                           "estimated azimuth is null",
     "not_a_person": "the object's silhouette is not a standing person's (a board, a post, a wall?)",
+    "methods_disagree": "the regression's and the body fit's intervals do not overlap (method both)",
+    "no_interval": "the body fit has no calibrated interval; its bounds are the estimate",
+    **{name: text for name, text in BODY_FIT_FLAGS.items() if name not in ("cut_off", "no_floor")},
 }
 #: The silhouette of a standing person (:func:`person_shape_flags`): the share of its bounding box
 #: (width × stature) it fills, and its width per metre of stature. Measured on rendered bodies in a room

@@ -33,8 +33,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--camera", default="auto",
                    help=presets_help() + "; auto (default): the preset of the image's size, flagged")
     p.add_argument("--method", default="regression", choices=METHODS,
-                   help="estimation route (default regression: the estimator model's regression on the measures and "
-                        "the view)")
+                   help="estimation route: regression (default; the estimator model on the image's measures and "
+                        "view, under a second), body-fit (the whole anny body fitted to the view and measured at "
+                        "rest, several seconds; docs/body_fit.md), or both side by side (flagged when they "
+                        "disagree)")
     p.add_argument("--model", default=None, help="estimator model (.npz, e.g. from wbsa train) or wbsa fit model "
                                                  "(.json); default: the model shipped with wbsa")
     p.add_argument("--azimuth", type=number_in(-360, 360), default=None,
@@ -59,6 +61,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "without it too)")
     p.add_argument("--mask-out", default=None, help="write the subject's mask here (8-bit PNG, 255 = subject)")
     p.add_argument("--out-mesh", default=None, help="write the reconstructed visible surface here (.ply/.obj)")
+    p.add_argument("--out-body", default=None,
+                   help="with --method body-fit or both: write the fitted body at rest here (.ply/.obj, metres, "
+                        "+Z up) and as the camera saw it beside it (NAME-observed.ply, camera frame)")
     p.add_argument("--json", action="store_true", help="print the estimate, view and flags as JSON")
     p.add_argument("--fhir", action="store_true", help="print a FHIR R4 Observation (LOINC 8277-6) instead")
     p.add_argument("--patient", default=None, help="FHIR subject reference, e.g. Patient/123 (with --fhir)")
@@ -112,6 +117,13 @@ def run_estimate(args: argparse.Namespace) -> int:
               f"{'  [' + str(len(est.flags)) + ' warning(s)]' if est.flags else ''}")
         print(f"view: {est.view_text()}; subject {est.distance_m:.2f} m away, "
               f"{est.stature_m:.2f} m tall, VBSA {est.vbsa_m2:.3f} m² from {est.n_pixels} pixels [{est.model}]")
+        for name, p in est.routes.items():
+            print(f"  {name}: WBSA {p.wbsa_m2:.3f} m² ({p.lo_m2:.3f}–{p.hi_m2:.3f} m²) [{p.model_name}]")
+        if est.body is not None:
+            b = est.body
+            print(f"fitted body: stature {b.stature_m:.3f} m, mass {b.mass_kg:.1f} kg (BMI {b.bmi:.1f}, from its "
+                  f"volume {1000 * b.volume_m3:.1f} L), {b.sex}, residual {1000 * b.residual_m:.1f} mm, "
+                  f"{b.seconds:.1f} s")
     return 0
 
 
@@ -132,8 +144,21 @@ def _check_outputs(args: argparse.Namespace) -> None:
         files.append(check_output_file(args.mask_out, (".png",), "--mask-out").resolve())
     if args.out_mesh is not None:
         files.append(check_output_file(args.out_mesh, WRITE_SUFFIXES, "--out-mesh").resolve())
+    if args.out_body is not None:
+        if args.method == "regression":
+            raise WbsaError("--out-body writes the fitted body of --method body-fit or both")
+        body = check_output_file(args.out_body, WRITE_SUFFIXES, "--out-body")
+        files += [body.resolve(), _observed_path(body).resolve()]
     if len(set(files)) < len(files):
-        raise WbsaError(f"--mask-out and --out-mesh name the same file {files[0]}; give two names")
+        raise WbsaError("--mask-out, --out-mesh and --out-body name the same file; give different names")
+
+
+def _observed_path(path):
+    """``NAME-observed.SUFFIX`` beside ``path``: the fitted body in the camera frame."""
+    from pathlib import Path
+
+    path = Path(path)
+    return path.with_name(f"{path.stem}-observed{path.suffix}")
 
 
 def _write_outputs(args: argparse.Namespace, est) -> None:
@@ -148,6 +173,10 @@ def _write_outputs(args: argparse.Namespace, est) -> None:
     from wbsa.core.mesh_io import write_mesh
 
     with contextlib.ExitStack() as stack:  # left in reverse: the mask is checked and renamed first
+        if args.out_body and est.body is not None:
+            for pose, name in (("rest", args.out_body), ("observed", _observed_path(args.out_body))):
+                tmp = stack.enter_context(atomic_path(name, keep_suffix=True, verify=lambda _: None))
+                write_mesh(est.body.mesh(pose), tmp)
         if args.out_mesh:
             tmp = stack.enter_context(atomic_path(args.out_mesh, keep_suffix=True, verify=lambda _: None))
             write_mesh(est.surface, tmp)  # written and checked on a temporary of its own, then onto tmp

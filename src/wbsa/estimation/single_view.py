@@ -49,7 +49,11 @@ class Estimate:
     surface : wbsa.core.TriangleMesh
         The reconstructed visible surface (camera frame, metres).
     body : wbsa.bodyfit.BodyFit or None
-        With ``method="body-fit"``: the whole body fitted to the image (its meshes, stature, mass, posture).
+        With ``method="body-fit"`` or ``"both"``: the whole body fitted to the image (its meshes, stature, mass,
+        posture).
+    routes : dict of str to Prediction
+        With ``method="both"``: each route's own prediction (``regression``, ``body-fit``); the estimate's numbers
+        are the first's.
     """
 
     wbsa_m2: float
@@ -71,6 +75,7 @@ class Estimate:
     surface: object = field(repr=False, compare=False)
     measured_mask: np.ndarray = field(repr=False, compare=False, default=None)
     body: object = field(repr=False, compare=False, default=None)
+    routes: dict = field(repr=False, compare=False, default_factory=dict)
 
     def __repr__(self) -> str:
         flags = f", flags: {', '.join(self.flags)}" if self.flags else ""
@@ -80,6 +85,8 @@ class Estimate:
     def view_text(self) -> str:
         """The view in words: the estimated one with its spread, or the stated one where none was estimated."""
         v = self.view
+        if np.isfinite(v.azimuth_deg) and not np.isfinite(v.azimuth_sd_deg):  # a fitted body's view
+            return f"azimuth {v.azimuth_deg:.0f}° (mirror-equivalent), elevation {v.elevation_deg:.0f}° (fitted)"
         if not np.isfinite(v.azimuth_deg):
             return (f"azimuth {self.view_used[0]:.0f}° stated (not estimated), elevation {v.elevation_deg:.0f}° ± "
                     f"{v.elevation_sd_deg:.0f}°")
@@ -98,6 +105,12 @@ class Estimate:
         out["view"] = self.view.to_dict()
         out["view_used"] = {"azimuth_deg": self.view_used[0], "elevation_deg": self.view_used[1]}
         out["flags"] = dict(self.flags)
+        if self.body is not None:
+            out["body"] = self.body.to_dict()
+        if self.routes:
+            out["routes"] = {name: {"wbsa_m2": round(p.wbsa_m2, 5), "wbsa_lo_m2": round(p.lo_m2, 5),
+                                    "wbsa_hi_m2": round(p.hi_m2, 5), "model": p.model_name, "flags": dict(p.flags)}
+                             for name, p in self.routes.items()}
         return out
 
     def method_text(self) -> str:
@@ -146,8 +159,10 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     model : EstimatorModel, path or None
         None: the model shipped with wbsa (:func:`wbsa.estimation.default_model.default_model`). A path: an
         estimator model file (``.npz``, e.g. from ``wbsa train``) or a ``wbsa fit`` model file (``.json``).
-    method : {'regression'}
-        The estimation route (:mod:`wbsa.estimation.methods`).
+    method : {'regression', 'body-fit', 'both'}
+        The estimation route (:mod:`wbsa.estimation.methods`): the regression on the image's measures (the
+        default), the whole body fitted to the view (seconds, not milliseconds; no clothes yet), or both side by
+        side (the regression's number leads; ``routes`` holds both).
     azimuth_deg, elevation_deg : float, optional
         A stated view; it is used for the prediction and checked against the estimated one.
     clothing_m : float
@@ -178,7 +193,7 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     from wbsa.camera.views import check_angle
     from wbsa.estimation import checks
     from wbsa.estimation.measure import measure_subject
-    from wbsa.estimation.methods import Request, Subject, check_method, predictor_for
+    from wbsa.estimation.methods import Request, Subject, check_method, predictors_for
     from wbsa.estimation.mixed_pixels import repair_mixed_pixels
     from wbsa.estimation.model import EstimatorModel
     from wbsa.estimation.segment import segment_subject
@@ -201,8 +216,9 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     depth_m = _depth_array(depth, depth_scale)
     checks.check_image_size(depth_m, intrinsics)
     depth_m, mixed = repair_mixed_pixels(depth_m, intrinsics.fx)
-    predictor = predictor_for(method, model)  # a model file is read (and refused if broken) before any work
-    predictor.check_request(request)
+    predictors = predictors_for(method, model)  # a model file is read (and refused if broken) before any work
+    for predictor in predictors:
+        predictor.check_request(request)
     flags: dict[str, str] = {}
     if segment is None:
         mask, floor = np.isfinite(depth_m) & (depth_m > 0), None
@@ -223,10 +239,14 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     if floor is None:
         flags["no_floor"] = checks.FLAGS["no_floor"]
     flags.update(checks.working_range_flags(m.distance_m, intrinsics))
-    prediction = predictor.predict(Subject(depth_m, mask, intrinsics, floor, m), request)
+    subject = Subject(depth_m, mask, intrinsics, floor, m)
+    predictions = [p.predict(subject, request) for p in predictors]
+    prediction = predictions[0]
     view = prediction.view
     flags.update(checks.view_flags((azimuth_deg, elevation_deg), view))
     flags.update(prediction.flags)
+    routes = {p.name: pred for p, pred in zip(predictors, predictions)} if len(predictors) > 1 else {}
+    flags.update(_agreement_flags(routes))
     if not np.isfinite(view.azimuth_deg):
         flags["view_not_estimated"] = (f"this model estimates no azimuth; the stated {prediction.view_used[0]:g}° was "
                                        "used (view.azimuth_deg is null)")
@@ -238,4 +258,18 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
                     view=view, view_used=prediction.view_used, flags=flags, method=method, model=prediction.model_name,
                     camera=intrinsics.name, clothing_m=float(clothing_m),
                     mask=mask & np.isfinite(depth_m) & (depth_m > 0), surface=m.surface, measured_mask=m.mask,
-                    body=prediction.body)
+                    body=next((p.body for p in predictions if p.body is not None), None), routes=routes)
+
+
+def _agreement_flags(routes: dict) -> dict[str, str]:
+    """``methods_disagree`` when two routes' intervals do not overlap (``both``), and the second route's flags
+    (a flag's name means the same whichever route raised it)."""
+    if len(routes) < 2:
+        return {}
+    (name_a, a), (name_b, b) = list(routes.items())[:2]
+    flags = dict(b.flags)
+    if a.hi_m2 < b.lo_m2 or b.hi_m2 < a.lo_m2:
+        flags["methods_disagree"] = (f"{name_a} {a.wbsa_m2:.3f} m² [{a.lo_m2:.3f}–{a.hi_m2:.3f}] and {name_b} "
+                                     f"{b.wbsa_m2:.3f} m² [{b.lo_m2:.3f}–{b.hi_m2:.3f}] do not overlap; check the "
+                                     "frame (clothes, pose, the person picked)")
+    return flags

@@ -15,8 +15,8 @@ ADVICE: dict[str, str] = {
                 "more reliable with the floor in view.",
     "several_people": "Check that the outlined person is the one to measure; if not, click on the right person "
                       "in the depth picture.",
-    "out_of_sensor_range": "Move the person (or the camera) to the camera's working distance, given in the "
-                           "detail, and take the picture again.",
+    "beyond_working_range": "Move the person (or the camera) to the camera's working distance, given in the "
+                            "detail, and take the picture again.",
     "out_of_training_range": "The person or the picture is unlike those the model learned from; treat the answer "
                              "with caution and check it against a height-and-weight formula below.",
     "view_disagrees": "The view typed does not match the picture: check the azimuth and elevation you typed, or "
@@ -30,6 +30,25 @@ ADVICE: dict[str, str] = {
     "interval_unsure": "The range given may be too narrow; report it as approximate.",
     "mixed_pixels": "Stand the person well in front of a plain wall, or turn on the camera's flying-pixel "
                     "filter, and take the picture again.",
+    "view_not_estimated": "The azimuth typed was used as it is; check it, or use the default model, which "
+                          "estimates it.",
+    "not_a_person": "Check the outline in the depth picture: it may be an object, not the person; click on the "
+                    "person, or clear the space around them and take the picture again.",
+    "methods_disagree": "The two methods do not agree: check the outline, the clothes and the posture (standing, "
+                        "arms slightly away from the body), and take the picture again.",
+    "no_interval": "The body fit gives no range here; use the regression's range, or report the value as "
+                   "approximate.",
+    "not_converged": "The body fit did not settle: take the picture again with the person standing still, "
+                     "arms slightly away from the body.",
+    "time_budget": "The body fit ran out of time; its body may be off. Take the picture again, or use the "
+                   "regression.",
+    "posture_at_limit": "Ask the person to stand upright, feet slightly apart, arms slightly away from the body, "
+                        "and take the picture again.",
+    "outside_model_range": "The person's shape is at the edge of what the body model can take; treat the body "
+                           "fit's answer with caution and compare it with the regression.",
+    "poor_fit": "The fitted body explains the picture poorly (clothes, something in front of the person, or not "
+                "a person): check the outline and take the picture again.",
+    "steep_view": "Put the camera at about chest height, level, and take the picture again.",
 }
 
 

@@ -10,6 +10,12 @@ in a module of its own, and :func:`predictor_for` is the one place that picks it
 ``regression`` with a ``wbsa fit`` model file (:mod:`.per_view`)
     The paper's per-view regressions at one camera and distance: the nearest fitted view is used and any
     difference in camera, distance or view is flagged ``model_mismatch``.
+``body-fit`` (:mod:`.body_fit`)
+    anny fitted to the view (shape, posture, camera pose; :func:`wbsa.bodyfit.fit_body`) and its rest-pose
+    skin measured; the fitted body comes with the estimate.
+``both``
+    The regression and the body fit side by side (:func:`predictors_for`): the regression's number leads,
+    the body fit's is reported beside it, and intervals that do not overlap are flagged ``methods_disagree``.
 """
 
 from __future__ import annotations
@@ -97,13 +103,22 @@ def check_method(method: str) -> Method:
     return method  # type: ignore[return-value]
 
 
+def predictors_for(method: Method, model=None) -> tuple[Predictor, ...]:
+    """The predictors of ``method``: one, or for ``both`` the regression's then the body fit's."""
+    check_method(method)
+    if method == "both":
+        return predictor_for("regression", model), predictor_for("body-fit")
+    return (predictor_for(method, model),)
+
+
 def predictor_for(method: Method, model=None) -> Predictor:
-    """The predictor of ``method`` with ``model`` (the one dispatch point).
+    """The predictor of one method with ``model`` (the one dispatch point).
 
     Parameters
     ----------
-    method : {'regression'}
+    method : {'regression', 'body-fit'}
     model : EstimatorModel, WbsaModel, path or None
+        The regression's model (the body fit has its own).
         None: the shipped default model. A path: an estimator model file (``.npz``) or a ``wbsa fit`` model
         file (``.json``), read and checked at once.
 
@@ -115,6 +130,15 @@ def predictor_for(method: Method, model=None) -> Predictor:
     from wbsa.estimation.model import EstimatorModel
 
     check_method(method)
+    if method == "both":
+        raise WbsaError("predictor_for takes one method; use predictors_for for both")
+    if method == "body-fit":
+        from wbsa.estimation.methods.body_fit import BodyFitPredictor
+
+        if model is not None:
+            raise WbsaError("the body fit uses no estimator model; drop the model (or use method both to run the "
+                            "regression with it beside the body fit)")
+        return BodyFitPredictor()
     loaded = load_model(model)
     if isinstance(loaded, EstimatorModel):
         from wbsa.estimation.methods.regression import RegressionPredictor
@@ -130,4 +154,4 @@ def predictor_for(method: Method, model=None) -> Predictor:
     return PerViewPredictor(loaded)
 
 
-__all__ = ["Prediction", "Predictor", "Request", "Subject", "check_method", "predictor_for"]
+__all__ = ["Prediction", "Predictor", "Request", "Subject", "check_method", "predictor_for", "predictors_for"]

@@ -121,16 +121,20 @@ def segmentation_shares(g: pd.DataFrame) -> pd.Series:
 
 def segmentation_by_camera(res: pd.DataFrame) -> pd.DataFrame:
     """:func:`segmentation_shares` per camera over the images within its working range
-    (:data:`wbsa.camera.presets.CAMERAS`), and per distance band of 1 m."""
+    (:data:`wbsa.camera.presets.CAMERAS`): all of them, those not flagged ``feet_unsure`` (the judged rows: the
+    camera's ``feet_within_m``), and per distance band of 1 m."""
     from wbsa.camera.presets import CAMERAS
 
     rng = res["camera"].map(lambda c: CAMERAS[c].working_range_m if c in CAMERAS else (0.0, np.inf))
     inside = res[[lo <= d <= hi for d, (lo, hi) in zip(res["distance_m"], rng)]].copy()
+    feet = inside["camera"].map(lambda c: CAMERAS[c].feet_within_m if c in CAMERAS else None)
+    sure = inside[[f is None or d <= f for d, f in zip(inside["distance_m"], feet)]]
     inside["band"] = pd.cut(inside["distance_m"], [0.0, 2.0, 3.0, 4.0, 5.0, 8.0]).astype(str)
     cams = inside.groupby("camera").apply(segmentation_shares, include_groups=False).reset_index()
+    judged = sure.groupby("camera").apply(segmentation_shares, include_groups=False).reset_index()
     bands = inside.groupby(["camera", "band"]).apply(segmentation_shares, include_groups=False).reset_index()
-    return pd.concat([cams.assign(band="all"), bands], ignore_index=True)[
-        ["camera", "band", "n", "strict_share", "off_strip_share", "target_met"]].round(3)
+    return pd.concat([cams.assign(band="working range"), judged.assign(band="not feet_unsure (judged)"), bands],
+                     ignore_index=True)[["camera", "band", "n", "strict_share", "off_strip_share", "target_met"]].round(3)
 
 
 def verdict(ok: bool) -> str:

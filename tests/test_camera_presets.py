@@ -74,3 +74,17 @@ def test_an_unknown_preset_is_one_line_naming_them():
 
     with pytest.raises(WbsaError, match="unknown camera preset 'kinect-v3'; use one of " + ", ".join(CAMERAS)):
         camera_record("kinect-v3")
+
+
+def test_frames_beyond_where_a_camera_tells_the_feet_from_the_floor_are_flagged():
+    """The phone LiDAR's segmentation keeps the feet apart from the floor within 3 m only (bench_estimate.py,
+    segmentation by camera and band): its farther frames are flagged, other cameras' are not."""
+    from wbsa.camera.intrinsics import Intrinsics
+    from wbsa.camera.presets import CAMERAS
+    from wbsa.estimation.checks import feet_flags
+
+    lidar = CAMERAS["phone-lidar"].intrinsics
+    assert feet_flags(2.9, lidar) == {} and "step closer" in feet_flags(3.4, lidar)["feet_unsure"]
+    assert all(feet_flags(r.working_range_m[1], r.intrinsics) == {} for n, r in CAMERAS.items() if n != "phone-lidar")
+    custom = Intrinsics(256, 192, 209.2, 209.2, 124.2, 96.4, name="phone-lidar", max_range_m=9.0)
+    assert feet_flags(4.0, custom) == {}  # a user's own calibration is not the preset's record

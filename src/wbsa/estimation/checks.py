@@ -31,6 +31,8 @@ FLAGS: dict[str, str] = {
     "view_not_estimated": "the model estimates no view (a wbsa fit model); the stated one was used, the "
                           "estimated azimuth is null",
     "not_a_person": "the object's silhouette is not a standing person's (a board, a post, a wall?)",
+    "feet_unsure": "the subject stands farther than this camera tells the feet from the floor; the area near "
+                   "the soles may be off",
     "methods_disagree": "the regression's and the body fit's intervals do not overlap (method both)",
     "no_interval": "the body fit has no calibrated interval; its bounds are the estimate",
     **{name: text for name, text in BODY_FIT_FLAGS.items() if name not in ("cut_off", "no_floor")},
@@ -139,6 +141,18 @@ def working_range_flags(distance_m: float, camera) -> dict[str, str]:
         return {}
     return {"beyond_working_range": f"subject at {distance_m:.2f} m, camera {camera.name} works {lo:g}–{hi:g} m; "
                                     f"stand within that range"}
+
+
+def feet_flags(distance_m: float, camera) -> dict[str, str]:
+    """``{"feet_unsure": ...}`` beyond the distance at which the camera's preset tells the feet from the floor
+    (:attr:`~wbsa.camera.presets.CameraRecord.feet_within_m`; none for a camera that is not a preset)."""
+    from wbsa.camera.presets import CAMERAS
+
+    record = CAMERAS.get(camera.name)
+    if record is None or record.feet_within_m is None or record.intrinsics != camera or distance_m <= record.feet_within_m:
+        return {}
+    return {"feet_unsure": f"subject at {distance_m:.2f} m; the {camera.name} tells the feet from the floor within "
+                           f"{record.feet_within_m:g} m: step closer"}
 
 
 def mixed_pixel_flags(mixed_share: float) -> dict[str, str]:

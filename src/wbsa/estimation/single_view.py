@@ -239,6 +239,7 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     if floor is None:
         flags["no_floor"] = checks.FLAGS["no_floor"]
     flags.update(checks.working_range_flags(m.distance_m, intrinsics))
+    flags.update(checks.feet_flags(m.distance_m, intrinsics))
     subject = Subject(depth_m, mask, intrinsics, floor, m)
     predictions = [p.predict(subject, request) for p in predictors]
     prediction = predictions[0]

@@ -34,6 +34,8 @@ ADVICE: dict[str, str] = {
                           "estimates it.",
     "not_a_person": "Check the outline in the depth picture: it may be an object, not the person; click on the "
                     "person, or clear the space around them and take the picture again.",
+    "feet_unsure": "Bring the person (or the camera) closer, within the distance given in the detail, and take "
+                   "the picture again.",
     "methods_disagree": "The two methods do not agree: check the outline, the clothes and the posture (standing, "
                         "arms slightly away from the body), and take the picture again.",
     "no_interval": "The body fit gives no range here; use the regression's range, or report the value as "

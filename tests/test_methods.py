@@ -1,0 +1,100 @@
+"""The estimator's method slot: one Predictor per route, one dispatch point, the routes side by side."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from wbsa.errors import WbsaError
+
+
+@pytest.fixture(scope="module")
+def person_view(body_model):
+    """A noisy Kinect v2 view of one adult in a room, 2.5 m away (a floor, a wall 0.8 m behind), and its truth."""
+    from wbsa.bodies.random_population import RandomPopulationSettings, sample_random_parameters
+    from wbsa.bodies.table import measure_population
+    from wbsa.camera import MeshScene, View, preset
+    from wbsa.sensor.settings import SensorSettings
+    from wbsa.simulate import simulate_view
+    from wbsa.training.room import compose_room
+
+    pop = measure_population(sample_random_parameters(RandomPopulationSettings(n=1, seed=11, age_years=(25, 50),
+                                                                               age_sampling="years")),
+                             show_progress=False)
+    mesh = body_model.skin_mesh(body_model.rest_bodies(pop).vertices[0])
+    room = compose_room(mesh, 10.0, wall_behind_m=0.8)
+    camera = preset("kinect-v2")
+    sim = simulate_view(MeshScene(room.mesh, surroundings=True), camera, View(10.0, 8.0, 2.5),
+                        sensor=SensorSettings(noise="nguyen2012"), seed=4, keep_frame=True,
+                        target=room.subject_center)
+    return sim.frame.depth_m, camera, float(pop["wbsa_m2"].iloc[0])
+
+
+def test_the_dispatch_point_picks_one_predictor_per_method():
+    from wbsa.estimation.methods import predictor_for, predictors_for
+    from wbsa.estimation.methods.body_fit import BodyFitPredictor
+    from wbsa.estimation.methods.regression import RegressionPredictor
+
+    assert isinstance(predictor_for("regression"), RegressionPredictor)
+    assert isinstance(predictor_for("body-fit"), BodyFitPredictor)
+    assert [p.name for p in predictors_for("both")] == ["regression", "body-fit"]
+    with pytest.raises(WbsaError, match="estimation method 'fit' is unknown; use one of regression, body-fit, both"):
+        predictor_for("fit")
+    with pytest.raises(WbsaError, match="the body fit uses no estimator model"):
+        predictor_for("body-fit", "model.npz")
+
+
+def test_the_regression_route_reads_the_shipped_model(person_view):
+    from wbsa.estimation import estimate
+
+    depth, camera, truth = person_view
+    est = estimate(depth, camera)
+    assert est.method == "regression" and est.model == "default" and est.body is None and not est.routes
+    assert est.wbsa_lo_m2 < truth < est.wbsa_hi_m2
+    assert abs(est.wbsa_m2 / truth - 1) < 0.06
+
+
+@pytest.mark.slow
+def test_both_routes_report_side_by_side_with_the_fitted_body(person_view, tmp_path, capsys):
+    """``both``: the regression's number leads, the body fit's is beside it with its fitted body, and the CLI
+    writes that body at rest and as seen."""
+    import json
+
+    from PIL import Image
+
+    from wbsa.cli import main
+    from wbsa.core.mesh_io import read_mesh
+    from wbsa.estimation import estimate
+
+    depth, camera, truth = person_view
+    est = estimate(depth, camera, method="both")
+    assert set(est.routes) == {"regression", "body-fit"}
+    assert est.wbsa_m2 == est.routes["regression"].wbsa_m2
+    fit = est.body
+    assert abs(est.routes["body-fit"].wbsa_m2 / truth - 1) < 0.10 and fit.wbsa_m2 == est.routes["body-fit"].wbsa_m2
+    assert abs(fit.stature_m - est.stature_m) < 0.06 and 10 < fit.mass_kg < 200  # the point cloud's stature
+    overlap = not (est.routes["regression"].hi_m2 < est.routes["body-fit"].lo_m2
+                   or est.routes["body-fit"].hi_m2 < est.routes["regression"].lo_m2)
+    assert ("methods_disagree" in est.flags) is not overlap
+    png = tmp_path / "depth.png"
+    Image.fromarray(np.round(depth * 1000).astype(np.uint16)).save(png)
+    assert main(["estimate", str(png), "--camera", "kinect-v2", "--method", "body-fit", "--out-body",
+                 str(tmp_path / "body.ply"), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["method"] == "body-fit" and out["body"]["stature_m"] == pytest.approx(fit.stature_m, abs=0.05)
+    rest, seen = read_mesh(tmp_path / "body.ply"), read_mesh(tmp_path / "body-observed.ply")
+    assert rest.area_m2 == pytest.approx(out["body"]["wbsa_m2"], rel=0.05) and len(seen.vertices) == len(rest.vertices)
+
+
+def test_what_a_route_cannot_serve_is_refused_before_any_work(person_view, tmp_path, capsys):
+    from wbsa.cli import main
+    from wbsa.estimation import estimate
+
+    depth, camera, _ = person_view
+    with pytest.raises(WbsaError, match="does not yet allow for clothes"):
+        estimate(depth, camera, method="body-fit", clothing_m=0.01)
+    np.save(tmp_path / "d.npy", depth)
+    assert main(["estimate", str(tmp_path / "d.npy"), "--camera", "kinect-v2", "--out-body",
+                 str(tmp_path / "b.ply")]) == 2
+    assert "--out-body writes the fitted body of --method body-fit or both" in capsys.readouterr().err
+    assert not (tmp_path / "b.ply").exists()

@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from wbsa.bodyfit.fit import FLAGS as BODY_FIT_FLAGS
+from wbsa.estimation.bodyfit.fit import FLAGS as BODY_FIT_FLAGS
 from wbsa.errors import WbsaError
 
 #: Every flag an estimate can carry, with what it means.

@@ -48,7 +48,7 @@ class Estimate:
         which the measures cut in training too (the VBSA is that of these pixels).
     surface : wbsa.core.TriangleMesh
         The reconstructed visible surface (camera frame, metres).
-    body : wbsa.bodyfit.BodyFit or None
+    body : wbsa.estimation.bodyfit.BodyFit or None
         With ``method="body-fit"`` or ``"both"``: the whole body fitted to the image (its meshes, stature, mass,
         posture).
     routes : dict of str to Prediction

@@ -11,7 +11,7 @@ in a module of its own, and :func:`predictor_for` is the one place that picks it
     The paper's per-view regressions at one camera and distance: the nearest fitted view is used and any
     difference in camera, distance or view is flagged ``model_mismatch``.
 ``body-fit`` (:mod:`.body_fit`)
-    anny fitted to the view (shape, posture, camera pose; :func:`wbsa.bodyfit.fit_body`) and its rest-pose
+    anny fitted to the view (shape, posture, camera pose; :func:`wbsa.estimation.bodyfit.fit_body`) and its rest-pose
     skin measured; the fitted body comes with the estimate.
 ``both``
     The regression and the body fit side by side (:func:`predictors_for`): the regression's number leads,

@@ -1,8 +1,8 @@
 """The body-fit method: anny fitted to the one depth view (shape, posture, camera pose), its rest-pose skin measured.
 
-The whole body is fitted to the segmented subject's points and silhouette (:func:`wbsa.bodyfit.fit_body`); the
-WBSA is the fitted body's skin at rest, with the split-conformal interval of :mod:`wbsa.bodyfit.interval`. The
-fitted body (:class:`~wbsa.bodyfit.result.BodyFit`: stature, mass, tapes, posture, meshes) rides along in
+The whole body is fitted to the segmented subject's points and silhouette (:func:`wbsa.estimation.bodyfit.fit_body`); the
+WBSA is the fitted body's skin at rest, with the split-conformal interval of :mod:`wbsa.estimation.bodyfit.interval`. The
+fitted body (:class:`~wbsa.estimation.bodyfit.result.BodyFit`: stature, mass, tapes, posture, meshes) rides along in
 :attr:`Prediction.body`.
 """
 
@@ -21,7 +21,7 @@ class BodyFitPredictor:
     name = "body-fit"
 
     def __init__(self, settings=None) -> None:
-        from wbsa.bodyfit.settings import BodyFitSettings
+        from wbsa.estimation.bodyfit.settings import BodyFitSettings
 
         self.settings = settings or BodyFitSettings()
 
@@ -32,7 +32,7 @@ class BodyFitPredictor:
 
     def predict(self, subject: Subject, request: Request) -> Prediction:
         """WBSA of the fitted body at rest; its flags (``fit_not_converged`` ...) become the estimate's."""
-        from wbsa.bodyfit.fit import fit_body
+        from wbsa.estimation.bodyfit.fit import fit_body
 
         fit = fit_body(subject.depth_m, subject.mask, subject.camera, subject.floor, clothing_m=request.clothing_m,
                        azimuth_deg=request.azimuth_deg, settings=self.settings)

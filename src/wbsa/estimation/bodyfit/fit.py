@@ -15,8 +15,8 @@ import time
 
 import numpy as np
 
-from wbsa.bodyfit.result import BodyFit
-from wbsa.bodyfit.settings import ANGLE_LIMITS_DEG, BodyFitSettings
+from wbsa.estimation.bodyfit.result import BodyFit
+from wbsa.estimation.bodyfit.settings import ANGLE_LIMITS_DEG, BodyFitSettings
 from wbsa.errors import WbsaError
 
 #: The flags a :class:`BodyFit` may carry, with their meaning.
@@ -45,7 +45,7 @@ def _models(spacing_m: float):
 
     from wbsa.bodies.anthropometry import Anthropometer
     from wbsa.bodies.body_model import BodyModel
-    from wbsa.bodyfit.model import FitBody
+    from wbsa.estimation.bodyfit.model import FitBody
 
     body_model = BodyModel()
     return body_model, FitBody(body_model, spacing_m), Anthropometer(body_model)
@@ -85,7 +85,7 @@ def fit_body(depth_m: np.ndarray, mask: np.ndarray, camera, floor, *, clothing_m
     """
     import torch
 
-    from wbsa.bodyfit.observation import check_inputs
+    from wbsa.estimation.bodyfit.observation import check_inputs
 
     if not (isinstance(clothing_m, (int, float)) and math.isfinite(clothing_m) and clothing_m >= 0):
         raise WbsaError(f"clothing_m must be a layer of 0 m or more, got {clothing_m!r}")
@@ -109,11 +109,11 @@ def _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fi
 
     from wbsa.bodies.posing import pose_vertices
     from wbsa.bodies.posture import ANGLE_COLUMNS
-    from wbsa.bodyfit.init import first_guesses
-    from wbsa.bodyfit.measures import measure_body
-    from wbsa.bodyfit.objective import Objective
-    from wbsa.bodyfit.observation import observe
-    from wbsa.bodyfit.optimize import optimise
+    from wbsa.estimation.bodyfit.init import first_guesses
+    from wbsa.estimation.bodyfit.measures import measure_body
+    from wbsa.estimation.bodyfit.objective import Objective
+    from wbsa.estimation.bodyfit.observation import observe
+    from wbsa.estimation.bodyfit.optimize import optimise
 
     t0 = time.perf_counter()
     deadline = t0 + settings.time_budget_s
@@ -167,7 +167,7 @@ def _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fi
         flags["steep_view"] = f"elevation {elevation:.0f}°"
 
     m = body["measures"]
-    from wbsa.bodyfit.interval import load
+    from wbsa.estimation.bodyfit.interval import load
 
     cal = load()
     lo, hi = cal.interval(float(m["wbsa_m2"])) if cal is not None else (math.nan, math.nan)

@@ -4,8 +4,8 @@ subject's points and silhouette, and measure the fitted body as the population i
 Entry point: :func:`fit_body`; result: :class:`BodyFit`; settings: :class:`BodyFitSettings`.
 """
 
-from wbsa.bodyfit.fit import FLAGS, fit_body
-from wbsa.bodyfit.result import BodyFit
-from wbsa.bodyfit.settings import BodyFitSettings
+from wbsa.estimation.bodyfit.fit import FLAGS, fit_body
+from wbsa.estimation.bodyfit.result import BodyFit
+from wbsa.estimation.bodyfit.settings import BodyFitSettings
 
 __all__ = ["BodyFit", "BodyFitSettings", "FLAGS", "fit_body"]

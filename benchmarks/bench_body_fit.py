@@ -68,48 +68,33 @@ def displaced(vertices: np.ndarray, faces: np.ndarray, skin_faces: np.ndarray, m
 
 def fit_chunk(population: pd.DataFrame, others: pd.DataFrame, first: int, seed: int, displace: bool,
               model_path: str | None, time_budget_s: float) -> pd.DataFrame:
-    """Capture, segment and fit every subject (the capture exactly as :func:`room_capture_chunk`'s)."""
+    """Capture, segment and fit every subject (the captures of :func:`wbsa.testing.testset.room_test_captures`,
+    those of ``bench_estimate.py``)."""
     from wbsa.bodies.body_model import BodyModel
-    from wbsa.bodies.posture import RandomPosture
-    from wbsa.estimation.bodyfit import BodyFitSettings, fit_body
     from wbsa.core.mesh import triangle_areas_m2
     from wbsa.errors import WbsaError
-    from wbsa.training.capture import sample_capture
-    from wbsa.training.room import capture_room, compose_room
+    from wbsa.estimation.bodyfit import BodyFitSettings, fit_body
     from wbsa.estimation.segment import SegmentSettings, segment_subject
-    from wbsa.testing.testset import RoomTestSettings
     from wbsa.estimation.view import azimuth_error_deg
+    from wbsa.testing.testset import RoomTestSettings, room_test_captures
 
     settings = RoomTestSettings(seed=seed)
     body_model = BodyModel()
-    poser = RandomPosture(body_model)
-    bodies = body_model.rest_bodies(population)
-    extra = body_model.rest_bodies(others)
     fit_settings = BodyFitSettings(time_budget_s=time_budget_s)
+
+    def bumped(vertices: np.ndarray, index: int) -> np.ndarray:
+        drng = np.random.default_rng(np.random.SeedSequence([settings.seed, index, DISPLACE_STREAM]))
+        out = displaced(vertices, body_model.closed_faces, body_model.skin_faces, body_model.trunk_vertex_mask, drng)
+        out[:, 2] -= out[:, 2].min()
+        return out
+
     rows = []
-    for b in range(len(population)):
-        index = first + b
-        rng = np.random.default_rng(np.random.SeedSequence([settings.seed, index]))
-        pose_rng, other_rng, capture_rng, room_rng, edge_rng = rng.spawn(5)
-        vertices, posture = poser(bodies.vertices[b], bodies.bone_heads[b], pose_rng)
-        t = population.iloc[b]
-        truth_wbsa = float(t["wbsa_m2"])
-        if displace:
-            drng = np.random.default_rng(np.random.SeedSequence([settings.seed, index, DISPLACE_STREAM]))
-            vertices = displaced(vertices, body_model.closed_faces, body_model.skin_faces,
-                                 body_model.trunk_vertex_mask, drng)
-            vertices[:, 2] -= vertices[:, 2].min()
-            truth_wbsa = float(triangle_areas_m2(vertices, body_model.skin_faces).sum())
-        cap = sample_capture(vertices, capture_rng, settings.capture)
-        subject = body_model.skin_mesh(vertices)
-        people = ()
-        if room_rng.random() < settings.second_person:
-            v2, _ = poser(extra.vertices[b], extra.bone_heads[b], other_rng)
-            side = room_rng.uniform(*settings.side_m) * room_rng.choice([-1.0, 1.0])
-            people = ((body_model.skin_mesh(v2), float(side)),)
-        wall_m = float(room_rng.uniform(*settings.wall_behind_m))
-        room = compose_room(subject, cap.view.azimuth_deg, wall_behind_m=wall_m, others=people)
-        frame, depth = capture_room(room, cap, seed=settings.seed, subject_id=index)
+    for tc in room_test_captures(population, others, first, settings, body_model, bumped if displace else None):
+        index, cap, depth = tc.index, tc.capture, tc.depth_m
+        t = population.iloc[index - first]
+        truth_wbsa = (float(triangle_areas_m2(tc.vertices, body_model.skin_faces).sum()) if displace
+                      else float(t["wbsa_m2"]))
+        posture, people = tc.posture, tc.second_person
         row = {k: t[k] for k in ("subject_id", "population", "sex", "age_years", "stature_m", "mass_kg",
                                  "volume_m3") if k in t.index}
         row.update(wbsa_m2=truth_wbsa, image=index, posture=posture, camera=cap.camera.name,

@@ -123,6 +123,87 @@ def contact_strip(truth: np.ndarray, surface_height_m: np.ndarray) -> np.ndarray
     return low & ndimage.binary_dilation(truth & low, iterations=CONTACT_REACH_PX)
 
 
+@dataclass(frozen=True)
+class HeldOutCapture:
+    """One held-out capture: the subject posed in its room, seen by its camera.
+
+    Attributes
+    ----------
+    index : int
+        The image's number (its seeds are ``SeedSequence([seed, index])``).
+    posture : str
+    capture : wbsa.training.capture.Capture
+    room : wbsa.training.room.RoomScene
+    frame : wbsa.core.DepthFrame
+        The render (triangle ids for the truth).
+    depth_m : (h, w) float64
+        What the camera returns (metres, whole millimetres; depth edges as the settings say).
+    truth : (h, w) bool
+        The subject's pixels in the render.
+    second_person : bool
+    vertices : (n, 3) float64
+        The posed body (before any clothes).
+    """
+
+    index: int
+    posture: str
+    capture: object
+    room: object
+    frame: object
+    depth_m: np.ndarray
+    truth: np.ndarray
+    second_person: bool
+    vertices: np.ndarray
+
+
+def room_test_captures(population: pd.DataFrame, others: pd.DataFrame, first: int, settings: RoomTestSettings,
+                       body_model, reshape=None):
+    """Yield the :class:`HeldOutCapture` of every subject of ``population`` (``others``: the possible second people).
+
+    ``reshape(vertices, index)``, if given, changes each posed body before it is captured (e.g. seeded bumps
+    outside the body model's shapes); everything drawn is unchanged by it. One generator serves every
+    benchmark, so their captures are the same images.
+    """
+    from wbsa.bodies.clothing import COVERED_BONES, dressed_vertices
+    from wbsa.bodies.posture import RandomPosture
+    from wbsa.training.room import capture_room, compose_room, with_edge_pixels
+
+    poser = RandomPosture(body_model)
+    covered = body_model.vertices_of_bones(COVERED_BONES)
+    bodies = body_model.rest_bodies(population)
+    extra = body_model.rest_bodies(others)
+    for b in range(len(population)):
+        index = first + b
+        rng = np.random.default_rng(np.random.SeedSequence([settings.seed, index]))
+        pose_rng, other_rng, capture_rng, room_rng, edge_rng = rng.spawn(5)
+        vertices, posture = poser(bodies.vertices[b], bodies.bone_heads[b], pose_rng)
+        if reshape is not None:
+            vertices = reshape(vertices, index)
+        cap = sample_capture(vertices, capture_rng, settings.capture)
+        subject = body_model.skin_mesh(vertices)
+        bare_center = subject.bbox_center
+        if settings.clothing_m > 0.0:
+            subject = body_model.skin_mesh(dressed_vertices(vertices, body_model.skin_faces, covered,
+                                                            settings.clothing_m))
+        people = ()
+        if room_rng.random() < settings.second_person:
+            v2, _ = poser(extra.vertices[b], extra.bone_heads[b], other_rng)
+            side = room_rng.uniform(*settings.side_m) * room_rng.choice([-1.0, 1.0])
+            people = ((body_model.skin_mesh(v2), float(side)),)
+        wall_m = float(room_rng.uniform(*settings.wall_behind_m))
+        if settings.scene == "alone":
+            room = compose_room(subject, cap.view.azimuth_deg, wall_behind_m=None, floor=False)
+            people = ()
+        else:
+            room = compose_room(subject, cap.view.azimuth_deg, wall_behind_m=wall_m, others=people)
+        if settings.clothing_m > 0.0:  # the camera aims where it aimed at the bare body
+            room = replace(room, subject_center=bare_center)
+        frame, depth = capture_room(room, cap, seed=settings.seed, subject_id=index)
+        truth = room.is_subject(frame.triangle_id) & (depth > 0)
+        depth = with_edge_pixels(depth, settings.edge_pixels, settings.edge_share, edge_rng)
+        yield HeldOutCapture(index, posture, cap, room, frame, depth, truth, bool(people), vertices)
+
+
 def room_capture_chunk(population: pd.DataFrame, others: pd.DataFrame, first: int, settings: RoomTestSettings,
                        model_path: str | None) -> pd.DataFrame:
     """Capture and estimate every subject of ``population`` (``others``: the same number of possible second people).
@@ -133,10 +214,7 @@ def room_capture_chunk(population: pd.DataFrame, others: pd.DataFrame, first: in
     wall time.
     """
     from wbsa.bodies.body_model import BodyModel
-    from wbsa.bodies.clothing import COVERED_BONES, dressed_vertices
-    from wbsa.bodies.posture import RandomPosture
     from wbsa.estimation.default_model import load_model
-    from wbsa.training.room import capture_room, compose_room, with_edge_pixels
     from wbsa.estimation.segment import SegmentSettings
     from wbsa.estimation.single_view import estimate
     from wbsa.estimation.view import fold_azimuth
@@ -146,47 +224,18 @@ def room_capture_chunk(population: pd.DataFrame, others: pd.DataFrame, first: in
     rows = []
     with single_threaded_math():
         body_model = BodyModel()
-        poser = RandomPosture(body_model)
         model = load_model(model_path)
-        covered = body_model.vertices_of_bones(COVERED_BONES)
-        bodies = body_model.rest_bodies(population)
-        extra = body_model.rest_bodies(others)
-        for b in range(len(population)):
-            index = first + b
-            rng = np.random.default_rng(np.random.SeedSequence([settings.seed, index]))
-            pose_rng, other_rng, capture_rng, room_rng, edge_rng = rng.spawn(5)
-            vertices, posture = poser(bodies.vertices[b], bodies.bone_heads[b], pose_rng)
-            cap = sample_capture(vertices, capture_rng, settings.capture)
-            subject = body_model.skin_mesh(vertices)
-            bare_center = subject.bbox_center
-            if settings.clothing_m > 0.0:
-                subject = body_model.skin_mesh(dressed_vertices(vertices, body_model.skin_faces, covered,
-                                                                settings.clothing_m))
-            people = ()
-            if room_rng.random() < settings.second_person:
-                v2, _ = poser(extra.vertices[b], extra.bone_heads[b], other_rng)
-                side = room_rng.uniform(*settings.side_m) * room_rng.choice([-1.0, 1.0])
-                people = ((body_model.skin_mesh(v2), float(side)),)
-            wall_m = float(room_rng.uniform(*settings.wall_behind_m))
-            if settings.scene == "alone":
-                room = compose_room(subject, cap.view.azimuth_deg, wall_behind_m=None, floor=False)
-                people = ()
-            else:
-                room = compose_room(subject, cap.view.azimuth_deg, wall_behind_m=wall_m, others=people)
-            if settings.clothing_m > 0.0:  # the camera aims where it aimed at the bare body
-                room = replace(room, subject_center=bare_center)
-            frame, depth = capture_room(room, cap, seed=settings.seed, subject_id=index)
-            truth = room.is_subject(frame.triangle_id) & (depth > 0)
-            strip = contact_strip(truth, room.surface_height_m(frame.triangle_id))
-            depth = with_edge_pixels(depth, settings.edge_pixels, settings.edge_share, edge_rng)
-            t = population.iloc[b]
+        for tc in room_test_captures(population, others, first, settings, body_model):
+            cap, depth, truth = tc.capture, tc.depth_m, tc.truth
+            strip = contact_strip(truth, tc.room.surface_height_m(tc.frame.triangle_id))
+            t = population.iloc[tc.index - first]
             row = {k: t[k] for k in ("subject_id", "population", "sex", "age_years", "stature_m", "mass_kg", "wbsa_m2")
                    if k in t.index}
-            row.update(image=index, posture=posture, camera=cap.camera.name, scene=settings.scene,
+            row.update(image=tc.index, posture=tc.posture, camera=cap.camera.name, scene=settings.scene,
                        noise_scale=cap.sensor.effective_noise_scale,
                        ideal_sensor=cap.sensor.is_ideal, azimuth_deg=cap.view.azimuth_deg,
                        elevation_deg=cap.view.elevation_deg, distance_m=cap.view.distance_m,
-                       camera_height_m=cap.camera_height_m, fits=cap.fits, second_person=bool(people),
+                       camera_height_m=cap.camera_height_m, fits=cap.fits, second_person=tc.second_person,
                        clothing_m=settings.clothing_m, clothing_stated=settings.clothing_stated,
                        subject_pixels=int(truth.sum()))
             t0 = time.perf_counter()

@@ -390,3 +390,16 @@ def test_wbsa_serve_prints_its_address_and_serves_the_page(small_estimator_model
     bad = subprocess.run([sys.executable, "-m", "wbsa", "serve", "--model", "/nonexistent/m.npz"],
                          capture_output=True, text=True, timeout=120)
     assert bad.returncode == 2 and bad.stderr.startswith("error:") and bad.stderr.count("\n") == 1, bad.stderr
+
+
+@pytest.mark.slow
+def test_the_body_fit_route_shows_and_offers_the_fitted_body(server, frames):
+    """method=body-fit: the answer is the body fit's, the 3-D view gets the fitted body beside the visible surface,
+    and the body is offered at rest and as seen (PLY, the writers of wbsa estimate --out-body)."""
+    url, _ = server
+    status, answer = _post(url, {"method": "body-fit"}, [("depth", "one.png", frames["one"]["path"].read_bytes())])
+    assert status == 200 and answer["method"] == "body-fit", answer
+    assert [m["name"] for m in answer["meshes"]] == ["visible surface", "fitted body"]
+    urls = {d["label"]: d["url"] for d in answer["downloads"]}
+    with urllib.request.urlopen(url + urls["Fitted body PLY (at rest)"], timeout=60) as r:
+        assert r.read(3) == b"ply"

@@ -29,6 +29,7 @@ def run_estimate(depth_m: np.ndarray, camera, model, options):
     import wbsa
     from wbsa.estimation import SegmentSettings
 
+    model = None if options.method == "body-fit" else model  # the body fit has no estimator model
     return wbsa.estimate(depth_m, camera, model, method=options.method, azimuth_deg=options.azimuth_deg,
                          elevation_deg=options.elevation_deg, clothing_m=options.clothing_m,
                          segment=SegmentSettings(pick=options.pick))
@@ -48,31 +49,41 @@ def downloads(est, folder: Path, name: str) -> dict[str, tuple[bytes, str, str]]
     from wbsa.core.mesh_io import write_mesh
     from wbsa.estimation.command import _write_mask
     from wbsa.estimation.fhir import fhir_observation
+    from wbsa.strict_json import json_text
 
     stem = _stem(name)
     files = {
-        "estimate.json": (json.dumps(est.to_dict(), indent=2).encode(), "application/json", f"{stem}-wbsa.json"),
-        "fhir.json": (json.dumps(fhir_observation(est), indent=2).encode(), "application/fhir+json",
+        "estimate.json": (json_text(est.to_dict()).encode(), "application/json", f"{stem}-wbsa.json"),
+        "fhir.json": (json_text(fhir_observation(est)).encode(), "application/fhir+json",
                       f"{stem}-wbsa-observation.fhir.json"),
     }
     _write_mask(folder / "mask.png", est.mask)
     files["mask.png"] = ((folder / "mask.png").read_bytes(), "image/png", f"{stem}-mask.png")
     write_mesh(est.surface, folder / "surface.ply")
     files["surface.ply"] = ((folder / "surface.ply").read_bytes(), "application/octet-stream", f"{stem}-surface.ply")
+    if est.body is not None:  # the body fit's body, as the camera saw it (beside the surface) and at rest
+        for pose in ("observed", "rest"):
+            est.body.write_ply(folder / f"body-{pose}.ply", pose)
+            files[f"body-{pose}.ply"] = ((folder / f"body-{pose}.ply").read_bytes(), "application/octet-stream",
+                                         f"{stem}-body-{pose}.ply")
     return files
 
 
 #: Download key -> the label the page gives it.
 DOWNLOAD_LABELS = {"estimate.json": "JSON", "fhir.json": "FHIR R4 Observation", "mask.png": "Mask PNG",
-                   "surface.ply": "Surface PLY"}
+                   "surface.ply": "Surface PLY", "body-rest.ply": "Fitted body PLY (at rest)",
+                   "body-observed.ply": "Fitted body PLY (as seen)"}
 
 
 def meshes(est, result_id: str) -> list[dict]:
     """The meshes of the 3-D view: name, and a PLY to load (or ``vertices``/``faces`` arrays).
 
-    The visible surface now (camera frame, metres); a route that fits a whole body adds it here.
+    The visible surface (camera frame, metres) and, with the body fit, the fitted body as the camera saw it.
     """
-    return [{"name": "visible surface", "url": f"api/result/{result_id}/surface.ply", "frame": "camera"}]
+    out = [{"name": "visible surface", "url": f"api/result/{result_id}/surface.ply", "frame": "camera"}]
+    if est.body is not None:
+        out.append({"name": "fitted body", "url": f"api/result/{result_id}/body-observed.ply", "frame": "camera"})
+    return out
 
 
 def formula_rows(height_cm: float | None, mass_kg: float | None, sex: str | None) -> dict | None:

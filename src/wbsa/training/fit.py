@@ -10,7 +10,8 @@ import numpy as np
 import pandas as pd
 
 from wbsa.estimation.measure import SCALAR_MEASURES
-from wbsa.estimation.model import SPREAD_TERMS, EstimatorModel, design, spread_design, tree_features, with_clothing
+from wbsa.estimation.design import SPREAD_TERMS, design, spread_design, tree_features, with_clothing
+from wbsa.estimation.model import EstimatorModel
 from wbsa.estimation.trees import TreeEnsemble
 from wbsa.estimation.view import ViewModel, azimuth_sd_deg, fold_azimuth
 from wbsa.training.renders import Samples

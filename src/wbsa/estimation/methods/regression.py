@@ -27,7 +27,7 @@ class RegressionPredictor:
         """WBSA of ``subject`` with the model's split-conformal interval; flags ``uncertain_view``,
         ``out_of_training_range`` and ``interval_unsure``."""
         from wbsa.estimation.checks import range_flags
-        from wbsa.estimation.model import range_values, with_clothing
+        from wbsa.estimation.design import range_values, with_clothing
 
         model, measures = self.model, subject.measures
         view = model.view.estimate(measures)

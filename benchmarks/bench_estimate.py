@@ -128,7 +128,7 @@ def segmentation_by_camera(res: pd.DataFrame) -> pd.DataFrame:
     rng = res["camera"].map(lambda c: CAMERAS[c].working_range_m if c in CAMERAS else (0.0, np.inf))
     inside = res[[lo <= d <= hi for d, (lo, hi) in zip(res["distance_m"], rng)]].copy()
     feet = inside["camera"].map(lambda c: CAMERAS[c].feet_within_m if c in CAMERAS else None)
-    sure = inside[[f is None or d <= f for d, f in zip(inside["distance_m"], feet)]]
+    sure = inside[[pd.isna(f) or d <= f for d, f in zip(inside["distance_m"], feet)]]
     inside["band"] = pd.cut(inside["distance_m"], [0.0, 2.0, 3.0, 4.0, 5.0, 8.0]).astype(str)
     cams = inside.groupby("camera").apply(segmentation_shares, include_groups=False).reset_index()
     judged = sure.groupby("camera").apply(segmentation_shares, include_groups=False).reset_index()

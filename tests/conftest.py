@@ -30,7 +30,7 @@ def small_estimator_model(tmp_path_factory):
     """The path of a small estimator model (32 bodies, 2 views each), trained once per run (about 75 s on two
     busy cores): quick, and still a bagged model with a calibrated interval."""
     from wbsa.training.pipeline import train_model
-    from wbsa.training.renders import RenderSettings
+    from wbsa.training.settings import RenderSettings
     from wbsa.training.settings import TrainSettings
 
     model = train_model(TrainSettings(n_random=32, n_survey=0, render=RenderSettings(views_per_subject=2),

@@ -82,7 +82,8 @@ def test_dressed_training_renders_differ_from_bare_ones_only_by_the_clothes():
     """The clothes draw from their own (seventh) stream: with every body dressed, the captures (posture,
     camera, view) are those of the bare renders, the row records the layer, and the measured VBSA grows by
     about the layer over the limbs' radius (1 cm: some 8 % on an adult, more on a child)."""
-    from wbsa.training.renders import RenderSettings, render_chunk
+    from wbsa.training.renders import render_chunk
+    from wbsa.training.settings import RenderSettings
     from wbsa.training.pipeline import TrainSettings, training_population
 
     pop = training_population(TrainSettings(n_random=8, n_survey=0, seed=5), show_progress=False).iloc[:2]

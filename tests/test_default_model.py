@@ -60,7 +60,7 @@ def test_a_small_rebuild_through_the_same_code_path_is_a_loadable_model_and_resu
     reads the renders it kept (as a run killed after its renders would) and fits the same model."""
     from wbsa.estimation.default_model import default_model_path
     from wbsa.estimation.model import EstimatorModel
-    from wbsa.training.renders import RenderSettings
+    from wbsa.training.settings import RenderSettings
     from wbsa.training.run import train
     from wbsa.training.settings import TrainSettings
 
@@ -87,7 +87,7 @@ def test_train_refuses_bad_settings_in_one_line(tmp_path, capsys):
     from wbsa.cli import main
 
     (tmp_path / "not-intrinsics.json").write_text('{"hello": 1}')
-    cases = [(["--camera", str(tmp_path / "not-intrinsics.json")], "lacks 'width'"),
+    cases = [(["--camera", str(tmp_path / "not-intrinsics.json")], "it needs width, height and intrinsic_matrix"),
              (["--distance", "0.2,3"], "0.5 <= LOW <= HIGH <= 8 m"),
              (["--distance", "2,9"], "0.5 <= LOW <= HIGH <= 8 m"),
              (["--camera", "kinect-v9"], "unknown camera preset 'kinect-v9'"),
@@ -101,7 +101,7 @@ def test_train_refuses_bad_settings_in_one_line(tmp_path, capsys):
 
 
 def test_a_folder_another_run_holds_is_refused(tmp_path):
-    from wbsa.training.renders import RenderSettings
+    from wbsa.training.settings import RenderSettings
     from wbsa.training.run import train
     from wbsa.training.settings import TrainSettings
 

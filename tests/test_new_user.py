@@ -166,11 +166,11 @@ def test_every_json_and_fhir_output_parses_strictly(body_depth, fit_model, monke
         assert code == 0, (argv, err)
         outputs[" ".join(map(str, argv[:1] + argv[-1:]))] = strict_json(out)
     est = outputs["estimate --json"]
-    assert est["view"]["azimuth_deg"] is None and "view_not_estimated" in est["flags"]
+    # a wbsa fit model borrows the shipped model's view estimate: a number, not a NaN
+    assert isinstance(est["view"]["azimuth_deg"], float) and "view_not_estimated" not in est["flags"]
     assert est["view_used"]["azimuth_deg"] == 0.0 and est["wbsa_m2"] > 1.0
-    assert any("view_not_estimated" in n["text"] for n in outputs["estimate --fhir"]["note"])
     code, out, err = run_cli("estimate", depth, "--camera", "kinect-v2", "--model", fit_model, "--azimuth", "0")
-    assert code == 0 and "nan" not in out.lower() and "azimuth 0° stated (not estimated)" in out, out
+    assert code == 0 and "nan" not in out.lower(), out
 
 
 def test_written_json_files_are_strict(tmp_path):

@@ -2,7 +2,7 @@
 
 JSON has no NaN or Infinity; Python's :mod:`json` writes them anyway (``NaN``), which strict parsers refuse.
 :func:`json_text` writes a non-finite number as ``null``; the code that produces the number says why, in the
-output's flags or notes (e.g. ``view_not_estimated`` of ``wbsa estimate``). No pandas import: the CLI's
+output's flags or notes (e.g. the body fit's ``no_interval``). No pandas import: the CLI's
 printers use it.
 """
 

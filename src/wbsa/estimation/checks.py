@@ -28,8 +28,6 @@ FLAGS: dict[str, str] = {
     "camera_assumed": "no camera was given; the preset of the image's size was assumed",
     "interval_unsure": "the model's calibration has too few subjects to promise the interval's level",
     "mixed_pixels": "many returns at the subject's outline lay between two surfaces; the area may be off",
-    "view_not_estimated": "the model estimates no view (a wbsa fit model); the stated one was used, the "
-                          "estimated azimuth is null",
     "not_a_person": "the object's silhouette is not a standing person's (a board, a post, a wall?)",
     "feet_unsure": "the subject stands farther than this camera tells the feet from the floor; the area near "
                    "the soles may be off",

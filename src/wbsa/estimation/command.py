@@ -162,12 +162,9 @@ def _observed_path(path):
 
 
 def _write_outputs(args: argparse.Namespace, est) -> None:
-    """The mask and the mesh as a set: both are written to temporaries and checked, then renamed; if either
-    fails, neither is put in place (an older file of either name is kept)."""
+    """The mask, the mesh and the fitted body as a set: all are written to temporaries and checked, then renamed;
+    if one fails, none is put in place (an older file of any of the names is kept)."""
     import contextlib
-
-    import numpy as np
-    from PIL import Image
 
     from wbsa.atomic import atomic_path
     from wbsa.core.mesh_io import write_mesh
@@ -182,4 +179,20 @@ def _write_outputs(args: argparse.Namespace, est) -> None:
             write_mesh(est.surface, tmp)  # written and checked on a temporary of its own, then onto tmp
         if args.mask_out:
             tmp = stack.enter_context(atomic_path(args.mask_out))
-            Image.fromarray(np.where(est.mask, 255, 0).astype(np.uint8)).save(tmp, format="PNG")
+            mask_image(est.mask).save(tmp, format="PNG")
+
+
+def mask_image(mask):
+    """The subject's mask as an 8-bit image (255 = subject), the format of ``--mask-out``."""
+    import numpy as np
+    from PIL import Image
+
+    return Image.fromarray(np.where(mask, 255, 0).astype(np.uint8))
+
+
+def write_mask(path, mask) -> None:
+    """Write :func:`mask_image` of ``mask`` to ``path`` as PNG, atomically (verified)."""
+    from wbsa.atomic import atomic_path
+
+    with atomic_path(path) as tmp:
+        mask_image(mask).save(tmp, format="PNG")

@@ -83,21 +83,18 @@ class Estimate:
                 f"{100 * self.level:.0f} %], {self.view_text()}, {self.distance_m:.2f} m{flags})")
 
     def view_text(self) -> str:
-        """The view in words: the estimated one with its spread, or the stated one where none was estimated."""
+        """The view in words: the estimated one with its spread (a fitted body's without one)."""
         v = self.view
         if np.isfinite(v.azimuth_deg) and not np.isfinite(v.azimuth_sd_deg):  # a fitted body's view
             return f"azimuth {v.azimuth_deg:.0f}° (mirror-equivalent), elevation {v.elevation_deg:.0f}° (fitted)"
-        if not np.isfinite(v.azimuth_deg):
-            return (f"azimuth {self.view_used[0]:.0f}° stated (not estimated), elevation {v.elevation_deg:.0f}° ± "
-                    f"{v.elevation_sd_deg:.0f}°")
         return (f"azimuth {v.azimuth_deg:.0f}° ± {v.azimuth_sd_deg:.0f}° (mirror-equivalent), elevation "
                 f"{v.elevation_deg:.0f}° ± {v.elevation_sd_deg:.0f}°")
 
     def to_dict(self) -> dict:
         """JSON-ready estimate, view and flags (without the mask and the surface).
 
-        A number that was not estimated is NaN here and ``null`` in the JSON (:func:`wbsa.strict_json.json_text`);
-        the flags say why (``view_not_estimated``).
+        A number that was not estimated (the spread of a fitted body's azimuth) is NaN here and ``null`` in the
+        JSON (:func:`wbsa.strict_json.json_text`).
         """
         out = {k: getattr(self, k) for k in ("wbsa_m2", "wbsa_lo_m2", "wbsa_hi_m2", "level", "vbsa_m2", "stature_m",
                                              "distance_m", "n_pixels", "clothing_m", "method", "model", "camera")}
@@ -248,9 +245,6 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     flags.update(prediction.flags)
     routes = {p.name: pred for p, pred in zip(predictors, predictions)} if len(predictors) > 1 else {}
     flags.update(_agreement_flags(routes))
-    if not np.isfinite(view.azimuth_deg):
-        flags["view_not_estimated"] = (f"this model estimates no azimuth; the stated {prediction.view_used[0]:g}° was "
-                                       "used (view.azimuth_deg is null)")
     if not all(np.isfinite(v) for v in (prediction.wbsa_m2, prediction.lo_m2, prediction.hi_m2)):
         raise WbsaError(f"the model gave no finite estimate ({prediction.wbsa_m2}); check the model file, or "
                         "rebuild it")

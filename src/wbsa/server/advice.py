@@ -30,8 +30,6 @@ ADVICE: dict[str, str] = {
     "interval_unsure": "The range given may be too narrow; report it as approximate.",
     "mixed_pixels": "Stand the person well in front of a plain wall, or turn on the camera's flying-pixel "
                     "filter, and take the picture again.",
-    "view_not_estimated": "The azimuth typed was used as it is; check it, or use the default model, which "
-                          "estimates it.",
     "not_a_person": "Check the outline in the depth picture: it may be an object, not the person; click on the "
                     "person, or clear the space around them and take the picture again.",
     "feet_unsure": "Bring the person (or the camera) closer, within the distance given in the detail, and take "

@@ -47,7 +47,7 @@ def downloads(est, folder: Path, name: str) -> dict[str, tuple[bytes, str, str]]
     (atomic, verified) into ``folder`` and read back.
     """
     from wbsa.core.mesh_io import write_mesh
-    from wbsa.estimation.command import _write_mask
+    from wbsa.estimation.command import write_mask
     from wbsa.estimation.fhir import fhir_observation
     from wbsa.strict_json import json_text
 
@@ -57,7 +57,7 @@ def downloads(est, folder: Path, name: str) -> dict[str, tuple[bytes, str, str]]
         "fhir.json": (json_text(fhir_observation(est)).encode(), "application/fhir+json",
                       f"{stem}-wbsa-observation.fhir.json"),
     }
-    _write_mask(folder / "mask.png", est.mask)
+    write_mask(folder / "mask.png", est.mask)
     files["mask.png"] = ((folder / "mask.png").read_bytes(), "image/png", f"{stem}-mask.png")
     write_mesh(est.surface, folder / "surface.ply")
     files["surface.ply"] = ((folder / "surface.ply").read_bytes(), "application/octet-stream", f"{stem}-surface.ply")

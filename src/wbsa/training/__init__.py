@@ -20,7 +20,7 @@ from wbsa.lazy import lazy_exports
 
 _EXPORTS = {
     "TrainSettings": "wbsa.training.settings",
-    "RenderSettings": "wbsa.training.renders",
+    "RenderSettings": "wbsa.training.settings",
     "CaptureSettings": "wbsa.training.capture",
     "train_model": "wbsa.training.pipeline",
     "training_renders": "wbsa.training.pipeline",

@@ -10,7 +10,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     from wbsa.camera.presets import TRAINED_CAMERAS, presets_help
     from wbsa.cli_types import number_in, range_of
     from wbsa.training.capture import DISTANCE_LIMITS_M, CaptureSettings
-    from wbsa.training.renders import RenderSettings
+    from wbsa.training.settings import RenderSettings
     from wbsa.training.settings import TrainSettings
 
     d, r, c = TrainSettings(), RenderSettings(), CaptureSettings()
@@ -69,7 +69,7 @@ def settings_from_args(args: argparse.Namespace):
     from wbsa.cli_types import range_of
     from wbsa.errors import WbsaError
     from wbsa.training.capture import CaptureSettings
-    from wbsa.training.renders import RenderSettings
+    from wbsa.training.settings import RenderSettings
     from wbsa.training.settings import TrainSettings
 
     disparity = None

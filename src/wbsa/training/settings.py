@@ -1,11 +1,85 @@
-"""What an estimator model is trained on: :class:`TrainSettings` (subjects, captures, trees, seed)."""
+"""What an estimator model is trained on: :class:`RenderSettings` (how each subject is captured) and
+:class:`TrainSettings` (subjects, the renders, trees, seed), composed; light to import (``wbsa train --help``)."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 
 from wbsa.errors import WbsaError
-from wbsa.training.renders import RenderSettings
+from wbsa.training.capture import CaptureSettings
+
+@dataclass(frozen=True)
+class RenderSettings:
+    """How samples are drawn from a population.
+
+    Attributes
+    ----------
+    views_per_subject : int
+        Captures per body (each with its own posture, camera and view).
+    capture : CaptureSettings
+    postures : tuple of str or None
+        Named postures of :data:`wbsa.bodies.posture.POSTURES` (None = all, with jitter).
+    floor_error_m, floor_tilt_deg : float
+        Without a room: standard deviation of the error put on the render's floor before the floor cut, as
+        a detected floor would have.
+    room : bool
+        Stand the body on a floor before a wall (``wall_behind_m`` behind it, uniform), store the depth
+        in millimetres and find the subject and the floor with
+        :func:`~wbsa.estimation.segment.segment_subject`: the measures then see what they see in a real
+        image (the segmentation's edges, the detected floor). False: the body alone, its own pixels and
+        the render's floor.
+    alone_share : float
+        With ``room``: share of captures of the body alone (no floor, no wall), as a frame whose room was
+        removed or a render of a 3-D body scan is; the measures then find no floor.
+    scan_share : float
+        Share of the captures of a body alone that are read as a rendered 3-D body scan is: no sensor effects
+        (no noise, holes or quantisation) and the render's own edges. The others keep their camera's drawn
+        sensor and edges (a frame whose room was removed).
+    clothed_share : float
+        Share of the captures of a dressed body: a layer of clothes over the trunk, upper arms, legs and feet
+        (:func:`~wbsa.bodies.clothing.dressed_vertices`, the shoe soles flattened onto the floor); the camera
+        aims at the dressed body's centre, a few millimetres from the bare one's.
+    clothing_m : (float, float)
+        Range of the layer's thickness (m), uniform.
+    """
+
+    views_per_subject: int = 4
+    capture: CaptureSettings = field(default_factory=CaptureSettings)
+    postures: tuple[str, ...] | None = None
+    floor_error_m: float = 0.003
+    floor_tilt_deg: float = 0.1
+    room: bool = True
+    wall_behind_m: tuple[float, float] = (0.5, 1.5)
+    alone_share: float = 0.15
+    scan_share: float = 0.5
+    clothed_share: float = 0.2
+    clothing_m: tuple[float, float] = (0.0, 0.015)
+
+    def __post_init__(self) -> None:
+        from wbsa.errors import WbsaError
+
+        check_clothing_settings(self.clothed_share, self.clothing_m)
+        if not isinstance(self.views_per_subject, int) or self.views_per_subject < 1:
+            raise WbsaError(f"views_per_subject must be an integer >= 1, got {self.views_per_subject!r}")
+        if not 0.0 <= self.alone_share <= 1.0:
+            raise WbsaError(f"alone_share {self.alone_share} must be a share of the captures in [0, 1]")
+        if not 0.0 <= self.scan_share <= 1.0:
+            raise WbsaError(f"scan_share {self.scan_share} must be a share of the captures of a body alone in [0, 1]")
+
+
+def check_clothing_settings(clothed_share: float, clothing_m: tuple[float, float]) -> None:
+    """Refuse a share of dressed captures outside [0, 1] or a thickness range outside 0–5 cm (one-line WbsaError)."""
+    from wbsa.errors import WbsaError
+    from wbsa.estimation.checks import MAX_CLOTHING_M
+
+    if not 0.0 <= clothed_share <= 1.0:
+        raise WbsaError(f"clothed_share {clothed_share} must be a share of the captures in [0, 1]")
+    lo, hi = (float(v) for v in clothing_m)
+    if not 0.0 <= lo <= hi <= MAX_CLOTHING_M:
+        raise WbsaError(f"clothing_m {tuple(clothing_m)} must be a range (low, high) of layers within "
+                        f"0–{MAX_CLOTHING_M:g} m, "
+                        "e.g. (0.0, 0.015)")
+
 
 
 @dataclass(frozen=True)

@@ -65,9 +65,10 @@ class ViewEstimate:
     p_front: float
 
     def to_dict(self) -> dict:
-        """JSON-ready fields."""
-        return {k: round(float(getattr(self, k)), 3) for k in ("azimuth_deg", "azimuth_sd_deg", "elevation_deg",
-                                                                "elevation_sd_deg", "p_front")}
+        """JSON-ready fields; a value not estimated (a fitted body's spreads) is None."""
+        values = {k: float(getattr(self, k)) for k in ("azimuth_deg", "azimuth_sd_deg", "elevation_deg",
+                                                        "elevation_sd_deg", "p_front")}
+        return {k: round(v, 3) if np.isfinite(v) else None for k, v in values.items()}
 
 
 @dataclass(frozen=True)

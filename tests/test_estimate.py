@@ -495,7 +495,6 @@ def test_floor_gives_stature_and_elevation(bodies):
     from wbsa.camera import MeshScene, View, pose_from_view, preset
     from wbsa.estimation.measure import measure_subject
     from wbsa.training.renders import render_floor
-    from wbsa.training.settings import 
     from wbsa.simulate import simulate_view
 
     man, _ = bodies
@@ -638,7 +637,6 @@ def test_out_of_fold_view_spread_is_the_held_out_one():
     the finished view model reports at run time (the held-out error), not the fold models' in-sample one,
     which was about a fifth of it on revision 10's renders and made every run-time view look uncertain."""
     from wbsa.training.renders import Samples
-    from wbsa.training.settings import 
     from wbsa.training.fit import oof_view
     from wbsa.estimation.view import fold_azimuth
 

@@ -98,3 +98,26 @@ def test_what_a_route_cannot_serve_is_refused_before_any_work(person_view, tmp_p
                  str(tmp_path / "b.ply")]) == 2
     assert "--out-body writes the fitted body of --method body-fit or both" in capsys.readouterr().err
     assert not (tmp_path / "b.ply").exists()
+
+
+def test_the_body_fit_reads_its_shipped_interval_and_its_level():
+    """The calibration ships in wbsa/data; a level it was not calibrated at is refused in one line."""
+    from wbsa.estimation.bodyfit.interval import load
+    from wbsa.estimation.methods import Request, predictor_for
+
+    calibration = load()
+    assert calibration is not None and calibration.level == 0.95 and calibration.error_lo < 0 < calibration.error_hi
+    body_fit = predictor_for("body-fit")
+    body_fit.check_request(Request(level=0.95))
+    with pytest.raises(WbsaError, match="calibrated at level 0.95 only"):
+        body_fit.check_request(Request(level=0.8))
+
+
+def test_both_keeps_the_regression_when_the_body_fit_cannot_serve(person_view):
+    """Stated clothes: the body fit refuses, the regression's answer stands, flagged body_fit_failed."""
+    from wbsa.estimation import estimate
+
+    depth, camera, _ = person_view
+    est = estimate(depth, camera, method="both", clothing_m=0.01)
+    assert est.body is None and "regression" in est.routes and "body-fit" not in est.routes
+    assert "does not yet allow for clothes" in est.flags["body_fit_failed"]

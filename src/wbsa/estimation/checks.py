@@ -32,6 +32,7 @@ FLAGS: dict[str, str] = {
     "feet_unsure": "the subject stands farther than this camera tells the feet from the floor; the area near "
                    "the soles may be off",
     "methods_disagree": "the regression's and the body fit's intervals do not overlap (method both)",
+    "body_fit_failed": "with method both, the body fit could not serve this image; the regression's answer stands",
     "no_interval": "the body fit has no calibrated interval; its bounds are the estimate",
     **{name: text for name, text in BODY_FIT_FLAGS.items() if name not in ("cut_off", "no_floor")},
 }
@@ -179,8 +180,8 @@ def view_flags(stated: tuple[float | None, float | None], estimated, tolerance_d
     if az is not None and math.isfinite(estimated.azimuth_deg):
         err = float(azimuth_error_deg(az, estimated.azimuth_deg))
         if err > tolerance_deg:
-            parts.append(f"azimuth stated {az:g}°, estimated {estimated.azimuth_deg:.0f}° ± {estimated.azimuth_sd_deg:.0f}°"
-                         " (mirror-equivalent)")
+            spread = f" ± {estimated.azimuth_sd_deg:.0f}°" if math.isfinite(estimated.azimuth_sd_deg) else ""
+            parts.append(f"azimuth stated {az:g}°, estimated {estimated.azimuth_deg:.0f}°{spread} (mirror-equivalent)")
     if el is not None and abs(el - estimated.elevation_deg) > tolerance_deg:
         parts.append(f"elevation stated {el:g}°, estimated {estimated.elevation_deg:.0f}°")
     return {"view_disagrees": "; ".join(parts)} if parts else {}

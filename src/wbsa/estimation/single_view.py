@@ -213,10 +213,16 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     depth_m = _depth_array(depth, depth_scale)
     checks.check_image_size(depth_m, intrinsics)
     depth_m, mixed = repair_mixed_pixels(depth_m, intrinsics.fx)
-    predictors = predictors_for(method, model)  # a model file is read (and refused if broken) before any work
-    for predictor in predictors:
-        predictor.check_request(request)
+    predictors = list(predictors_for(method, model))  # a model file is read (and refused if broken) at once
     flags: dict[str, str] = {}
+    for k, predictor in enumerate(predictors):
+        try:
+            predictor.check_request(request)
+        except WbsaError as exc:
+            if k == 0:
+                raise
+            flags["body_fit_failed"] = str(exc)  # both: the second route cannot serve this request
+            predictors[k] = None
     if segment is None:
         mask, floor = np.isfinite(depth_m) & (depth_m > 0), None
         if not mask.any():
@@ -238,22 +244,32 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     flags.update(checks.working_range_flags(m.distance_m, intrinsics))
     flags.update(checks.feet_flags(m.distance_m, intrinsics))
     subject = Subject(depth_m, mask, intrinsics, floor, m)
-    predictions = [p.predict(subject, request) for p in predictors]
-    prediction = predictions[0]
+    prediction = predictors[0].predict(subject, request)
+    routes = {predictors[0].name: prediction} if len(predictors) > 1 else {}
+    for predictor in predictors[1:]:
+        if predictor is None:
+            continue
+        try:  # both: a body fit that fails leaves the regression's answer standing, flagged
+            routes[predictor.name] = predictor.predict(subject, request)
+        except WbsaError as exc:
+            flags["body_fit_failed"] = str(exc)
+    for route in (prediction, *list(routes.values())[1:]):
+        if not all(np.isfinite(v) for v in (route.wbsa_m2, route.lo_m2, route.hi_m2)):
+            raise WbsaError(f"the {route.model_name} model gave no finite estimate ({route.wbsa_m2}); check the "
+                            "model file, or rebuild it")
     view = prediction.view
     flags.update(checks.view_flags((azimuth_deg, elevation_deg), view))
-    flags.update(prediction.flags)
-    routes = {p.name: pred for p, pred in zip(predictors, predictions)} if len(predictors) > 1 else {}
-    flags.update(_agreement_flags(routes))
-    if not all(np.isfinite(v) for v in (prediction.wbsa_m2, prediction.lo_m2, prediction.hi_m2)):
-        raise WbsaError(f"the model gave no finite estimate ({prediction.wbsa_m2}); check the model file, or "
-                        "rebuild it")
+    for name, text in prediction.flags.items():  # the image's own checks keep their wording
+        flags.setdefault(name, text)
+    for name, text in _agreement_flags(routes).items():
+        flags.setdefault(name, text)
     return Estimate(wbsa_m2=prediction.wbsa_m2, wbsa_lo_m2=prediction.lo_m2, wbsa_hi_m2=prediction.hi_m2, level=level,
                     vbsa_m2=m.vbsa_m2, stature_m=m.stature_m, distance_m=m.distance_m, n_pixels=m.n_pixels,
                     view=view, view_used=prediction.view_used, flags=flags, method=method, model=prediction.model_name,
                     camera=intrinsics.name, clothing_m=float(clothing_m),
                     mask=mask & np.isfinite(depth_m) & (depth_m > 0), surface=m.surface, measured_mask=m.mask,
-                    body=next((p.body for p in predictions if p.body is not None), None), routes=routes)
+                    body=next((p.body for p in (prediction, *routes.values()) if p.body is not None), None),
+                    routes=routes)
 
 
 def _agreement_flags(routes: dict) -> dict[str, str]:

@@ -36,6 +36,8 @@ ADVICE: dict[str, str] = {
                    "the picture again.",
     "methods_disagree": "The two methods do not agree: check the outline, the clothes and the posture (standing, "
                         "arms slightly away from the body), and take the picture again.",
+    "body_fit_failed": "The body fit could not measure this picture (the detail says why); the regression's answer "
+                       "is shown. Fix what the detail names to get both.",
     "no_interval": "The body fit gives no range here; use the regression's range, or report the value as "
                    "approximate.",
     "not_converged": "The body fit did not settle: take the picture again with the person standing still, "

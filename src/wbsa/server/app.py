@@ -141,6 +141,7 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
     from starlette.staticfiles import StaticFiles
 
     from wbsa.camera.presets import PRESETS
+    from wbsa.strict_json import finite_or_none
     from wbsa.typing import METHODS
     from wbsa.server.batch import Batch, BatchStore, run_batch
     from wbsa.server.jobs import ResultStore, Runner, internal_error, measure, new_id
@@ -191,7 +192,7 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
         finally:
             runner.release()
         results.add(result)
-        return JSONResponse(result.answer, status_code=422 if "error" in result.answer else 200)
+        return JSONResponse(finite_or_none(result.answer), status_code=422 if "error" in result.answer else 200)
 
     async def pick(request: Request) -> Response:
         import dataclasses
@@ -222,7 +223,7 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
         finally:
             runner.release()
         results.add(result)
-        return JSONResponse(result.answer, status_code=422 if "error" in result.answer else 200)
+        return JSONResponse(finite_or_none(result.answer), status_code=422 if "error" in result.answer else 200)
 
     async def result_file(request: Request) -> Response:
         try:

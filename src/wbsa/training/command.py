@@ -57,7 +57,11 @@ def _camera(spec: str, disparity: tuple[float, float] | None):
     from wbsa.camera.presets import resolve_camera
     from wbsa.camera.presets import CAMERAS, CameraRecord
 
-    if spec in CAMERAS and disparity is None:
+    if spec in CAMERAS:
+        if disparity is not None:
+            from wbsa.errors import WbsaError
+
+            raise WbsaError(f"--disparity goes with --camera FILE.json; the preset {spec} has its own")
         return spec
     intrinsics = resolve_camera(spec)
     return CameraRecord(intrinsics, "active-stereo" if disparity else "time-of-flight", disparity, False,

@@ -101,7 +101,7 @@ def training_renders(settings: TrainSettings = TrainSettings(), parts: tuple[str
     """
     from pathlib import Path
 
-    from wbsa.training.recipe import settings_hash
+    from wbsa.training.recipe import MODEL_REVISION, settings_hash
 
     _check_parts(parts)
     pop = training_population(settings, show_progress)
@@ -111,7 +111,8 @@ def training_renders(settings: TrainSettings = TrainSettings(), parts: tuple[str
     out = {}
     for part in parts:
         rows, seed = chosen[part]
-        store = None if folder is None else RenderStore(Path(folder) / part, settings_hash(settings))
+        key = f"r{MODEL_REVISION}-{settings_hash(settings)}"  # renders of another wbsa revision are not reused
+        store = None if folder is None else RenderStore(Path(folder) / part, key)
         out[part] = render_samples(pop[rows].reset_index(drop=True), settings.render, seed, workers=workers,
                                    store=store, show_progress=show_progress, log_lines=log_lines)
     return out

@@ -21,8 +21,8 @@ import numpy as np
 
 from wbsa.errors import WbsaError
 
-#: Where the calibration is stored (package data; rebuilt by the command in its ``command`` field).
-CALIBRATION_PATH = Path(__file__).resolve().parent.parent / "data" / "bodyfit_interval.json"
+#: Where the calibration is stored (package data, ``wbsa/data``; rebuilt by the command in its ``command`` field).
+CALIBRATION_PATH = Path(__file__).resolve().parents[2] / "data" / "bodyfit_interval.json"
 
 
 @dataclass(frozen=True)

@@ -26,9 +26,16 @@ class BodyFitPredictor:
         self.settings = settings or BodyFitSettings()
 
     def check_request(self, request: Request) -> None:
-        """Refuse stated clothes: the body fit does not yet allow for them."""
+        """Refuse stated clothes (the body fit does not yet allow for them) and an interval level other than the
+        one its interval was calibrated at."""
+        from wbsa.estimation.bodyfit.interval import load
+
         if request.clothing_m > 0:
             raise WbsaError("the body fit does not yet allow for clothes (--clothing-cm > 0); use --method regression")
+        calibration = load()
+        if calibration is not None and abs(request.level - calibration.level) > 1e-9:
+            raise WbsaError(f"the body fit's interval is calibrated at level {calibration.level:g} only; give "
+                            f"--level {calibration.level:g} or use --method regression")
 
     def predict(self, subject: Subject, request: Request) -> Prediction:
         """WBSA of the fitted body at rest; its flags (``fit_not_converged`` ...) become the estimate's."""
@@ -36,11 +43,10 @@ class BodyFitPredictor:
 
         fit = fit_body(subject.depth_m, subject.mask, subject.camera, subject.floor, clothing_m=request.clothing_m,
                        azimuth_deg=request.azimuth_deg, settings=self.settings)
-        m = subject.measures
         psi = float(fold_azimuth(fit.azimuth_deg))
         view = ViewEstimate(psi, float("nan"), fit.elevation_deg, float("nan"), float("nan"))
         az = psi if request.azimuth_deg is None else float(fold_azimuth(request.azimuth_deg))
-        el = fit.elevation_deg if request.elevation_deg is None else float(request.elevation_deg)
+        el = fit.elevation_deg  # the fit places the body itself; a stated elevation is checked against it
         flags = dict(fit.flags)
         lo, hi = fit.wbsa_lo_m2, fit.wbsa_hi_m2
         if not (math.isfinite(lo) and math.isfinite(hi)):

@@ -88,6 +88,8 @@ async function pickAt(x, y) {
 }
 
 function fmt(v, digits) { return Number(v).toFixed(digits); }
+// " ± 3°" for a spread that was estimated, nothing for one that was not (a fitted body's view)
+function spread(v) { return v === null || v === undefined ? "" : ` ± ${fmt(v, 0)}°`; }
 
 function show(a) {
   $("batch").hidden = true;
@@ -173,7 +175,7 @@ function showView(v) {
   const et = svg("text", { x: ex + 90, y: ey - 5, "font-size": 11, fill: "#5b6577" });
   et.textContent = `elevation ${fmt(v.elevation_used_deg, 0)}°`;
   s.append(et);
-  $("view-line").textContent = `Azimuth ${fmt(v.azimuth_deg, 0)}° ± ${fmt(v.azimuth_sd_deg, 0)}° (0 = in front, 90 = at the person's left; its mirror image, −azimuth, looks the same${v.uncertain ? "; the faint camera: front and back may be swapped" : ""}), elevation ${fmt(v.elevation_deg, 0)}° ± ${fmt(v.elevation_sd_deg, 0)}°, ${fmt(v.distance_m, 2)} m away.`;
+  $("view-line").textContent = `Azimuth ${fmt(v.azimuth_deg, 0)}°${spread(v.azimuth_sd_deg)} (0 = in front, 90 = at the person's left; its mirror image, −azimuth, looks the same${v.uncertain ? "; the faint camera: front and back may be swapped" : ""}), elevation ${fmt(v.elevation_deg, 0)}°${spread(v.elevation_sd_deg)}, ${fmt(v.distance_m, 2)} m away.`;
 }
 
 function showFormulae(f, wbsa) {

@@ -169,20 +169,15 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
             "methods": methods, "max_upload_bytes": max_upload_bytes, "max_clothing_cm": 5,
             "model": "default" if model is None else str(getattr(model, "meta", {}).get("name", "given"))})
 
-    async def estimate_one(request: Request) -> Response:
+    async def answered(work) -> Response:
+        """Run ``work()`` (a coroutine giving a result) in one of the runner's places and answer with the result;
+        a bad request gets its one-line message, a failure of wbsa itself a 500 with no traceback."""
         try:
             runner.reserve()
         except UploadError as exc:
             return error(exc)
         try:
-            form = await read_form(request, max_upload_bytes)
-            options = options_from_form(form, presets, methods)
-            depth = form.files.get("depth", [])
-            if len(depth) != 1:
-                raise UploadError("send one depth file in the field 'depth' (for several, use the batch)"
-                                  if depth else "no depth file was sent; choose or drop a depth image")
-            check_depth_upload(depth[0])
-            result = await runner.run(measure, depth[0], options, model, root)
+            result = await work()
         except UploadError as exc:
             return error(exc)
         except ClientDisconnect:
@@ -194,36 +189,39 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
         results.add(result)
         return JSONResponse(finite_or_none(result.answer), status_code=422 if "error" in result.answer else 200)
 
+    async def estimate_one(request: Request) -> Response:
+        async def work():
+            form = await read_form(request, max_upload_bytes)
+            options = options_from_form(form, presets, methods)
+            depth = form.files.get("depth", [])
+            if len(depth) != 1:
+                raise UploadError("send one depth file in the field 'depth' (for several, use the batch)"
+                                  if depth else "no depth file was sent; choose or drop a depth image")
+            check_depth_upload(depth[0])
+            return await runner.run(measure, depth[0], options, model, root)
+
+        return await answered(work)
+
     async def pick(request: Request) -> Response:
         import dataclasses
 
         from wbsa.estimation.command import _pick
 
-        try:
-            runner.reserve()
-        except UploadError as exc:
-            return error(exc)
-        try:
+        async def work():
             before = results.get(request.path_params["rid"])
             if before.depth_m is None:
                 raise UploadError("this upload holds no depth image to pick from; upload a depth file")
-            text = request.query_params.get("pick", "")
             try:
-                at = _pick(text)
+                at = _pick(request.query_params.get("pick", ""))
             except argparse.ArgumentTypeError as exc:
                 raise UploadError(f"pick: {exc}") from None
             options = dataclasses.replace(before.options, pick=at)
             result = await runner.run(measure, None, options, model, root, depth_m=before.depth_m)
             result.name = before.name
             result.answer["name"] = before.name
-        except UploadError as exc:
-            return error(exc)
-        except Exception as exc:
-            return JSONResponse({"error": internal_error(exc)}, status_code=500)
-        finally:
-            runner.release()
-        results.add(result)
-        return JSONResponse(finite_or_none(result.answer), status_code=422 if "error" in result.answer else 200)
+            return result
+
+        return await answered(work)
 
     async def result_file(request: Request) -> Response:
         try:

@@ -7,8 +7,6 @@ deterministic bytes of data files (no timings in a survey population's Parquet m
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 import struct
 import zlib
@@ -20,21 +18,8 @@ import pytest
 from wbsa.analysis.fit_views import FitSettings
 from wbsa.analysis.outputs import run_fit
 from helpers.synthetic import synthetic_population, synthetic_scan
-from wbsa.cli import main
 from wbsa.errors import WbsaError
-
-
-def run_cli(*args: str) -> tuple[int, str, str]:
-    o, e = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(o), contextlib.redirect_stderr(e):
-        code = main([str(a) for a in args])
-    return code, o.getvalue(), e.getvalue()
-
-
-def assert_one_line_error(code: int, err: str, *fragments: str) -> None:
-    assert code == 2 and err.startswith("error: ") and err.count("\n") == 1 and "Traceback" not in err, err
-    for f in fragments:
-        assert f in err, err
+from helpers.cli import assert_one_line_error, run_cli
 
 
 @pytest.fixture(scope="module")

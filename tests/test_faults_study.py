@@ -6,20 +6,17 @@ complete is not.
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 import os
 import random
 import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
 
-from wbsa.cli import main
+from helpers.cli import run_cli
 
 pytestmark = pytest.mark.slow  # real bodies, a scan, a fit and a report per study (10-30 s each)
 
@@ -87,13 +84,6 @@ def assert_nothing_incomplete(folder: Path) -> None:
         rec = json.loads(marker.read_text())
         stage = Stage(rec["stage"], rec["key"], marker.parent, rec["settings"], rec["inputs"])
         assert stage.done, marker
-
-
-def run_cli(*args: str) -> tuple[int, str, str]:
-    o, e = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(o), contextlib.redirect_stderr(e):
-        code = main(list(args))
-    return code, o.getvalue(), e.getvalue()
 
 
 def report_title(html_path: Path) -> str:

@@ -2,28 +2,13 @@
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 
 import numpy as np
 import pytest
 
-from wbsa.cli import main
 from wbsa.errors import WbsaError
-
-
-def run_cli(*args) -> tuple[int, str, str]:
-    o, e = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(o), contextlib.redirect_stderr(e):
-        code = main([str(a) for a in args])
-    return code, o.getvalue(), e.getvalue()
-
-
-def assert_one_line_error(code: int, err: str, *fragments: str) -> None:
-    assert code == 2 and err.startswith("error: ") and err.count("\n") == 1 and "Traceback" not in err, err
-    for f in fragments:
-        assert f in err, err
+from helpers.cli import assert_one_line_error, run_cli
 
 
 def strict_json(text: str):
@@ -226,7 +211,6 @@ def test_a_view_set_with_angle_lists_is_refused_and_views_replace_inherited_list
 
 def test_the_worker_count_recorded_is_the_one_used(tmp_path, monkeypatch):
     """``--workers 1`` was recorded as 0; the pipeline's recorded settings are now those it ran with."""
-    import dataclasses
 
     import wbsa.study.pipeline as pipeline
 
@@ -253,7 +237,6 @@ def test_the_worker_count_recorded_is_the_one_used(tmp_path, monkeypatch):
 
 def test_objects_the_api_returns_print_short(tmp_path):
     """Every object the public API returns prints a line (or a small table), its detail one attribute away."""
-    from pathlib import Path
 
     import wbsa
     from wbsa.camera import preset

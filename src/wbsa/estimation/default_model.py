@@ -52,7 +52,8 @@ def load_model(model=None):
     """An :class:`EstimatorModel` or a ``wbsa fit`` :class:`~wbsa.analysis.model_file.WbsaModel`.
 
     ``None`` gives the shipped default model; a path ending in ``.npz`` an estimator model (e.g. one
-    ``wbsa train`` wrote); ``.json`` a ``wbsa fit`` model file; a model object is returned as it is.
+    ``wbsa train`` wrote); ``.json`` a ``wbsa fit`` model file; a model object is returned as it is; anything else
+    is refused in one line.
     """
     if model is None:
         return default_model()
@@ -67,6 +68,11 @@ def load_model(model=None):
             _check_legacy_finite(legacy, path)
             return legacy
         raise WbsaError(f"model {path.name} is neither an estimator model (.npz) nor a wbsa fit model (.json)")
+    from wbsa.analysis.model_file import WbsaModel
+
+    if not isinstance(model, (EstimatorModel, WbsaModel)):
+        raise WbsaError(f"model must be None (the default model), a model file path (.npz or .json), an "
+                        f"EstimatorModel or a WbsaModel, got {type(model).__name__}")
     return model
 
 

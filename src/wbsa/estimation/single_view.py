@@ -185,22 +185,17 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
         a height that is not human (wrong depth scale), a broken model, an unknown method, a stated layer of
         clothes that is not 0–0.05 m, or one stated to a ``wbsa fit`` model.
     """
-    from wbsa.analysis.model_file import WbsaModel
     from wbsa.camera.presets import resolve_camera
     from wbsa.camera.views import check_angle
     from wbsa.estimation import checks
     from wbsa.estimation.measure import measure_subject
     from wbsa.estimation.methods import Request, Subject, check_method, predictors_for
     from wbsa.estimation.mixed_pixels import repair_mixed_pixels
-    from wbsa.estimation.model import EstimatorModel
     from wbsa.estimation.segment import segment_subject
 
     check_method(method)
     if not (checks.is_real_number(level) and 0 < level < 1):
         raise WbsaError(f"interval level {level!r} must be a number in (0, 1), e.g. 0.95")
-    if not (model is None or isinstance(model, (str, os.PathLike, EstimatorModel, WbsaModel))):
-        raise WbsaError(f"model must be None (the default model), a model file path (.npz or .json), an "
-                        f"EstimatorModel or a WbsaModel, got {type(model).__name__}")
     if segment is not None and not isinstance(segment, SegmentSettings):
         raise WbsaError(f"segment must be SegmentSettings or None, got {type(segment).__name__}")
     if azimuth_deg is not None:
@@ -209,11 +204,11 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
         elevation_deg = check_angle(elevation_deg, "elevation", "elevation_deg")
     checks.check_clothing(clothing_m)
     request = Request(azimuth_deg, elevation_deg, float(clothing_m), level)
+    predictors = list(predictors_for(method, model))  # a model is read (and refused if broken) before any work
     intrinsics = resolve_camera(camera)
     depth_m = _depth_array(depth, depth_scale)
     checks.check_image_size(depth_m, intrinsics)
     depth_m, mixed = repair_mixed_pixels(depth_m, intrinsics.fx)
-    predictors = list(predictors_for(method, model))  # a model file is read (and refused if broken) at once
     flags: dict[str, str] = {}
     for k, predictor in enumerate(predictors):
         try:

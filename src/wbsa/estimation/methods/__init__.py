@@ -144,12 +144,7 @@ def predictor_for(method: Method, model=None) -> Predictor:
         from wbsa.estimation.methods.regression import RegressionPredictor
 
         return RegressionPredictor(loaded)
-    from wbsa.analysis.model_file import WbsaModel
-
-    if not isinstance(loaded, WbsaModel):
-        raise WbsaError(f"model must be an estimator model, a wbsa fit model or the path of one, got "
-                        f"{type(loaded).__name__}")
-    from wbsa.estimation.methods.per_view import PerViewPredictor
+    from wbsa.estimation.methods.per_view import PerViewPredictor  # a wbsa fit model (load_model checked it)
 
     return PerViewPredictor(loaded)
 

@@ -38,7 +38,7 @@ class BodyFitPredictor:
                             f"--level {calibration.level:g} or use --method regression")
 
     def predict(self, subject: Subject, request: Request) -> Prediction:
-        """WBSA of the fitted body at rest; its flags (``fit_not_converged`` ...) become the estimate's."""
+        """WBSA of the fitted body at rest; its flags (``not_converged`` ...) become the estimate's."""
         from wbsa.estimation.bodyfit.fit import fit_body
 
         fit = fit_body(subject.depth_m, subject.mask, subject.camera, subject.floor, clothing_m=request.clothing_m,

@@ -22,7 +22,7 @@ from wbsa.errors import WbsaError
 #: The flags a :class:`BodyFit` may carry, with their meaning.
 FLAGS = {
     "not_converged": "the fit used all its steps without settling; the body may be off",
-    "time_budget": "the fit ran out of its time budget and returned its best body so far",
+    "time_budget": "the fit reached its wall-clock safety stop and returned its best body so far",
     "posture_at_limit": "a joint angle sits at the edge of the standing postures the fit allows",
     "outside_model_range": "a body parameter sits at the edge of anny's range: the person may be outside the model",
     "poor_fit": "the fitted surface leaves many observed points unexplained (not a standing person, clothes, "
@@ -144,7 +144,8 @@ def _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fi
 
     flags: dict[str, str] = {}
     if opt.timed_out:
-        flags["time_budget"] = f"stopped after {opt.steps} steps at the {settings.time_budget_s:g} s budget"
+        flags["time_budget"] = (f"stopped after {opt.steps} of {settings.steps} steps at the "
+                                f"{settings.time_budget_s:g} s safety stop")
     elif not opt.converged:
         flags["not_converged"] = f"{opt.steps} steps without settling"
     lows = np.array([lo for lo, _ in ANGLE_LIMITS_DEG] * 2)

@@ -3,8 +3,11 @@
 One batch holds every restart, so a step costs one blendshape product and one skinning for all of them
 (the time of a fit is per-operation overhead, not arithmetic). Each restart keeps its own best state;
 the correspondences and normals are refreshed every ``refresh_every`` steps. The loop stops when the
-best loss stalls (converged), after ``steps`` steps (not converged) or at the deadline (its best so far,
-flagged by the caller).
+best loss stalls (converged) or after ``steps`` steps (not converged): the budget is counted in steps, so the
+same image gives the same body on any machine. A wall-clock deadline is only a safety stop: it is checked
+after each step, so at least one step always runs, and the fit returns its best body so far (flagged by the
+caller). Stopped while the robust scale still anneals, where losses of different steps are not comparable,
+the best body is each restart's latest state, compared at that step's scale.
 """
 
 from __future__ import annotations
@@ -79,7 +82,8 @@ def optimise(fit_body, objective, starts, settings: BodyFitSettings, deadline: f
     starts : Starts
     settings : BodyFitSettings
     deadline : float
-        ``time.perf_counter()`` value at which to stop.
+        ``time.perf_counter()`` value after which no further step starts (a safety stop; ``math.inf`` for none).
+        The first step always runs, so there is always a best body to return.
     """
     import torch
 
@@ -124,8 +128,10 @@ def optimise(fit_body, objective, starts, settings: BodyFitSettings, deadline: f
     k = len(fit_body.subset.index)
     model = fit_body.body_model
 
+    latest_loss = np.full(b, np.inf)
+    latest: list = [None] * b
     for step in range(settings.steps):
-        if time.perf_counter() > deadline:
+        if step and time.perf_counter() > deadline:
             timed_out = True
             break
         if step and step == prune_step and len(values) > settings.keep_restarts:
@@ -138,6 +144,8 @@ def optimise(fit_body, objective, starts, settings: BodyFitSettings, deadline: f
                 phen0 = phen0[keep]
             best_loss = best_loss[keep.numpy()]
             best = [best[i] for i in keep.numpy()]
+            latest_loss = latest_loss[keep.numpy()]
+            latest = [latest[i] for i in keep.numpy()]
             opt = adam()
         if step % settings.refresh_every == 0:
             with torch.no_grad():
@@ -173,11 +181,18 @@ def optimise(fit_body, objective, starts, settings: BodyFitSettings, deadline: f
         if floor_seen:
             loss = loss + (shift[:, 2] / _FLOOR_SD_M).square() / len(objective.obs.points)
         values = loss.detach().numpy().astype(np.float64)
+
+        def state(i):
+            return (params[i].detach().numpy().copy(), angles[i].detach().numpy().astype(np.float64),
+                    float(yaw[i].detach()), shift[i].detach().numpy().astype(np.float64),
+                    v_all[i].detach().numpy(), tri[i], bary[i])
+
         for i in np.flatnonzero(values < best_loss):
             best_loss[i] = values[i]
-            best[i] = (params[i].detach().numpy().copy(), angles[i].detach().numpy().astype(np.float64),
-                       float(yaw[i].detach()), shift[i].detach().numpy().astype(np.float64),
-                       v_all[i].detach().numpy(), tri[i], bary[i])
+            best[i] = state(i)
+        if step < _ANNEAL_SHARE * settings.steps:
+            latest_loss = values.copy()
+            latest = [state(i) for i in range(len(values))]
         if step % settings.refresh_every == settings.refresh_every - 1:
             history.append(float(best_loss.min()))
         if step < _ANNEAL_SHARE * settings.steps:  # the scale still changes: losses are not comparable
@@ -190,6 +205,8 @@ def optimise(fit_body, objective, starts, settings: BodyFitSettings, deadline: f
             phen[:, -3:].clamp_(min=0.02)
             local.clamp_(-1.0, 1.0)
             angles.copy_(torch.maximum(torch.minimum(angles, hi), lo))
+    if not np.isfinite(best_loss).any():  # stopped while the scale annealed: the latest states, at one scale
+        best_loss, best = latest_loss, latest
     i = int(np.argmin(best_loss))
     params, ang, yaw_i, shift_i, verts, tri_i, bary_i = best[i]
     with torch.no_grad():

@@ -56,7 +56,9 @@ class BodyFitSettings:
     local_changes : bool
         Fit anny's four local changes (waist, hips, belly, buttocks) besides the phenotypes.
     time_budget_s : float
-        Wall time after which the fit stops with its best result so far (flag ``time_budget``).
+        A wall-clock safety stop (s), not the fit's budget: ``steps`` is the budget, so the same image gives the
+        same body on any machine. Past it no further step starts and the fit returns its best body so far,
+        flagged ``time_budget`` (at least one step always runs).
     tolerance : float
         Convergence: the best loss fell by less than this fraction over the last ``refresh_every`` steps.
     density_model : {'constant', 'deurenberg-siri', 'deurenberg-brozek'}
@@ -87,7 +89,7 @@ class BodyFitSettings:
     local_change_prior_weight: float = 0.01
     age_prior_sd: float = 0.1
     local_changes: bool = True
-    time_budget_s: float = 30.0
+    time_budget_s: float = 300.0
     tolerance: float = 0.0005
     density_model: DensityModel = "constant"
     density_kg_m3: float = 980.0

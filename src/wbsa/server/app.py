@@ -110,7 +110,7 @@ def options_from_form(form, presets, methods) -> "Options":
 
 
 def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_upload_bytes: int = MAX_UPLOAD_BYTES,
-               temp_dir: str | None = None, keep_results: int = 64):
+               temp_dir: str | None = None, keep_results: int = 64, token: str | None = None):
     """The ``wbsa serve`` application (Starlette, ASGI).
 
     Parameters
@@ -128,6 +128,9 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
         Where the server's temporary folder is made (default: the system's); it is removed at shutdown.
     keep_results : int
         Answers kept in memory for downloads and picks.
+    token : str, optional
+        A token every request must carry (:class:`wbsa.server.access.TokenGate`; 403 without it). None: no
+        token (loopback only: ``wbsa serve`` makes one for any other address).
 
     Returns
     -------
@@ -282,6 +285,8 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
 
     from starlette.middleware import Middleware
 
+    from wbsa.server.access import TokenGate
+
     app = Starlette(routes=[
         Route("/", page),
         Route("/api/info", info),
@@ -292,7 +297,8 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
         Route("/api/batch/{bid}.csv", batch_csv),
         Route("/api/batch/{bid}", batch_progress),
         Mount("/static", StaticFiles(directory=STATIC), name="static"),
-    ], lifespan=lifespan, middleware=[Middleware(SecurityHeaders)])
+    ], lifespan=lifespan, middleware=[Middleware(SecurityHeaders)]
+        + ([Middleware(TokenGate, token=token)] if token is not None else []))
     app.state.root, app.state.runner, app.state.results, app.state.batches = root, runner, results, batches
     app.state.model = model
     return app

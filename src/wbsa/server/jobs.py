@@ -105,6 +105,9 @@ class ResultStore:
             while len(self._items) > self.capacity:
                 self._items.popitem(last=False)
 
+    def __len__(self) -> int:
+        return len(self._items)
+
     def get(self, result_id: str) -> Result:
         """The result of ``result_id``; an :class:`UploadError` (404) if unknown or dropped."""
         with self._lock:

@@ -53,7 +53,7 @@ def _models(spacing_m: float):
 
 def fit_body(depth_m: np.ndarray, mask: np.ndarray, camera, floor, *, clothing_m: float = 0.0,
              azimuth_deg: float | None = None, settings: BodyFitSettings = BodyFitSettings(),
-             seed: int = 0) -> BodyFit:
+             seed: int = 0, start=None) -> BodyFit:
     """Fit anny to one depth view of a standing person and measure the fitted body.
 
     Parameters
@@ -72,6 +72,10 @@ def fit_body(depth_m: np.ndarray, mask: np.ndarray, camera, floor, *, clothing_m
     settings : BodyFitSettings
     seed : int
         Seeds the subsample of the observed points.
+    start : callable, optional
+        ``start(observation, fit_model) -> Starts``: fit from these starts (:class:`wbsa.estimation.bodyfit.init.Starts`,
+        in the observation's view frame) instead of the render-and-compare grid; e.g. a known body, to measure
+        how far the fit drifts from it.
 
     Returns
     -------
@@ -98,12 +102,12 @@ def fit_body(depth_m: np.ndarray, mask: np.ndarray, camera, floor, *, clothing_m
     threads = torch.get_num_threads()
     torch.set_num_threads(settings.threads)
     try:
-        return _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fit_model, meter)
+        return _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fit_model, meter, start)
     finally:
         torch.set_num_threads(threads)
 
 
-def _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fit_model, meter) -> BodyFit:
+def _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fit_model, meter, start) -> BodyFit:
     """:func:`fit_body` on checked inputs, with anny loaded."""
     import torch
 
@@ -111,6 +115,7 @@ def _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fi
     from wbsa.bodies.posture import ANGLE_COLUMNS
     from wbsa.estimation.bodyfit.init import first_guesses
     from wbsa.estimation.bodyfit.measures import measure_body
+    from wbsa.estimation.bodyfit.noise import camera_noise
     from wbsa.estimation.bodyfit.objective import Objective
     from wbsa.estimation.bodyfit.observation import observe
     from wbsa.estimation.bodyfit.optimize import optimise
@@ -119,9 +124,11 @@ def _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fi
     deadline = t0 + settings.time_budget_s
     rng = np.random.default_rng(np.random.SeedSequence([int(seed), 0xB0D7]))
     obs = observe(depth, mask, camera, floor, settings.n_points, rng)
-    objective = Objective(obs, settings.robust_loss, settings.robust_scale_m, settings.silhouette_tolerance_px)
+    objective = Objective(obs, settings.robust_loss, settings.robust_scale_m, settings.silhouette_tolerance_px,
+                          camera_noise(camera))
     with torch.no_grad():
-        starts = first_guesses(fit_model, objective, settings.restarts, azimuth_deg, settings.child_starts)
+        starts = (first_guesses(fit_model, objective, settings.restarts, azimuth_deg, settings.child_starts)
+                  if start is None else start(obs, fit_model))
     opt = optimise(fit_model, objective, starts, settings, deadline)
 
     body = measure_body(meter, opt.params, settings.density_model, settings.density_kg_m3)

@@ -1,7 +1,11 @@
-"""The losses of the body fit: point-to-surface, silhouette, free space, priors (torch, batched over restarts).
+"""The losses of the body fit: depth along each ray, point-to-surface, silhouette, free space, priors (torch,
+batched over restarts).
 
 Every term is a mean of robust penalties of residuals in units of a scale, so the weights compare like with like:
 
+* **along the ray** (:mod:`wbsa.estimation.bodyfit.rays`, the default data term): each observed depth against
+  the model surface its camera ray meets, over the sensor's σ(z, θ); points whose ray misses the body use
+  the point-to-surface residual;
 * **point-to-surface** (:meth:`Objective.data`): each observed point against its corresponding model vertex
   (the nearest camera-facing one, refreshed every few steps), along that vertex's normal plus a tenth of
   the tangential offset (point-to-plane ICP; the model vertices are ~3 cm apart, so point-to-point would
@@ -17,7 +21,8 @@ Every term is a mean of robust penalties of residuals in units of a scale, so th
   subject, measured across the outline, where the image is sharper (about a pixel, 5 mm at 3.5 m) than the
   depth (2 cm of noise at 3.5 m);
 * **free space** (:meth:`Objective.free_space`): a camera-facing vertex in front of the surface seen at its
-  pixel by more than 1 cm plus twice the depth noise would hide it; Huber with scale 1 cm;
+  pixel by more than 1 cm plus twice the camera's face-on depth noise (quantisation included) would hide it;
+  Huber with scale 1 cm;
 * **priors**: the phenotypes stay near their start (weakly), the local changes near 0.
 """
 
@@ -25,16 +30,15 @@ from __future__ import annotations
 
 import numpy as np
 
+from wbsa.estimation.bodyfit.noise import DepthNoise
 from wbsa.estimation.bodyfit.observation import Observation
 
 #: Scale (m) of the silhouette and free-space residuals; depth tolerance of the free-space term (m), to which
-#: :data:`FREE_SPACE_NOISE_K` times the depth-noise envelope at the vertex's depth is added
-#: (:func:`wbsa.estimation.cloud.depth_noise_m`, the noisiest supported camera: 2 cm at 3.5 m), so that noise
-#: does not push the body back.
+#: :data:`FREE_SPACE_NOISE_K` times the camera's face-on depth noise at the vertex's depth is added
+#: (:meth:`wbsa.estimation.bodyfit.noise.DepthNoise.envelope_m`), so that noise does not push the body back.
 SURFACE_SCALE_M = 0.01
 FREE_SPACE_TOLERANCE_M = 0.01
 FREE_SPACE_NOISE_K = 2.0
-_Q_STEP = 0.125 / (575.8 * 0.075)
 #: The point-to-surface scale is at least this many times the depth noise measured on the subject.
 NOISE_SCALE_K = 1.5
 #: A model vertex is on the body's outline when the cosine between its normal and its viewing ray is below this.
@@ -58,10 +62,15 @@ class Objective:
     obs : Observation
     robust_loss : {'geman-mcclure', 'huber'}
     robust_scale_m, silhouette_tolerance_px : float
+    noise : DepthNoise
+        The camera's depth noise (:func:`wbsa.estimation.bodyfit.noise.camera_noise`).
     """
 
-    def __init__(self, obs: Observation, robust_loss: str, robust_scale_m: float, silhouette_tolerance_px: float):
+    def __init__(self, obs: Observation, robust_loss: str, robust_scale_m: float, silhouette_tolerance_px: float,
+                 noise: DepthNoise = DepthNoise("")):
         import torch
+
+        from wbsa.estimation.bodyfit.rays import RayTerm
 
         self.torch = torch
         f32 = torch.float32
@@ -81,6 +90,9 @@ class Objective:
         #: the robust scale: the settings', or 1.5 times the depth noise measured on the subject if more
         self.scale = max(float(robust_scale_m), NOISE_SCALE_K * obs.noise_m)
         self.tolerance_px = float(silhouette_tolerance_px)
+        self.noise = noise
+        #: the along-ray term of the observed points
+        self.rays = RayTerm(obs.points, obs.camera_position, obs.basis[:, 2], noise)
 
     # -- geometry ---------------------------------------------------------------------------
     def project(self, v):
@@ -134,13 +146,17 @@ class Objective:
         ``scale_m`` overrides the robust scale (the fit anneals it from coarse to fine, so that points far from
         a poor start still pull on it).
         """
+        return self.data_points(v_all, tri, bary, scale_m).mean(1)
+
+    def data_points(self, v_all, tri, bary, scale_m: float | None = None):
+        """(b, p) robust point-to-surface cost of each observed point (see :meth:`data`)."""
         point, n = self.surface_points(v_all, tri, bary)
         d = self.points[None] - point
         along = (d * n).sum(-1)
         tangential = (d * d).sum(-1) - along * along
         scale = self.scale if scale_m is None else scale_m
         r2 = (along * along + TANGENTIAL_WEIGHT * tangential) / scale**2
-        return self.robust(r2).mean(1)
+        return self.robust(r2)
 
     def residuals_m(self, v_all, tri, bary):
         """(b, p) point-to-plane distances (m) of the observed points to their closest surface points."""
@@ -165,9 +181,7 @@ class Objective:
         c = col.detach().round().long().clamp(0, w - 1)
         seen = self.depth[r, c]
         ok = facing & torch.isfinite(seen)
-        z0 = z.detach()
-        noise = ((0.0012 + 0.0019 * (z0 - 0.4).square()).square()  # depth_noise_m, in torch
-                 + (_Q_STEP * z0.square()).square() / 12.0).sqrt()
+        noise = torch.as_tensor(self.noise.envelope_m(z.detach().numpy()), dtype=z.dtype)
         tol = FREE_SPACE_TOLERANCE_M + FREE_SPACE_NOISE_K * noise
         ahead = torch.where(ok, (seen - z - tol).clamp(min=0.0), torch.zeros_like(z))
         return _huber(ahead / SURFACE_SCALE_M).sum(1) / facing.sum(1).clamp(min=1)

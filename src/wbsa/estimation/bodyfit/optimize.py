@@ -117,6 +117,8 @@ def optimise(fit_body, objective, starts, settings: BodyFitSettings, deadline: f
     history: list[float] = []
     converged = timed_out = False
     tri = bary = facing = contour_corr = selection = None
+    ray_tri = ray_hit = ray_sigma = None
+    along_ray = settings.data_term == "along-ray"
     step = 0
 
     def body(selection):
@@ -153,11 +155,17 @@ def optimise(fit_body, objective, starts, settings: BodyFitSettings, deadline: f
                                            shift.detach().numpy().astype(np.float64))
                 tri_full, bary, n, facing = objective.correspondences(full, model.skin_faces, model.closed_faces,
                                                                      fit_body.subset.index)
-                extra = np.setdiff1d(np.unique(tri_full), fit_body.subset.index)
+                touched = [tri_full]
+                if along_ray:
+                    ray_full, ray_hit, ray_sigma = objective.rays.correspondences(full, model.skin_faces)
+                    touched.append(ray_full[ray_hit.numpy()])
+                extra = np.setdiff1d(np.unique(np.concatenate([t.ravel() for t in touched])), fit_body.subset.index)
                 selection = fit_body.select(np.concatenate([fit_body.subset.index, extra]))
                 lookup = np.zeros(len(full[0]), dtype=np.int64)
                 lookup[selection.index] = np.arange(len(selection.index))
                 tri = torch.as_tensor(lookup[tri_full])
+                if along_ray:
+                    ray_tri = torch.as_tensor(lookup[ray_full])
                 contour_corr = objective.contour_correspondences(full[:, fit_body.subset.index], n)
             annealed = step >= _ANNEAL_SHARE * settings.steps + 2 * settings.refresh_every
             if annealed and history[-2] - history[-1] < settings.tolerance * abs(history[-2]):
@@ -170,7 +178,11 @@ def optimise(fit_body, objective, starts, settings: BodyFitSettings, deadline: f
             g["lr"] = base * (1.0 - 0.8 * step / settings.steps)
         params, v_all = body(selection)
         v = v_all[:, :k]
-        loss = (objective.data(v_all, tri, bary, scale) * (scale / final) ** 2
+        data = objective.data_points(v_all, tri, bary, scale) * (scale / final) ** 2
+        if along_ray:  # points whose ray misses the body keep the closest-point cost
+            data = torch.where(ray_hit, objective.rays.cost(v_all, ray_tri, ray_hit, ray_sigma, scale, objective.robust),
+                               data)
+        loss = (data.mean(1)
                 + settings.silhouette_weight * objective.silhouette(v)
                 + settings.contour_weight * objective.contour(v, contour_corr)
                 + settings.free_space_weight * objective.free_space(v, facing)

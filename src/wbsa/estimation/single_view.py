@@ -158,7 +158,8 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
         estimator model file (``.npz``, e.g. from ``wbsa train``) or a ``wbsa fit`` model file (``.json``).
     method : {'regression', 'body-fit', 'both'}
         The estimation route (:mod:`wbsa.estimation.methods`): the regression on the image's measures (the
-        default), the whole body fitted to the view (seconds, not milliseconds; no clothes yet), or both side by
+        default), the whole body fitted to the view (seconds, not milliseconds; a stated layer of clothes is taken
+        off the fitted body as an offset), or both side by
         side (the regression's number leads; ``routes`` holds both).
     azimuth_deg, elevation_deg : float, optional
         A stated view; it is used for the prediction and checked against the estimated one.

@@ -66,7 +66,9 @@ def fit_body(depth_m: np.ndarray, mask: np.ndarray, camera, floor, *, clothing_m
     floor : wbsa.estimation.cloud.Plane or None
         The floor in the camera frame (returns within its noise are not fitted; the body stands on it).
     clothing_m : float
-        A stated layer of clothes (m). Only 0 is fitted today: a layer raises.
+        A stated layer of clothes (m) over the trunk, upper arms, legs and feet
+        (:data:`wbsa.bodies.clothing.COVERED_BONES`): the observation is compared with the fitted body dressed in
+        it (an offset of that thickness along the skin's normals there), and the bare body is measured.
     azimuth_deg : float, optional
         A stated view: the starts keep to within 45° of it.
     settings : BodyFitSettings
@@ -85,16 +87,15 @@ def fit_body(depth_m: np.ndarray, mask: np.ndarray, camera, floor, *, clothing_m
     ------
     WbsaError
         A depth image that is not (h, w) finite metres of the camera's size, an empty mask, fewer than 200
-        returns above the floor, a stated layer of clothes.
+        returns above the floor, a layer of clothes that is not 0 to 5 cm.
     """
     import torch
 
     from wbsa.estimation.bodyfit.observation import check_inputs
 
-    if not (isinstance(clothing_m, (int, float)) and math.isfinite(clothing_m) and clothing_m >= 0):
-        raise WbsaError(f"clothing_m must be a layer of 0 m or more, got {clothing_m!r}")
-    if clothing_m > 0:
-        raise WbsaError("the body fit does not yet allow for clothes (clothing_m > 0); use method 'regression'")
+    from wbsa.estimation.checks import check_clothing
+
+    check_clothing(clothing_m)
     if azimuth_deg is not None and not math.isfinite(azimuth_deg):
         raise WbsaError(f"azimuth_deg must be a finite number of degrees, got {azimuth_deg!r}")
     depth, mask = check_inputs(depth_m, mask, camera)
@@ -102,15 +103,18 @@ def fit_body(depth_m: np.ndarray, mask: np.ndarray, camera, floor, *, clothing_m
     threads = torch.get_num_threads()
     torch.set_num_threads(settings.threads)
     try:
-        return _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fit_model, meter, start)
+        return _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fit_model, meter, start,
+                    float(clothing_m))
     finally:
         torch.set_num_threads(threads)
 
 
-def _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fit_model, meter, start) -> BodyFit:
+def _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fit_model, meter, start,
+         clothing_m) -> BodyFit:
     """:func:`fit_body` on checked inputs, with anny loaded."""
     import torch
 
+    from wbsa.bodies.clothing import COVERED_BONES
     from wbsa.bodies.posing import pose_vertices
     from wbsa.bodies.posture import ANGLE_COLUMNS
     from wbsa.estimation.bodyfit.init import first_guesses
@@ -129,7 +133,8 @@ def _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fi
     with torch.no_grad():
         starts = (first_guesses(fit_model, objective, settings.restarts, azimuth_deg, settings.child_starts)
                   if start is None else start(obs, fit_model))
-    opt = optimise(fit_model, objective, starts, settings, deadline)
+    covered = body_model.vertices_of_bones(COVERED_BONES) if clothing_m > 0 else None
+    opt = optimise(fit_model, objective, starts, settings, deadline, clothing_m, covered)
 
     body = measure_body(meter, opt.params, settings.density_model, settings.density_kg_m3)
     rest = body["rest"]

@@ -12,6 +12,7 @@ and build, beside Du Bois and Mosteller given the TRUE height and mass.
     python benchmarks/bench_body_fit.py --subjects 20 --seed 1000 [--out fits.csv] [--model MODEL.npz]
     python benchmarks/bench_body_fit.py --subjects 20 --displace   # bodies outside anny's shape space
     python benchmarks/bench_body_fit.py --calibrate --subjects 40 --seed 2000   # rebuild the interval calibration
+    python benchmarks/bench_body_fit.py --drift --subjects 10 --draws 3   # truth-started drift, seed 3000
 
 ``--displace``: each subject's skin gets seeded smooth local displacements of 1–3 cm (3–7 Gaussian bumps of
 6–15 cm along the normals of the trunk and legs, centred between 0.3 and 0.75 of stature; truth: the displaced
@@ -20,6 +21,10 @@ mass, so their figures there are not comparable.
 ``--calibrate``: fit these subjects (give a seed other than the benchmark's 1000 and training's 0, 1) and store
 the split-conformal bounds of the WBSA error (:mod:`wbsa.estimation.bodyfit.interval`) in ``src/wbsa/data``.
 ``--model``: also run the regression route (``wbsa.estimate``) on the same images and print it beside.
+``--drift``: fits started at the true body (its shape, posture and placement), per camera × distance band
+(:func:`drift_chunk`): how far the fit's minimum lies from the truth under each camera's noise, apart from the
+start, the segmentation and the floor (the subject's true pixels and floor are given). Fits keep the shipped
+settings unless ``--data-term`` says otherwise (``closest-point``: the former data term).
 """
 
 from __future__ import annotations
@@ -197,23 +202,26 @@ def drift_chunk(population: pd.DataFrame, seed: int, draws: int, cameras: tuple[
         angles, posed = settle_posture(bodies.vertices[b], bodies.bone_heads[b], draw_angles(name, rng), body_model.rig)
         subject = body_model.skin_mesh(posed)
         for camera_name in cameras:
+            cam_index = DRIFT_CAMERAS.index(camera_name) if camera_name in DRIFT_CAMERAS else 99
             record = camera_record(camera_name)
             camera = record.intrinsics
             baseline, step = record.disparity or (0.075, 0.125)
             sensor = SensorSettings(noise="nguyen2012", quantise=record.disparity is not None, baseline_m=baseline,
                                     disparity_step_px=step)
-            for band in bands:
+            for band_index, band in enumerate(bands):
                 distance = band_distance_m(camera, band)
                 if distance is None:
                     continue
-                for k in range(draws):
-                    az = float(rng.uniform(0.0, 360.0))
+                for k in range(draws):  # each fit's own stream: the same captures whichever cameras are run
+                    cell = [seed, b, DRIFT_STREAM, cam_index, band_index, k]
+                    az = float(np.random.default_rng(np.random.SeedSequence(cell)).uniform(0.0, 360.0))
                     room = compose_room(subject, az, wall_behind_m=1.0)
                     centre = room.subject_center
                     el = float(np.degrees(np.arcsin(np.clip((1.2 - centre[2]) / distance, -0.95, 0.95))))
                     view = View(az, el, distance)
                     cap = Capture(camera, view, sensor, 1.2, True)
-                    frame, depth = capture_room(room, cap, seed=seed, subject_id=int(rng.integers(2**31)))
+                    frame, depth = capture_room(room, cap, seed=seed,
+                                                subject_id=((b * 100 + cam_index) * 10 + band_index) * 100 + k)
                     mask = room.is_subject(frame.triangle_id) & (depth > 0)
                     pose = pose_from_view(view, centre)
                     normal = pose.R @ np.array([0.0, 0.0, 1.0])
@@ -335,6 +343,8 @@ def main() -> None:
     ap.add_argument("--drift", action="store_true",
                     help="truth-started drift per camera x distance band instead (subjects of --seed; default 3000)")
     ap.add_argument("--draws", type=int, default=3, help="--drift: sensor-noise draws per subject and cell (default 3)")
+    ap.add_argument("--cameras", default=",".join(DRIFT_CAMERAS),
+                    help="--drift: the cameras, comma-separated (default all trained presets)")
     ap.add_argument("--out", default=None, help="write the per-image results here (.csv)")
     ap.add_argument("--calibrate", action="store_true", help="store the interval calibration from these fits")
     args = ap.parse_args()
@@ -357,7 +367,7 @@ def main() -> None:
     fit_settings = BodyFitSettings(**changes)
     pop = population(args.subjects, args.survey_share, args.seed)
     if args.drift:
-        res = drift_chunk(pop, args.seed, args.draws, DRIFT_CAMERAS, DRIFT_BANDS_M, fit_settings)
+        res = drift_chunk(pop, args.seed, args.draws, tuple(args.cameras.split(",")), DRIFT_BANDS_M, fit_settings)
         if args.out:
             res.to_csv(args.out, index=False)
         print(f"\n{len(pop)} subjects, seed {args.seed}, {args.draws} noise draws each, data term "

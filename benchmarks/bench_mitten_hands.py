@@ -1,14 +1,16 @@
-"""How much skin area a scanned mesh with fused fingers and smoothed toes leaves out: anny whole against the same
-body with each hand replaced by a mitten and each foot's toes fused.
+"""How much skin a scanned mesh with fused fingers and smoothed toes leaves out: anny's whole skin against the
+surface a scanner's reconstruction makes of the same body.
 
 A body scanner's mesh often has "mitten" hands (the fingers fused into one surface) and smoothed feet, and so
 measures less skin than anny's, which has every finger and toe (the body fit and the population measure anny's).
-For each body at rest: the mitten of a hand is the convex hull of the hand's vertices (those moved mainly by the
-wrist, metacarpal and finger bones of that side) less its cap over the wrist's opening, and it replaces the hand's
-own skin triangles; the toes are fused likewise (the convex hull of the toe vertices of each foot, less its cap).
-A cap's area is that of the opening's boundary loop, a polygon projected on its best-fitting plane.
+Here the scanner's surface is a screened Poisson reconstruction (Open3D; Kazhdan & Hoppe 2013) of points sampled
+densely on the body at rest, at an octree depth whose cells (about 7 mm at depth 8, 14 mm at depth 7 over a
+body's 1.8 m) are as wide as the gaps between fingers and toes, so that they fuse. Each reconstructed triangle
+belongs to the body part of the skin vertex nearest its centre; per part, its area is set against the skin's
+own (the triangles of that part's vertices). The forearms are the control: a smooth part whose area the
+reconstruction should keep.
 
-    python benchmarks/bench_mitten_hands.py [--subjects 12 --seed 1000]
+    python benchmarks/bench_mitten_hands.py [--subjects 4 --seed 1000 --depths 8,7]
 """
 
 from __future__ import annotations
@@ -21,78 +23,77 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-
-def loop_area_m2(vertices: np.ndarray, faces: np.ndarray) -> float:
-    """Area (m²) of the openings of a patch of triangles ``faces (m, 3)``: each boundary loop as a polygon on its
-    best-fitting plane (the vector area of a closed loop, fan-triangulated from its centroid)."""
-    edges = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
-    directed = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
-    _, inverse, counts = np.unique(edges, axis=0, return_inverse=True, return_counts=True)
-    boundary = directed[counts[inverse.ravel()] == 1]
-    total = 0.0
-    nxt = {int(a): int(b) for a, b in boundary}
-    seen: set[int] = set()
-    for start in list(nxt):
-        if start in seen:
-            continue
-        loop = [start]
-        seen.add(start)
-        while nxt.get(loop[-1]) is not None and nxt[loop[-1]] != start and nxt[loop[-1]] not in seen:
-            loop.append(nxt[loop[-1]])
-            seen.add(loop[-1])
-        p = vertices[loop]
-        c = p.mean(0)
-        total += 0.5 * float(np.linalg.norm(np.cross(p - c, np.roll(p, -1, axis=0) - c).sum(0)))
-    return total
+#: Body parts (bone-name prefixes of anny's vertices) compared.
+PARTS = {"hands": ("wrist", "metacarpal", "finger"), "feet": ("foot", "toe"), "forearms": ("lowerarm",)}
 
 
-def fused_area_change_m2(vertices: np.ndarray, faces: np.ndarray, part: np.ndarray) -> float:
-    """Area change (m²) when the skin triangles of a part (vertices ``part (n,)`` bool) become their convex hull
-    less the hull's cap over the part's opening."""
-    from scipy.spatial import ConvexHull
+def part_areas_m2(vertices: np.ndarray, faces: np.ndarray, part_of_vertex: np.ndarray, points: np.ndarray,
+                  tri: np.ndarray, skin_vertices: np.ndarray) -> tuple[dict, dict]:
+    """Areas (m²) per part of the skin ``(vertices, faces)`` and of a reconstruction ``(points, tri)``.
+
+    ``part_of_vertex (n,)`` names each skin vertex's part ('' for none); a skin triangle belongs to its first
+    vertex's part, a reconstructed one to the part of the skin vertex (of ``skin_vertices``) nearest its centre.
+    """
+    from scipy.spatial import cKDTree
 
     from wbsa.core.mesh import triangle_areas_m2
 
-    inside = part[faces].all(axis=1)
-    own = float(triangle_areas_m2(vertices, faces[inside]).sum())
-    hull = ConvexHull(vertices[part]).area
-    return hull - loop_area_m2(vertices, faces[inside]) - own
+    skin = triangle_areas_m2(vertices, faces)
+    rec = triangle_areas_m2(points, tri)
+    _, nearest = cKDTree(vertices[skin_vertices]).query(points[tri].mean(1), workers=1)
+    rec_part = part_of_vertex[skin_vertices][nearest]
+    skin_part = part_of_vertex[faces[:, 0]]
+    return ({p: float(skin[skin_part == p].sum()) for p in PARTS} | {"all": float(skin.sum())},
+            {p: float(rec[rec_part == p].sum()) for p in PARTS} | {"all": float(rec.sum())})
+
+
+def reconstruct(vertices: np.ndarray, faces: np.ndarray, depth: int, n_points: int = 400_000, seed: int = 0):
+    """A screened Poisson surface (points (k, 3), triangles (t, 3)) of ``n_points`` seeded samples of the skin."""
+    import open3d as o3d
+
+    mesh = o3d.geometry.TriangleMesh(o3d.utility.Vector3dVector(vertices), o3d.utility.Vector3iVector(faces))
+    mesh.compute_triangle_normals()
+    o3d.utility.random.seed(seed)
+    cloud = mesh.sample_points_uniformly(n_points, use_triangle_normal=True)
+    rec, _ = o3d.geometry.TriangleMesh.create_from_point_cloud_poisson(cloud, depth=depth, n_threads=1)
+    return np.asarray(rec.vertices), np.asarray(rec.triangles)
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--subjects", type=int, default=12, help="bodies (default 12, as bench_estimate's population)")
+    ap.add_argument("--subjects", type=int, default=4, help="bodies (bench_estimate's population; default 4)")
     ap.add_argument("--seed", type=int, default=1000)
+    ap.add_argument("--depths", default="8,7", help="Poisson octree depths (default 8,7)")
     args = ap.parse_args()
 
     from bench_estimate import population
 
     from wbsa.bodies.body_model import BodyModel
-    from wbsa.core.mesh import triangle_areas_m2
 
     model = BodyModel()
     pop = population(args.subjects, 0.4, args.seed)
     rest = model.rest_bodies(pop)
-    labels = np.asarray(model.bone_labels)
-    bone = labels[model.vertex_bone]
-    rows = []
+    bone = np.asarray(model.bone_labels)[model.vertex_bone]
+    part = np.full(len(bone), "", dtype=object)
+    for name, prefixes in PARTS.items():
+        part[np.array([b.startswith(prefixes) for b in bone])] = name
+    faces = np.asarray(model.skin_faces)
+    used = np.unique(faces)
+    changes = {d: [] for d in args.depths.split(",")}
     for b in range(len(pop)):
         v = rest.vertices[b]
-        whole = float(triangle_areas_m2(v, model.skin_faces).sum())
-        change = {"hands": 0.0, "toes": 0.0}
-        for side in ("L", "R"):
-            hand = np.array([s.startswith(("wrist", "metacarpal", "finger")) and s.endswith(side) for s in bone])
-            toes = np.array([s.startswith("toe") and s.endswith(side) for s in bone])
-            change["hands"] += fused_area_change_m2(v, model.skin_faces, hand)
-            change["toes"] += fused_area_change_m2(v, model.skin_faces, toes)
-        rows.append((float(pop["age_years"].iloc[b]), whole, 100 * change["hands"] / whole,
-                     100 * (change["hands"] + change["toes"]) / whole))
-        print(f"body {b} ({rows[-1][0]:.0f} y): whole {whole:.4f} m², mitten hands {rows[-1][2]:+.2f} %, "
-              f"and fused toes {rows[-1][3]:+.2f} %", flush=True)
-    r = np.array(rows)
-    print(f"\n{len(r)} bodies (seed {args.seed}): mitten hands {r[:, 2].mean():+.2f} % "
-          f"({r[:, 2].min():+.2f} … {r[:, 2].max():+.2f}), mitten hands and fused toes {r[:, 3].mean():+.2f} % "
-          f"({r[:, 3].min():+.2f} … {r[:, 3].max():+.2f}) of the whole skin's WBSA")
+        for d in changes:
+            pts, tri = reconstruct(v, faces, int(d))
+            skin, rec = part_areas_m2(v, faces, part, pts, tri, used)
+            row = {p: 100 * (rec[p] - skin[p]) / skin["all"] for p in (*PARTS, "all")}
+            changes[d].append(row)
+            print(f"body {b} ({pop['age_years'].iloc[b]:.0f} y, WBSA {skin['all']:.3f} m², hands "
+                  f"{100 * skin['hands'] / skin['all']:.1f} %, feet {100 * skin['feet'] / skin['all']:.1f} %), depth {d}: reconstructed "
+                  "minus skin, % of WBSA: " + ", ".join(f"{p} {x:+.2f}" for p, x in row.items()), flush=True)
+    for d, rows in changes.items():
+        mean = {p: np.mean([r[p] for r in rows]) for p in rows[0]}
+        print(f"depth {d}, {len(rows)} bodies (seed {args.seed}), reconstructed minus skin, mean % of WBSA: "
+              + ", ".join(f"{p} {x:+.2f}" for p, x in mean.items()))
 
 
 if __name__ == "__main__":

@@ -4,7 +4,7 @@ The same subjects (random, ages 3–80, and survey-matched NHANES people not use
 cameras, distances, views and sensor effects as ``benchmarks/bench_estimate.py`` with the same ``--seed`` and
 ``--subjects`` (image ``i`` draws from ``SeedSequence([seed, i])`` exactly as
 :func:`wbsa.testing.testset.room_capture_chunk` does); the subject is segmented by
-:func:`wbsa.estimation.segment.segment_subject`, then :func:`wbsa.estimation.bodyfit.fit_body` fits and measures it without
+:func:`wbsa.estimation.subject.segment.segment_subject`, then :func:`wbsa.estimation.methods.body_fit.fit_body` fits and measures it without
 being told the view. Printed: WBSA MAPE and bias (all views, within 30° of front or back), Bland–Altman limits,
 stature error, mass MAPE, azimuth error (mirror-equivalent), time per image, by posture, camera, distance band
 and build, beside Du Bois and Mosteller given the TRUE height and mass.
@@ -19,7 +19,7 @@ and build, beside Du Bois and Mosteller given the TRUE height and mass.
 skin's own area), as fat or muscle that anny's shapes cannot make. The formulae get the undisplaced height and
 mass, so their figures there are not comparable.
 ``--calibrate``: fit these subjects (give a seed other than the benchmark's 1000 and training's 0, 1) and store
-the split-conformal bounds of the WBSA error (:mod:`wbsa.estimation.bodyfit.interval`) in ``src/wbsa/data``.
+the split-conformal bounds of the WBSA error (:mod:`wbsa.estimation.methods.body_fit.interval`) in ``src/wbsa/data``.
 ``--model``: also run the regression route (``wbsa.estimate``) on the same images and print it beside.
 ``--drift``: fits started at the true body (its shape, posture and placement), per camera × distance band
 (:func:`drift_chunk`): how far the fit's minimum lies from the truth under each camera's noise, apart from the
@@ -55,7 +55,7 @@ def displaced(vertices: np.ndarray, faces: np.ndarray, skin_faces: np.ndarray, m
     muscle sit; their signs are random (a bulge or a hollow). Only ``movable`` vertices move (the trunk and
     legs, not the arms and hands: a 2 cm push along the normals of a finger would triple its skin).
     """
-    from wbsa.estimation.bodyfit.model import vertex_normals
+    from wbsa.estimation.methods.body_fit.model import vertex_normals
 
     n = vertex_normals(vertices[None], faces)[0]
     z = vertices[:, 2] / vertices[:, 2].max()
@@ -78,9 +78,9 @@ def fit_chunk(population: pd.DataFrame, others: pd.DataFrame, first: int, seed: 
     from wbsa.bodies.body_model import BodyModel
     from wbsa.core.mesh import triangle_areas_m2
     from wbsa.errors import WbsaError
-    from wbsa.estimation.bodyfit import fit_body
-    from wbsa.estimation.segment import SegmentSettings, segment_subject
-    from wbsa.estimation.view import azimuth_error_deg
+    from wbsa.estimation.methods.body_fit import fit_body
+    from wbsa.estimation.subject.segment import SegmentSettings, segment_subject
+    from wbsa.estimation.methods.view import azimuth_error_deg
     from wbsa.testing.testset import RoomTestSettings, room_test_captures
 
     settings = RoomTestSettings(seed=seed)
@@ -146,13 +146,13 @@ DRIFT_STREAM = 0xD1F7
 
 
 def truth_start(params: np.ndarray, angles_deg: np.ndarray, posed: np.ndarray, world_to_camera):
-    """``start(obs, fit_model)`` for :func:`wbsa.estimation.bodyfit.fit_body`: the true body, posture and placement.
+    """``start(obs, fit_model)`` for :func:`wbsa.estimation.methods.body_fit.fit_body`: the true body, posture and placement.
 
     ``params (15,)`` and ``angles_deg (10,)`` are the body's; ``posed (n, 3)`` its posed vertices standing on z = 0
     (anny's frame), which ``world_to_camera`` (a :class:`wbsa.camera.extrinsics.Pose`) puts in the camera frame. The
     placement (a turn about the floor's normal and a shift) maps ``posed`` onto its place in the fit's view frame.
     """
-    from wbsa.estimation.bodyfit.init import Starts
+    from wbsa.estimation.methods.body_fit.init import Starts
 
     def start(obs, fit_model):
         r = obs.basis @ world_to_camera.R  # anny's frame to the view frame; a turn about +Z on a true floor
@@ -184,8 +184,8 @@ def drift_chunk(population: pd.DataFrame, seed: int, draws: int, cameras: tuple[
     from wbsa.camera.extrinsics import pose_from_view
     from wbsa.camera.presets import camera_record
     from wbsa.camera.views import View
-    from wbsa.estimation.bodyfit import fit_body
-    from wbsa.estimation.cloud import Plane
+    from wbsa.estimation.methods.body_fit import fit_body
+    from wbsa.estimation.subject.cloud import Plane
     from wbsa.sensor import SensorSettings
     from wbsa.training.capture import Capture
     from wbsa.training.room import capture_room, compose_room
@@ -359,7 +359,7 @@ def main() -> None:
 
     from bench_estimate import population
 
-    from wbsa.estimation.bodyfit import BodyFitSettings
+    from wbsa.estimation.methods.body_fit import BodyFitSettings
 
     torch.set_num_threads(1)
     t0 = time.perf_counter()
@@ -385,7 +385,7 @@ def main() -> None:
           f"{args.first}–{stop - 1}" + (", displaced skin (outside anny's shapes)" if args.displace else ""))
     report(res, time.perf_counter() - t0, args.displace)
     if args.calibrate:
-        from wbsa.estimation.bodyfit.interval import calibrate, fit_fingerprint, save
+        from wbsa.estimation.methods.body_fit.interval import calibrate, fit_fingerprint, save
 
         ok = res[res["error"] == ""]
         command = (f"python benchmarks/bench_body_fit.py --calibrate --subjects {args.subjects} --seed {args.seed}"

@@ -1,4 +1,4 @@
-"""The whole-body fit to one depth view (``wbsa.estimation.bodyfit``, issue 28)."""
+"""The whole-body fit to one depth view (``wbsa.estimation.methods.body_fit``, issue 28)."""
 
 from __future__ import annotations
 
@@ -24,7 +24,7 @@ def render(body_model):
     from wbsa.bodies.posture import POSTURES
     from wbsa.camera import MeshScene, View, preset
     from wbsa.camera.extrinsics import pose_from_view
-    from wbsa.estimation.cloud import Plane
+    from wbsa.estimation.subject.cloud import Plane
     from wbsa.training.room import compose_room
     from wbsa.simulate import simulate_view
 
@@ -87,7 +87,7 @@ def test_torch_posing_matches_the_project_posing(body_model):
     from wbsa.bodies.body_model import body_parameter_array
     from wbsa.bodies.posing import pose_vertices
     from wbsa.bodies.posture import draw_angles
-    from wbsa.estimation.bodyfit.model import FitBody
+    from wbsa.estimation.methods.body_fit.model import FitBody
 
     fit_body = FitBody(body_model, 0.05)
     row = reference_adult(0.0)
@@ -102,7 +102,7 @@ def test_torch_posing_matches_the_project_posing(body_model):
 
 
 def test_fit_recovers_a_known_body_from_a_noise_free_render(render, tmp_path):
-    from wbsa.estimation.bodyfit import BodyFitSettings, fit_body
+    from wbsa.estimation.methods.body_fit import BodyFitSettings, fit_body
     from wbsa.core.mesh_io import read_mesh
 
     depth, mask, camera, floor, truth = render
@@ -123,7 +123,7 @@ def test_fit_recovers_a_known_body_from_a_noise_free_render(render, tmp_path):
 
 def test_a_stated_layer_of_clothes_is_taken_off_the_fitted_body(dressed_render):
     """Seen in 1.5 cm of clothes, the body fit reads the bare skin when told the layer, and more when not."""
-    from wbsa.estimation.bodyfit import BodyFitSettings, fit_body
+    from wbsa.estimation.methods.body_fit import BodyFitSettings, fit_body
 
     depth, mask, camera, floor, truth = dressed_render
     stated = fit_body(depth, mask, camera, floor, clothing_m=0.015, settings=BodyFitSettings(**FAST))
@@ -133,7 +133,7 @@ def test_a_stated_layer_of_clothes_is_taken_off_the_fitted_body(dressed_render):
 
 
 def test_a_fit_past_its_safety_stop_returns_its_best_body_flagged(render):
-    from wbsa.estimation.bodyfit import BodyFitSettings, fit_body
+    from wbsa.estimation.methods.body_fit import BodyFitSettings, fit_body
 
     depth, mask, camera, floor, _ = render
     # a stop that has passed before the first step, whatever the machine's speed: one step runs, its best body returns
@@ -143,7 +143,7 @@ def test_a_fit_past_its_safety_stop_returns_its_best_body_flagged(render):
 
 
 def test_the_budget_is_counted_in_steps_and_a_stop_while_annealing_keeps_a_body(render):
-    from wbsa.estimation.bodyfit import BodyFitSettings, fit_body
+    from wbsa.estimation.methods.body_fit import BodyFitSettings, fit_body
 
     depth, mask, camera, floor, _ = render
     settings = BodyFitSettings(restarts=2, steps=4)  # every step inside the annealing share
@@ -155,7 +155,7 @@ def test_the_budget_is_counted_in_steps_and_a_stop_while_annealing_keeps_a_body(
 
 
 def test_bad_inputs_give_one_line_errors(render):
-    from wbsa.estimation.bodyfit import fit_body
+    from wbsa.estimation.methods.body_fit import fit_body
 
     depth, mask, camera, floor, _ = render
     cases = [
@@ -174,7 +174,7 @@ def test_bad_inputs_give_one_line_errors(render):
 
 
 def test_settings_refuse_bad_values():
-    from wbsa.estimation.bodyfit import BodyFitSettings
+    from wbsa.estimation.methods.body_fit import BodyFitSettings
 
     for bad in (dict(steps=0), dict(restarts=1.5), dict(robust_loss="l2"), dict(data_term="closest"), dict(time_budget_s=-1.0),
                 dict(density_model="bmi"), dict(vertex_spacing_m=1.0)):
@@ -183,7 +183,7 @@ def test_settings_refuse_bad_values():
 
 
 def test_conformal_bounds_are_the_order_statistics_and_refuse_too_few():
-    from wbsa.estimation.bodyfit.interval import calibrate
+    from wbsa.estimation.methods.body_fit.interval import calibrate
 
     errors = np.linspace(-0.05, 0.03, 39)
     cal = calibrate(errors[::-1], 0.95, "cmd")
@@ -199,8 +199,8 @@ def test_conformal_bounds_are_the_order_statistics_and_refuse_too_few():
 def test_the_shipped_interval_is_calibrated_on_the_shipped_fit():
     """The interval's conformal bounds hold for the fit they were measured on: rebuild them (the command stored in
     the calibration) whenever a setting that shapes the fitted body changes."""
-    from wbsa.estimation.bodyfit import BodyFitSettings
-    from wbsa.estimation.bodyfit.interval import fit_fingerprint, load
+    from wbsa.estimation.methods.body_fit import BodyFitSettings
+    from wbsa.estimation.methods.body_fit.interval import fit_fingerprint, load
 
     cal = load()
     assert cal is not None and cal.n >= 39 and cal.error_lo < 0 < cal.error_hi
@@ -212,8 +212,8 @@ def test_the_along_ray_residual_is_the_depth_difference_along_each_ray():
     and the triangle its ray meets is found; a ray past the body misses."""
     import torch
 
-    from wbsa.estimation.bodyfit.noise import DepthNoise
-    from wbsa.estimation.bodyfit.rays import RayTerm
+    from wbsa.estimation.methods.body_fit.noise import DepthNoise
+    from wbsa.estimation.methods.body_fit.rays import RayTerm
 
     # a square in the plane y = 2 - 0.5 x (view frame), seen from the origin looking along +y
     corners = np.array([[-1.0, 2.5, -1.0], [1.0, 1.5, -1.0], [1.0, 1.5, 1.0], [-1.0, 2.5, 1.0]])
@@ -235,7 +235,7 @@ def test_the_fit_expects_each_camera_s_quantisation():
     """A structured-light camera returns depth in disparity steps of z²·s/(f·b) (Kinect v1 at 4 m: 4.6 cm), which
     widen its σ; a time-of-flight camera has none; σ grows with depth and towards grazing."""
     from wbsa.camera import preset
-    from wbsa.estimation.bodyfit.noise import camera_noise
+    from wbsa.estimation.methods.body_fit.noise import camera_noise
 
     v1, v2 = camera_noise(preset("kinect-v1")), camera_noise(preset("kinect-v2"))
     assert v1.step_m(4.0) == pytest.approx(16.0 * 0.125 / (575.8157 * 0.075))

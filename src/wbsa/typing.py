@@ -55,9 +55,9 @@ DepthTechnology = Literal["structured-light", "time-of-flight", "active-stereo",
 Method = Literal["regression", "body-fit", "both"]
 #: A population's ``posture`` setting: a posture name, or ``mixed`` (a random name per subject).
 PostureChoice = Literal[Literal["a-pose", "mixed"], PostureName]
-#: Robust penalty of the body fit's point-to-surface residuals (:mod:`wbsa.estimation.bodyfit.objective`).
+#: Robust penalty of the body fit's point-to-surface residuals (:mod:`wbsa.estimation.methods.body_fit.objective`).
 RobustLoss = Literal["geman-mcclure", "huber"]
-#: The body fit's data term (:mod:`wbsa.estimation.bodyfit.objective`): depth compared along each camera ray,
+#: The body fit's data term (:mod:`wbsa.estimation.methods.body_fit.objective`): depth compared along each camera ray,
 #: or each point against its closest model surface point.
 DataTerm = Literal["along-ray", "closest-point"]
 

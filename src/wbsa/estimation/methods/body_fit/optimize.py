@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from wbsa.bodies.body_model import PHENOTYPE_COLUMNS
-from wbsa.estimation.bodyfit.settings import ANGLE_LIMITS_DEG, BodyFitSettings
+from wbsa.estimation.methods.body_fit.settings import ANGLE_LIMITS_DEG, BodyFitSettings
 
 _N_PH = len(PHENOTYPE_COLUMNS)
 _AGE = PHENOTYPE_COLUMNS.index("p_age")
@@ -75,7 +75,7 @@ def _limits(torch):
 def clothes_layer(full: np.ndarray, closed_faces: np.ndarray, covered: np.ndarray, layer_m: float) -> np.ndarray:
     """(b, n, 3) float64 offsets that dress posed bodies ``full (b, n, 3)``: ``layer_m`` along the vertex normals where
     ``covered (n,)``, the soles kept on the bodies' lowest level (as :func:`wbsa.bodies.clothing.dressed_vertices`)."""
-    from wbsa.estimation.bodyfit.model import vertex_normals
+    from wbsa.estimation.methods.body_fit.model import vertex_normals
 
     layer = layer_m * covered[None, :, None] * vertex_normals(full, closed_faces)
     lowest = full[..., 2].min(axis=1, keepdims=True)
@@ -85,12 +85,12 @@ def clothes_layer(full: np.ndarray, closed_faces: np.ndarray, covered: np.ndarra
 
 def optimise(fit_body, objective, starts, settings: BodyFitSettings, deadline: float, clothing_m: float = 0.0,
              covered: np.ndarray | None = None) -> Optimum:
-    """Fit every start of ``starts`` (:class:`wbsa.estimation.bodyfit.init.Starts`) to ``objective``'s observation.
+    """Fit every start of ``starts`` (:class:`wbsa.estimation.methods.body_fit.init.Starts`) to ``objective``'s observation.
 
     Parameters
     ----------
-    fit_body : wbsa.estimation.bodyfit.model.FitBody
-    objective : wbsa.estimation.bodyfit.objective.Objective
+    fit_body : wbsa.estimation.methods.body_fit.model.FitBody
+    objective : wbsa.estimation.methods.body_fit.objective.Objective
     starts : Starts
     settings : BodyFitSettings
     deadline : float
@@ -104,7 +104,7 @@ def optimise(fit_body, objective, starts, settings: BodyFitSettings, deadline: f
     """
     import torch
 
-    from wbsa.estimation.bodyfit.model import yaw_matrix
+    from wbsa.estimation.methods.body_fit.model import yaw_matrix
 
     f32, f64 = torch.float32, torch.float64
     phen0 = torch.as_tensor(starts.params[:, :_N_PH], dtype=f64)

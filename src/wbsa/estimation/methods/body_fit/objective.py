@@ -3,7 +3,7 @@ batched over restarts).
 
 Every term is a mean of robust penalties of residuals in units of a scale, so the weights compare like with like:
 
-* **along the ray** (:mod:`wbsa.estimation.bodyfit.rays`, the default data term): each observed depth against
+* **along the ray** (:mod:`wbsa.estimation.methods.body_fit.rays`, the default data term): each observed depth against
   the model surface its camera ray meets, over the sensor's σ(z, θ); points whose ray misses the body use
   the point-to-surface residual;
 * **point-to-surface** (:meth:`Objective.data`): each observed point against its corresponding model vertex
@@ -30,12 +30,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from wbsa.estimation.bodyfit.noise import DepthNoise
-from wbsa.estimation.bodyfit.observation import Observation
+from wbsa.estimation.methods.body_fit.noise import DepthNoise
+from wbsa.estimation.methods.body_fit.observation import Observation
 
 #: Scale (m) of the silhouette and free-space residuals; depth tolerance of the free-space term (m), to which
 #: :data:`FREE_SPACE_NOISE_K` times the camera's face-on depth noise at the vertex's depth is added
-#: (:meth:`wbsa.estimation.bodyfit.noise.DepthNoise.envelope_m`), so that noise does not push the body back.
+#: (:meth:`wbsa.estimation.methods.body_fit.noise.DepthNoise.envelope_m`), so that noise does not push the body back.
 SURFACE_SCALE_M = 0.01
 FREE_SPACE_TOLERANCE_M = 0.01
 FREE_SPACE_NOISE_K = 2.0
@@ -63,14 +63,14 @@ class Objective:
     robust_loss : {'geman-mcclure', 'huber'}
     robust_scale_m, silhouette_tolerance_px : float
     noise : DepthNoise
-        The camera's depth noise (:func:`wbsa.estimation.bodyfit.noise.camera_noise`).
+        The camera's depth noise (:func:`wbsa.estimation.methods.body_fit.noise.camera_noise`).
     """
 
     def __init__(self, obs: Observation, robust_loss: str, robust_scale_m: float, silhouette_tolerance_px: float,
                  noise: DepthNoise = DepthNoise("")):
         import torch
 
-        from wbsa.estimation.bodyfit.rays import RayTerm
+        from wbsa.estimation.methods.body_fit.rays import RayTerm
 
         self.torch = torch
         f32 = torch.float32
@@ -232,7 +232,7 @@ class Objective:
         Parameters
         ----------
         full : (b, n, 3) float64
-            Every vertex of every body, view frame (:meth:`wbsa.estimation.bodyfit.model.FitBody.full_posed`).
+            Every vertex of every body, view frame (:meth:`wbsa.estimation.methods.body_fit.model.FitBody.full_posed`).
         skin_faces, closed_faces : (m, 3) int
         subset : (k,) int
             The vertices the fit moves at every step.
@@ -250,7 +250,7 @@ class Objective:
         """
         import open3d as o3d
 
-        from wbsa.estimation.bodyfit.model import vertex_normals
+        from wbsa.estimation.methods.body_fit.model import vertex_normals
 
         torch = self.torch
         cam = self.obs.camera_position

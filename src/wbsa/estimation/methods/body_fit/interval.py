@@ -15,6 +15,7 @@ from __future__ import annotations
 import json
 import math
 from dataclasses import dataclass
+from importlib import resources
 from pathlib import Path
 
 import numpy as np
@@ -22,7 +23,7 @@ import numpy as np
 from wbsa.errors import WbsaError
 
 #: Where the calibration is stored (package data, ``wbsa/data``; rebuilt by the command in its ``command`` field).
-CALIBRATION_PATH = Path(__file__).resolve().parents[2] / "data" / "bodyfit_interval.json"
+CALIBRATION_PATH = Path(str(resources.files("wbsa") / "data" / "bodyfit_interval.json"))
 
 
 @dataclass(frozen=True)
@@ -59,7 +60,7 @@ _NOT_FIT = ("time_budget_s", "threads", "density_model", "density_kg_m3")
 
 
 def fit_fingerprint(settings) -> dict:
-    """The settings of a :class:`wbsa.estimation.bodyfit.BodyFitSettings` that shape the fitted body, as plain values:
+    """The settings of a :class:`wbsa.estimation.methods.body_fit.BodyFitSettings` that shape the fitted body, as plain values:
     a calibration holds only for fits made with the same."""
     from dataclasses import asdict
 

@@ -10,7 +10,7 @@ along the ray, differentiable through the intersection of the ray with that tria
 
 (``c`` the camera centre, ``d`` the ray's unit direction, ``a`` a corner and ``n`` the normal of the triangle,
 ``d_z`` the ray's cosine with the optical axis, so ``r`` is a z-depth difference), in units of the sensor's
-σ(z, θ) (:class:`wbsa.estimation.bodyfit.noise.DepthNoise`; θ the angle between the triangle's normal and the
+σ(z, θ) (:class:`wbsa.estimation.methods.body_fit.noise.DepthNoise`; θ the angle between the triangle's normal and the
 ray). Noise that scatters returns along their rays leaves this residual centred on the true surface; the
 closest-point residual is not (the closest surface point of a return scattered behind a convex body lies
 inside it, so that term's minimum moves inward as the noise grows). Points whose ray meets no model triangle
@@ -42,7 +42,7 @@ class RayTerm:
         The camera centre, view frame.
     optical_axis : (3,) float64
         The camera's +z axis, view frame (unit).
-    noise : wbsa.estimation.bodyfit.noise.DepthNoise
+    noise : wbsa.estimation.methods.body_fit.noise.DepthNoise
     """
 
     def __init__(self, points: np.ndarray, camera_position: np.ndarray, optical_axis: np.ndarray, noise) -> None:

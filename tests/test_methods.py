@@ -121,3 +121,28 @@ def test_both_keeps_the_regression_when_the_body_fit_cannot_serve(person_view):
     est = estimate(depth, camera, method="both", clothing_m=0.01)
     assert est.body is None and "regression" in est.routes and "body-fit" not in est.routes
     assert "does not yet allow for clothes" in est.flags["body_fit_failed"]
+
+
+def test_every_flag_raised_has_one_record_and_every_record_is_raised():
+    """A flag written anywhere in the code (``...flags["name"] = ...``, or a key of a dict built in a ``*_flags``
+    check) has its record in :data:`wbsa.estimation.flags.FLAG_RECORDS`, and no record is dead."""
+    import ast
+    from pathlib import Path
+
+    import wbsa
+    from wbsa.estimation.flags import FLAG_RECORDS, FLAGS
+
+    raised = set()
+    for path in Path(wbsa.__file__).parent.rglob("*.py"):
+        tree = ast.parse(path.read_text())
+        for node in ast.walk(tree):
+            if (isinstance(node, ast.Subscript) and isinstance(node.ctx, ast.Store) and isinstance(node.slice, ast.Constant)
+                    and ast.unparse(node.value).endswith("flags")):
+                raised.add(node.slice.value)
+            if isinstance(node, ast.FunctionDef) and node.name.endswith("_flags"):
+                raised |= {k.value for d in ast.walk(node) if isinstance(d, ast.Dict)
+                           for k in d.keys if isinstance(k, ast.Constant)}
+    assert raised == set(FLAG_RECORDS)
+    assert FLAGS == {name: flag.meaning for name, flag in FLAG_RECORDS.items()}
+    assert all(flag.routes and set(flag.routes) <= {"image", "regression", "body-fit", "both"} and flag.meaning
+               and flag.advice for flag in FLAG_RECORDS.values())

@@ -5,6 +5,7 @@
 ``methods``      the method slot: :class:`Predictor` (``methods.base``), one dispatch point (:func:`predictor_for`),
                  the methods ``regression`` (the estimator model, the shipped default model) and ``body_fit``
 ``single_view``  :func:`estimate`, the entry point (``wbsa.estimate`` calls it)
+``flags``        every flag: its meaning, the page's advice, the routes that raise it
 ``fhir``         the FHIR R4 Observation
 ``command``      ``wbsa estimate``
 
@@ -34,7 +35,7 @@ _EXPORTS = {
     "default_model_path": "wbsa.estimation.methods.regression.default_model",
     "model_card": "wbsa.estimation.methods.regression.default_model",
     "fhir_observation": "wbsa.estimation.fhir",
-    "FLAGS": "wbsa.estimation.subject.checks",
+    "FLAGS": "wbsa.estimation.flags",
 }
 __all__ = sorted(_EXPORTS)
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

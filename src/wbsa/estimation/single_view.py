@@ -1,7 +1,7 @@
 """WBSA from one depth image: find the subject, measure it, estimate the view, predict with an interval.
 
 :func:`estimate` is the library entry point (``wbsa.estimate`` calls it). Every number it returns carries
-its flags (:data:`wbsa.estimation.subject.checks.FLAGS`); what cannot be measured raises a one-line
+its flags (:data:`wbsa.estimation.flags.FLAGS`); what cannot be measured raises a one-line
 :class:`~wbsa.errors.WbsaError`.
 """
 
@@ -36,7 +36,7 @@ class Estimate:
     view_used : (float, float)
         Azimuth and elevation the prediction used (the stated ones where given).
     flags : dict of str to str
-        Named warnings (see :data:`wbsa.estimation.subject.checks.FLAGS`); empty when all checks passed.
+        Named warnings (see :data:`wbsa.estimation.flags.FLAGS`); empty when all checks passed.
     clothing_m : float
         The stated layer of clothes the estimate allows for (m; 0: none or tight-fitting).
     method, model, camera : str
@@ -187,6 +187,7 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     """
     from wbsa.camera.presets import resolve_camera
     from wbsa.camera.views import check_angle
+    from wbsa.estimation.flags import FLAGS
     from wbsa.estimation.subject import checks
     from wbsa.estimation.subject.measure import measure_subject
     from wbsa.estimation.methods.base import Request, Subject
@@ -237,7 +238,7 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     if m.touches_border:
         flags["cut_off"] = "subject pixels on the image border; step back or re-aim the camera"
     if floor is None:
-        flags["no_floor"] = checks.FLAGS["no_floor"]
+        flags["no_floor"] = FLAGS["no_floor"]
     flags.update(checks.working_range_flags(m.distance_m, intrinsics))
     flags.update(checks.feet_flags(m.distance_m, intrinsics))
     subject = Subject(depth_m, mask, intrinsics, floor, m)

@@ -3,7 +3,7 @@
 Errors (:class:`~wbsa.errors.WbsaError`, the CLI exits 2): an image whose size is not the camera's, a
 subject whose height from the point cloud is not a human height (wrong depth scale or units), a model with
 non-finite numbers. Flags (a name and a sentence, in ``Estimate.flags``; ``warning:`` lines on the terminal)
-for an estimate that is given but may be off: see :data:`FLAGS`.
+for an estimate that is given but may be off: see :data:`wbsa.estimation.flags.FLAGS`.
 """
 
 from __future__ import annotations
@@ -12,30 +12,8 @@ import math
 
 import numpy as np
 
-from wbsa.estimation.methods.body_fit.fit import FLAGS as BODY_FIT_FLAGS
 from wbsa.errors import WbsaError
 
-#: Every flag an estimate can carry, with what it means.
-FLAGS: dict[str, str] = {
-    "cut_off": "the subject touches the image border and may be cut off",
-    "no_floor": "no floor was found; the elevation comes from the body's long axis",
-    "several_people": "more than one person-sized object; one was picked",
-    "beyond_working_range": "the subject is closer or farther than the camera's documented working range",
-    "out_of_training_range": "a measure lies outside the range the model was trained on",
-    "view_disagrees": "the stated view differs from the estimated one by more than 30°",
-    "uncertain_view": "the camera may be in front of or behind the subject (azimuth uncertain)",
-    "model_mismatch": "the model was fitted for another camera, distance or view",
-    "camera_assumed": "no camera was given; the preset of the image's size was assumed",
-    "interval_unsure": "the model's calibration has too few subjects to promise the interval's level",
-    "mixed_pixels": "many returns at the subject's outline lay between two surfaces; the area may be off",
-    "not_a_person": "the object's silhouette is not a standing person's (a board, a post, a wall?)",
-    "feet_unsure": "the subject stands farther than this camera tells the feet from the floor; the area near "
-                   "the soles may be off",
-    "methods_disagree": "the regression's and the body fit's intervals do not overlap (method both)",
-    "body_fit_failed": "with method both, the body fit could not serve this image; the regression's answer stands",
-    "no_interval": "the body fit has no calibrated interval; its bounds are the estimate",
-    **{name: text for name, text in BODY_FIT_FLAGS.items() if name not in ("cut_off", "no_floor")},
-}
 #: The silhouette of a standing person (:func:`person_shape_flags`): the share of its bounding box
 #: (width × stature) it fills, and its width per metre of stature. Measured on rendered bodies in a room
 #: (Kinect v2, 3 m, 12° elevation; A-pose and arms-down adults and teenagers of 1.35–2.07 m, azimuths 0–180°):

@@ -49,7 +49,7 @@ class BodyFit:
         The fit's final objective (:mod:`wbsa.estimation.methods.body_fit.objective`).
     converged : bool
     flags : dict of str to str
-        Named warnings (:data:`wbsa.estimation.methods.body_fit.fit.FLAGS`); empty when every check passed.
+        Named warnings (:data:`wbsa.estimation.flags.FLAGS`, route ``body-fit``); empty when every check passed.
     seconds : float
         Wall time of the fit (without loading anny, done once per process).
     steps, restarts : int

@@ -69,6 +69,34 @@ def write_depth_png(path: str | os.PathLike, depth_m: np.ndarray, *, depth_scale
     return path
 
 
+def mask_image(mask: np.ndarray):
+    """A subject's mask as an 8-bit image (255 = subject), the format of ``wbsa estimate --mask-out``.
+
+    Parameters
+    ----------
+    mask : (h, w) bool
+
+    Returns
+    -------
+    PIL.Image.Image
+    """
+    from PIL import Image
+
+    return Image.fromarray(np.where(mask, 255, 0).astype(np.uint8))
+
+
+def write_mask(path: str | os.PathLike, mask: np.ndarray) -> None:
+    """Write :func:`mask_image` of ``mask`` to ``path`` as PNG, atomically (verified).
+
+    Parameters
+    ----------
+    path : str or path
+    mask : (h, w) bool
+    """
+    with atomic_path(path) as tmp:
+        mask_image(mask).save(tmp, format="PNG")
+
+
 def read_depth_png(path: str | os.PathLike, *, depth_scale: float = MM_PER_M) -> np.ndarray:
     """Read a 16-bit depth PNG (a real sensor's or :func:`write_depth_png`'s) into metres.
 

@@ -31,6 +31,7 @@ _EXPORTS = {
     "EstimatorModel": "wbsa.estimation.methods.regression.model",
     "Predictor": "wbsa.estimation.methods.base",
     "predictor_for": "wbsa.estimation.methods.dispatch",
+    "BodyFitSettings": "wbsa.estimation.methods.body_fit.settings",
     "default_model": "wbsa.estimation.methods.regression.default_model",
     "default_model_path": "wbsa.estimation.methods.regression.default_model",
     "model_card": "wbsa.estimation.methods.regression.default_model",

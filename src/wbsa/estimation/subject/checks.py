@@ -31,10 +31,27 @@ MIXED_PER_OUTLINE_PIXEL = 0.1
 MAX_CLOTHING_M = 0.05
 
 
-def check_image_size(depth: np.ndarray, camera) -> None:
-    """Raise if the depth image is not 2-D or not the camera's size."""
+def check_two_dimensional(depth: np.ndarray) -> None:
+    """Raise if the depth image is not 2-D.
+
+    Parameters
+    ----------
+    depth : array
+        The depth image, (h, w) when right.
+    """
     if np.ndim(depth) != 2:
         raise WbsaError(f"a depth image must be 2-D (h, w), got shape {np.shape(depth)}; give a single-channel image")
+
+
+def check_image_size(depth: np.ndarray, camera) -> None:
+    """Raise if the depth image is not 2-D or not the camera's size.
+
+    Parameters
+    ----------
+    depth : (h, w) float64
+    camera : Intrinsics
+    """
+    check_two_dimensional(depth)
     h, w = np.shape(depth)
     if (w, h) != (camera.width, camera.height):
         raise WbsaError(f"the depth image is {w}x{h} but camera {camera.name} is {camera.width}x{camera.height}; "
@@ -69,7 +86,13 @@ def person_shape_flags(stature_m: float, width_m: float, silhouette_m2: float) -
 
 
 def check_height(stature_m: float) -> None:
-    """Raise if a height measured on the point cloud cannot be a person's."""
+    """Raise if a height measured on the point cloud cannot be a person's.
+
+    Parameters
+    ----------
+    stature_m : float
+        The subject's height over the floor (or along its long axis), metres.
+    """
     lo, hi = HUMAN_HEIGHT_M
     if not (math.isfinite(stature_m) and lo <= stature_m <= hi):
         raise WbsaError(f"the subject measures {stature_m:.2f} m tall in the point cloud, outside {lo:g}–{hi:g} m; "
@@ -77,12 +100,23 @@ def check_height(stature_m: float) -> None:
 
 
 def is_real_number(value: object) -> bool:
-    """Whether ``value`` is a real number (int, float or a NumPy real scalar; not a bool, str or complex)."""
+    """Whether ``value`` is a real number (int, float or a NumPy real scalar; not a bool, str or complex).
+
+    Parameters
+    ----------
+    value : object
+    """
     return (isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_)))
 
 
 def check_clothing(clothing_m: float) -> None:
-    """Raise if a stated layer of clothes is not a thickness of 0 to :data:`MAX_CLOTHING_M` metres."""
+    """Raise if a stated layer of clothes is not a thickness of 0 to :data:`MAX_CLOTHING_M` metres.
+
+    Parameters
+    ----------
+    clothing_m : float
+        The stated layer (m).
+    """
     ok = is_real_number(clothing_m) and math.isfinite(float(clothing_m)) and 0.0 <= float(clothing_m) <= MAX_CLOTHING_M
     if not ok:
         raise WbsaError(f"the clothes' layer {clothing_m!r} m must be a thickness of 0 to {MAX_CLOTHING_M:g} m "
@@ -90,7 +124,15 @@ def check_clothing(clothing_m: float) -> None:
 
 
 def check_finite_model(arrays: dict, source: str) -> None:
-    """Raise if any number of a model is NaN or infinite."""
+    """Raise if any number of a model is NaN or infinite.
+
+    Parameters
+    ----------
+    arrays : dict of str to array
+        The model's named arrays.
+    source : str
+        The model's name in the message (its file).
+    """
     for name, arr in arrays.items():
         a = np.asarray(arr)
         if a.dtype.kind in "fc" and not np.all(np.isfinite(a)):
@@ -98,7 +140,15 @@ def check_finite_model(arrays: dict, source: str) -> None:
 
 
 def range_flags(values: dict[str, float], ranges: dict[str, tuple[float, float]]) -> dict[str, str]:
-    """``{"out_of_training_range": ...}`` naming every value outside its training range, else ``{}``."""
+    """``{"out_of_training_range": ...}`` naming every value outside its training range, else ``{}``.
+
+    Parameters
+    ----------
+    values : dict of str to float
+        The subject's measures by name.
+    ranges : dict of str to (float, float)
+        The training range (low, high) of each checked measure; names not in it are not checked.
+    """
     out = []
     for name, value in values.items():
         if name in ranges:
@@ -110,7 +160,14 @@ def range_flags(values: dict[str, float], ranges: dict[str, tuple[float, float]]
 
 def working_range_flags(distance_m: float, camera) -> dict[str, str]:
     """``{"beyond_working_range": ...}`` if the subject's distance is outside the camera's working range
-    (:attr:`~wbsa.camera.presets.CameraRecord.working_range_m`; an intrinsics file's own range)."""
+    (:attr:`~wbsa.camera.presets.CameraRecord.working_range_m`; an intrinsics file's own range).
+
+    Parameters
+    ----------
+    distance_m : float
+        The subject's distance from the camera (m).
+    camera : Intrinsics
+    """
     lo, hi = float(camera.min_range_m), float(camera.max_range_m)
     if lo <= distance_m <= hi:
         return {}
@@ -120,7 +177,14 @@ def working_range_flags(distance_m: float, camera) -> dict[str, str]:
 
 def feet_flags(distance_m: float, camera) -> dict[str, str]:
     """``{"feet_unsure": ...}`` beyond the distance at which the camera's preset tells the feet from the floor
-    (:attr:`~wbsa.camera.presets.CameraRecord.feet_within_m`; none for a camera that is not a preset)."""
+    (:attr:`~wbsa.camera.presets.CameraRecord.feet_within_m`; none for a camera that is not a preset).
+
+    Parameters
+    ----------
+    distance_m : float
+        The subject's distance from the camera (m).
+    camera : Intrinsics
+    """
     from wbsa.camera.presets import CAMERAS
 
     record = CAMERAS.get(camera.name)

@@ -104,6 +104,28 @@ class SegmentSettings:
                     f"must be one of {', '.join(PICKS)} or an (x, y) pixel, got {self.pick!r}")
 
 
+def parse_pick(text: str) -> str | tuple[int, int]:
+    """A ``pick`` from its text: ``nearest``, ``largest``, ``center`` or ``x,y`` (a pixel), as ``--pick`` and the
+    page give it.
+
+    Parameters
+    ----------
+    text : str
+
+    Raises
+    ------
+    WbsaError
+        Text that is none of these.
+    """
+    if text in PICKS:
+        return text
+    try:
+        x, y = (int(v) for v in text.split(","))
+    except ValueError:
+        raise WbsaError(f"{text!r} is not nearest, largest, center or x,y") from None
+    return (x, y)
+
+
 def _is_pixel(pick: object) -> bool:
     return isinstance(pick, tuple) and len(pick) == 2 and all(isinstance(v, (int, np.integer)) for v in pick)
 

@@ -112,7 +112,7 @@ def _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fi
         starts = first_guesses(fit_model, objective, settings.restarts, azimuth_deg, settings.child_starts)
     opt = optimise(fit_model, objective, starts, settings, deadline)
 
-    body = measure_body(meter, opt.params, settings.density_model, settings.density_kg_m3)
+    body = measure_body(meter, opt.params, settings.composition)
     rest = body["rest"]
     angles_deg = np.degrees(opt.angles_rad)
     posed = pose_vertices(rest.vertices[0], rest.bone_heads[0], angles_deg, body_model.rig)

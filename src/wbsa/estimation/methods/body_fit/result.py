@@ -26,7 +26,7 @@ class BodyFit:
         Its coverage (NaN without one).
     stature_m, volume_m3, mass_kg, bmi : float
         Of the fitted body at rest; mass and BMI from the composition model of the settings
-        (``density_model``; constant 980 kg/m³ by default, as the population tables).
+        (``BodyFitSettings.composition``; anny's constant 980 kg/m³ by default, as the population tables).
     tapes : dict of str to float
         The tape measures of :mod:`wbsa.bodies.anthropometry` (``waist_circ_m``, ``hip_circ_m`` ...), metres.
     sex : str

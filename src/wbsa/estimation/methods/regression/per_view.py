@@ -21,13 +21,31 @@ class PerViewPredictor:
         self.model = model
 
     def check_request(self, request: Request) -> None:
-        """Refuse stated clothes: the per-view fits know nothing of them."""
+        """Refuse stated clothes: the per-view fits know nothing of them.
+
+        Parameters
+        ----------
+        request : Request
+            The stated view, clothes and interval level.
+        """
         if request.clothing_m > 0:
             raise WbsaError("a wbsa fit model allows for no clothes; state none (--clothing-cm 0) or use the default "
                             "estimator model")
 
     def predict(self, subject: Subject, request: Request) -> Prediction:
-        """WBSA from the nearest fitted view; flags ``model_mismatch`` and ``uncertain_view``."""
+        """WBSA from the nearest fitted view; flags ``model_mismatch`` and ``uncertain_view``.
+
+        Parameters
+        ----------
+        subject : Subject
+            The segmented, measured subject.
+        request : Request
+            The stated view, clothes and interval level.
+
+        Returns
+        -------
+        Prediction
+        """
         from wbsa.estimation.methods.regression.default_model import default_model
 
         measures, camera = subject.measures, subject.camera

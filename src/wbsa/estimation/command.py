@@ -6,21 +6,10 @@ import argparse
 import sys
 
 
-def _pick(text: str):
-    """``--pick``: :func:`~wbsa.estimation.subject.segment.parse_pick`, refused as argparse refuses a value."""
-    from wbsa.errors import WbsaError
-    from wbsa.estimation.subject.segment import parse_pick
-
-    try:
-        return parse_pick(text)
-    except WbsaError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
-
-
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``estimate`` subcommand."""
     from wbsa.camera.presets import presets_help
-    from wbsa.cli_types import number_in
+    from wbsa.cli_types import number_in, pick
     from wbsa.typing import METHODS
 
     p = sub.add_parser("estimate", help="estimate WBSA from one depth image of a standing person",
@@ -58,7 +47,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="with --method body-fit or both: most optimiser steps of the fit (default 200)")
     p.add_argument("--body-fit-restarts", type=int, default=None,
                    help="with --method body-fit or both: starting points fitted together (default 6)")
-    p.add_argument("--pick", type=_pick, default=None,
+    p.add_argument("--pick", type=pick, default=None,
                    help="with several people: nearest, largest, center or x,y (a pixel of the subject)")
     p.add_argument("--no-segment", action="store_true",
                    help="every return is the subject (skip the segmentation; a body alone in the image is found "

@@ -26,7 +26,6 @@ import tempfile
 from contextlib import asynccontextmanager
 from pathlib import Path
 
-from wbsa.errors import WbsaError
 from wbsa.server.uploads import MAX_UPLOAD_BYTES, UploadError, check_depth_upload, check_fields, read_form
 
 STATIC = Path(__file__).parent / "static"
@@ -77,7 +76,7 @@ def _number(fields: dict, name: str, low: float, high: float, what: str) -> floa
 
 def options_from_form(form, presets, methods) -> "Options":
     """The page's choices as :class:`~wbsa.server.jobs.Options`, every field checked."""
-    from wbsa.estimation.subject.segment import parse_pick
+    from wbsa.cli_types import pick as parse_pick
     from wbsa.server.jobs import Options, camera_from_upload
 
     check_fields(form, FIELDS, FILES)
@@ -99,7 +98,7 @@ def options_from_form(form, presets, methods) -> "Options":
     if f.get("pick", "").strip():
         try:
             pick = parse_pick(f["pick"].strip())
-        except WbsaError as exc:
+        except argparse.ArgumentTypeError as exc:
             raise UploadError(f"pick: {exc}") from None
     clothing_cm = _number(f, "clothing_cm", 0, 5, "a thickness of clothes in cm")
     return Options(camera=camera, intrinsics=camera_from_upload(intrinsics[0]) if intrinsics else None,
@@ -207,7 +206,7 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
     async def pick(request: Request) -> Response:
         import dataclasses
 
-        from wbsa.estimation.subject.segment import parse_pick
+        from wbsa.cli_types import pick as parse_pick
 
         async def work():
             before = results.get(request.path_params["rid"])
@@ -215,7 +214,7 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
                 raise UploadError("this upload holds no depth image to pick from; upload a depth file")
             try:
                 at = parse_pick(request.query_params.get("pick", ""))
-            except WbsaError as exc:
+            except argparse.ArgumentTypeError as exc:
                 raise UploadError(f"pick: {exc}") from None
             options = dataclasses.replace(before.options, pick=at)
             result = await runner.run(measure, None, options, model, root, depth_m=before.depth_m)

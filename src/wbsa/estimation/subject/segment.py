@@ -33,8 +33,8 @@ from wbsa.errors import WbsaError, check_field
 from wbsa.estimation.subject.cloud import Plane, ransac_plane
 from wbsa.estimation.subject.clusters import MAX_FOOTPRINT_M, attach_low, footprint_m, merge_occluding
 from wbsa.estimation.subject.feet import grow_feet
+from wbsa.typing import PICK_RULES, PickRule
 
-PICKS = ("nearest", "largest", "center")
 #: Height over the floor below which returns are not used to link objects (only to extend them).
 LOW_BAND_M = 0.10
 #: A room surface reaches this close to the image's border (pixels).
@@ -90,7 +90,7 @@ class SegmentSettings:
     min_person_height_m: float = 0.45
     max_person_height_m: float = 2.6
     max_person_width_m: float = 2.6
-    pick: str | tuple[int, int] | None = None
+    pick: PickRule | tuple[int, int] | None = None
     seed: int = 0
 
     def __post_init__(self) -> None:
@@ -100,30 +100,8 @@ class SegmentSettings:
         check_field(self.voxel_m > 0, "voxel_m", f"must be a positive length in metres, got {self.voxel_m}")
         check_field(self.cluster_gap_m > 0, "cluster_gap_m",
                     f"must be a positive length in metres, got {self.cluster_gap_m}")
-        check_field(self.pick is None or self.pick in PICKS or _is_pixel(self.pick), "pick",
-                    f"must be one of {', '.join(PICKS)} or an (x, y) pixel, got {self.pick!r}")
-
-
-def parse_pick(text: str) -> str | tuple[int, int]:
-    """A ``pick`` from its text: ``nearest``, ``largest``, ``center`` or ``x,y`` (a pixel), as ``--pick`` and the
-    page give it.
-
-    Parameters
-    ----------
-    text : str
-
-    Raises
-    ------
-    WbsaError
-        Text that is none of these.
-    """
-    if text in PICKS:
-        return text
-    try:
-        x, y = (int(v) for v in text.split(","))
-    except ValueError:
-        raise WbsaError(f"{text!r} is not nearest, largest, center or x,y") from None
-    return (x, y)
+        check_field(self.pick is None or self.pick in PICK_RULES or _is_pixel(self.pick), "pick",
+                    f"must be one of {', '.join(PICK_RULES)} or an (x, y) pixel, got {self.pick!r}")
 
 
 def _is_pixel(pick: object) -> bool:

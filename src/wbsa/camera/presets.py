@@ -124,7 +124,13 @@ TRAINED_CAMERAS: tuple[str, ...] = tuple(name for name, r in CAMERAS.items() if 
 
 
 def camera_record(name: str) -> CameraRecord:
-    """The record of a preset; a one-line :class:`WbsaError` naming the presets otherwise."""
+    """The record of a preset; a one-line :class:`WbsaError` naming the presets otherwise.
+
+    Parameters
+    ----------
+    name : str
+        A preset's name (a key of :data:`CAMERAS`).
+    """
     try:
         return CAMERAS[name]
     except (KeyError, TypeError):
@@ -132,14 +138,26 @@ def camera_record(name: str) -> CameraRecord:
 
 
 def presets_help(default: str | None = None) -> str:
-    """The presets as a ``--help`` text: ``preset (one of ...) or Open3D intrinsics JSON``."""
+    """The presets as a ``--help`` text: ``preset (one of ...) or Open3D intrinsics JSON``.
+
+    Parameters
+    ----------
+    default : str or None
+        The option's default, said at the end when given.
+    """
     tail = f" (default {default})" if default else ""
     return (f"camera preset, one of: {'; '.join(r.describe() for r in CAMERAS.values())}; or an Open3D "
             f"PinholeCameraIntrinsic JSON file{tail}")
 
 
 def preset(name: PresetName) -> Intrinsics:
-    """The intrinsics of a named camera (a key of :data:`~wbsa.camera.presets.CAMERAS`, e.g. ``kinect-v2``)."""
+    """The intrinsics of a named camera (a key of :data:`~wbsa.camera.presets.CAMERAS`, e.g. ``kinect-v2``).
+
+    Parameters
+    ----------
+    name : str
+        A preset's name (a key of :data:`CAMERAS`).
+    """
     return camera_record(name).intrinsics
 
 

@@ -54,12 +54,29 @@ def depth_to_png_mm(depth_m: np.ndarray, *, depth_scale: float = MM_PER_M) -> np
 
 
 def png_mm_to_depth(units: np.ndarray, *, depth_scale: float = MM_PER_M) -> np.ndarray:
-    """Decode 16-bit depth units into metres: (h, w) uint16 -> (h, w) float32, 0 = no return."""
+    """Decode 16-bit depth units into metres: (h, w) uint16 -> (h, w) float32, 0 = no return.
+
+    Parameters
+    ----------
+    units : (h, w) uint16
+        Depth in units, 0 = no return.
+    depth_scale : float
+        Units per metre (1000: millimetres).
+    """
     return metres_from_units(units, depth_scale)
 
 
 def write_depth_png(path: str | os.PathLike, depth_m: np.ndarray, *, depth_scale: float = MM_PER_M) -> Path:
-    """Write a depth image atomically as a 16-bit grayscale PNG (see :func:`depth_to_png_mm`)."""
+    """Write a depth image atomically as a 16-bit grayscale PNG (see :func:`depth_to_png_mm`).
+
+    Parameters
+    ----------
+    path : str or path
+    depth_m : (h, w) float
+        Depth in metres, 0 or NaN = no return.
+    depth_scale : float
+        Units per metre stored (1000: millimetres).
+    """
     from PIL import Image
 
     units = depth_to_png_mm(depth_m, depth_scale=depth_scale)
@@ -142,6 +159,10 @@ DEPTH_SUFFIXES = (".png", ".npy", ".tif", ".tiff", ".exr")
 def check_depth_path(path: Path) -> None:
     """Refuse a depth path that is not a regular file, saying what it is (missing, a folder, a FIFO or device,
     a symbolic-link loop) rather than "does not exist" for all of them.
+
+    Parameters
+    ----------
+    path : Path
 
     Raises
     ------
@@ -234,6 +255,12 @@ def read_depth(path: str | os.PathLike, *, depth_scale: float | None = None) -> 
         Single-channel float depth in metres, if the ``OpenEXR`` package is installed.
 
     NaN, infinite, zero and negative values are "no return".
+
+    Parameters
+    ----------
+    path : str or path
+    depth_scale : float or None
+        Units per metre of the stored values; None: the type's default above.
 
     Raises
     ------

@@ -7,7 +7,13 @@ import sys
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    """Add the ``estimate`` subcommand."""
+    """Add the ``estimate`` subcommand.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The ``wbsa`` parser's subcommands.
+    """
     from wbsa.camera.presets import presets_help
     from wbsa.cli_types import number_in, pick
     from wbsa.typing import METHODS
@@ -64,7 +70,13 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run_estimate(args: argparse.Namespace) -> int:
-    """Handler of ``wbsa estimate``."""
+    """Handler of ``wbsa estimate``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed options of ``wbsa estimate``.
+    """
     from wbsa.estimation.single_view import estimate
     from wbsa.estimation.subject.segment import SegmentSettings
 

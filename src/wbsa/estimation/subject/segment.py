@@ -182,7 +182,17 @@ def _voxelise(points: np.ndarray, voxel_m: float) -> tuple[np.ndarray, np.ndarra
 
 def find_room(cloud: np.ndarray, settings: SegmentSettings, intrinsics,
               shape: tuple[int, int]) -> tuple[Plane | None, list[Plane]]:
-    """Floor and walls among the largest planes of a thinned (v, 3) cloud of an (h, w) image (see the module doc)."""
+    """Floor and walls among the largest planes of a thinned (v, 3) cloud of an (h, w) image (see the module doc).
+
+    Parameters
+    ----------
+    cloud : (v, 3) float64
+        The thinned cloud (camera frame, m).
+    settings : SegmentSettings
+    intrinsics : Intrinsics
+    shape : (int, int)
+        The image's (h, w).
+    """
     rng = np.random.default_rng(settings.seed)
     free = np.ones(len(cloud), dtype=bool)
     surfaces: list[Plane] = []

@@ -9,7 +9,13 @@ from wbsa.bodies.body_model import BODY_PARAMETER_COLUMNS, PHENOTYPE_COLUMNS
 
 
 def parameter_table(params: np.ndarray) -> pd.DataFrame:
-    """One-row population table of ``(15,)`` body parameters, clipped to anny's ranges."""
+    """One-row population table of ``(15,)`` body parameters, clipped to anny's ranges.
+
+    Parameters
+    ----------
+    params : (15,) float64
+        anny's phenotypes then local changes.
+    """
     p = np.asarray(params, dtype=np.float64).copy()
     n = len(PHENOTYPE_COLUMNS)
     p[:n] = np.clip(p[:n], 0.0, 1.0)

@@ -98,7 +98,12 @@ class BodyFit:
                 f"{self.seconds:.1f} s{flags})")
 
     def mesh(self, pose: Literal["rest", "observed"] = "rest") -> TriangleMesh:
-        """The fitted skin at rest (body frame) or in the observed pose (camera frame)."""
+        """The fitted skin at rest (body frame) or in the observed pose (camera frame).
+
+        Parameters
+        ----------
+        pose : {'rest', 'observed'}
+        """
         from wbsa.errors import WbsaError
 
         if pose not in ("rest", "observed"):
@@ -106,7 +111,13 @@ class BodyFit:
         return TriangleMesh(self.rest_vertices if pose == "rest" else self.posed_vertices, self.faces)
 
     def write_ply(self, path: str | os.PathLike, pose: Literal["rest", "observed"] = "rest"):
-        """Write :meth:`mesh` as a binary PLY (atomically, checked; :func:`wbsa.core.mesh_io.write_mesh`)."""
+        """Write :meth:`mesh` as a binary PLY (atomically, checked; :func:`wbsa.core.mesh_io.write_mesh`).
+
+        Parameters
+        ----------
+        path : str or path
+        pose : {'rest', 'observed'}
+        """
         from wbsa.core.mesh_io import write_mesh
 
         return write_mesh(self.mesh(pose), path)

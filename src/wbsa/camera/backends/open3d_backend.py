@@ -20,6 +20,20 @@ class Open3DBackend:
                       target: np.ndarray | None = None, *, return_frames: bool = True,
                       grazing_cos: float = GRAZING_COS,
                       grazing_split_px: float | None = GRAZING_SPLIT_PX) -> list[tuple[dict, DepthFrame | None]]:
+        """One ``(row, frame)`` per view: :func:`wbsa.camera.measure.measure_view` of each.
+
+        Parameters
+        ----------
+        scene : MeshScene
+        intrinsics : Intrinsics
+        views : list of View
+        target : (3,) float, optional
+            Point the camera aims at; default the mesh's bounding-box centre.
+        return_frames : bool
+            Also build each view's full-image :class:`DepthFrame`.
+        grazing_cos, grazing_split_px : float, float or None
+            As for :func:`wbsa.camera.measure.measure_view`.
+        """
         from wbsa.camera.measure import measure_view
 
         return [measure_view(scene, intrinsics, view, target, return_frame=return_frames, grazing_cos=grazing_cos,

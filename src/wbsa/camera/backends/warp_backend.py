@@ -105,6 +105,18 @@ class WarpBackend:
 
         ``grazing_cos`` ≤ 0 (the plain pixel sum, with its cos θ clip) is left to the Open3D back end.
 
+        Parameters
+        ----------
+        scene : MeshScene
+        intrinsics : Intrinsics
+        views : list of View
+        target : (3,) float, optional
+            Point the camera aims at; default the mesh's bounding-box centre.
+        return_frames : bool
+            Also build each view's full-image :class:`DepthFrame`.
+        grazing_cos, grazing_split_px : float, float or None
+            As for :func:`wbsa.camera.measure.measure_view`.
+
         Raises
         ------
         WbsaError

@@ -51,15 +51,8 @@ class Backend(Protocol):
 
         Parameters
         ----------
-        scene : MeshScene
-        intrinsics : Intrinsics
-        views : list of View
-        target : (3,) float, optional
-            Point the camera aims at; default the mesh's bounding-box centre.
-        return_frames : bool
-            Also build each view's full-image :class:`DepthFrame`.
-        grazing_cos, grazing_split_px : float, float or None
-            As for :func:`wbsa.camera.measure.measure_view`.
+        scene, intrinsics, views, target, return_frames, grazing_cos, grazing_split_px
+            As for :func:`measure_views` (without its ``backend``).
         """
 
 
@@ -168,14 +161,8 @@ def iter_measure_views(scene: MeshScene, intrinsics: Intrinsics, views, target: 
 
     Parameters
     ----------
-    scene : MeshScene
-    intrinsics : Intrinsics
-    views : iterable of View
-    target : (3,) float, optional
-        Point the camera aims at; default the mesh's bounding-box centre.
-    backend : {'auto', 'open3d', 'warp'}
-    return_frames : bool
-        Also build each view's full-image :class:`DepthFrame`.
+    scene, intrinsics, views, target, backend, return_frames
+        As for :func:`measure_views`.
     """
     views = list(views)
     step = FRAMES_PER_CALL if return_frames else max(1, len(views))

@@ -107,15 +107,8 @@ class WarpBackend:
 
         Parameters
         ----------
-        scene : MeshScene
-        intrinsics : Intrinsics
-        views : list of View
-        target : (3,) float, optional
-            Point the camera aims at; default the mesh's bounding-box centre.
-        return_frames : bool
-            Also build each view's full-image :class:`DepthFrame`.
-        grazing_cos, grazing_split_px : float, float or None
-            As for :func:`wbsa.camera.measure.measure_view`.
+        scene, intrinsics, views, target, return_frames, grazing_cos, grazing_split_px
+            As for :func:`wbsa.camera.backends.measure_views` (without its ``backend``).
 
         Raises
         ------

@@ -32,7 +32,7 @@ class BodyFitPredictor:
         Parameters
         ----------
         request : Request
-            The stated view, clothes and interval level.
+            As for :meth:`~wbsa.estimation.methods.base.Predictor.check_request`.
         """
         from wbsa.estimation.methods.body_fit.interval import load
 
@@ -48,14 +48,8 @@ class BodyFitPredictor:
 
         Parameters
         ----------
-        subject : Subject
-            The segmented, measured subject.
-        request : Request
-            The stated view, clothes and interval level.
-
-        Returns
-        -------
-        Prediction
+        subject, request : Subject, Request
+            As for :meth:`~wbsa.estimation.methods.base.Predictor.predict`.
         """
         from wbsa.estimation.methods.body_fit.fit import fit_body
 

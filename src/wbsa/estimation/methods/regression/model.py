@@ -138,12 +138,8 @@ class EstimatorModel:
 
         Parameters
         ----------
-        features : dict of str to (n,) float64
-            The subjects' measures with the stated clothes (:func:`with_clothing`).
-        shape : (n, b) float64
-            The subjects' shape bands (:attr:`SubjectMeasures.shape`), metres.
-        psi_deg, psi_sd_deg, elevation_deg : (n,) float64
-            The view used, its azimuth spread and its elevation (degrees).
+        features, shape, psi_deg, psi_sd_deg, elevation_deg
+            As for :func:`~wbsa.estimation.methods.regression.design.tree_features`.
         """
         X = (design(features, psi_deg, elevation_deg) - self.mean) / self.scale
         out = X @ self.coef + self.intercept
@@ -201,12 +197,8 @@ class EstimatorModel:
 
         Parameters
         ----------
-        features : dict of str to (n,) float64
-            The subjects' measures with the stated clothes (:func:`with_clothing`).
-        shape : (n, b) float64
-            The subjects' shape bands (:attr:`SubjectMeasures.shape`), metres.
-        psi_deg, psi_sd_deg, elevation_deg : (n,) float64
-            The view used, its azimuth spread and its elevation (degrees).
+        features, shape, psi_deg, psi_sd_deg, elevation_deg
+            As for :func:`~wbsa.estimation.methods.regression.design.tree_features`.
         level : float
             The interval's coverage, in (0, 1).
         """

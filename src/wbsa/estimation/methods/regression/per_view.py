@@ -26,7 +26,7 @@ class PerViewPredictor:
         Parameters
         ----------
         request : Request
-            The stated view, clothes and interval level.
+            As for :meth:`~wbsa.estimation.methods.base.Predictor.check_request`.
         """
         if request.clothing_m > 0:
             raise WbsaError("a wbsa fit model allows for no clothes; state none (--clothing-cm 0) or use the default "
@@ -37,14 +37,8 @@ class PerViewPredictor:
 
         Parameters
         ----------
-        subject : Subject
-            The segmented, measured subject.
-        request : Request
-            The stated view, clothes and interval level.
-
-        Returns
-        -------
-        Prediction
+        subject, request : Subject, Request
+            As for :meth:`~wbsa.estimation.methods.base.Predictor.predict`.
         """
         from wbsa.estimation.methods.regression.default_model import default_model
 

@@ -26,7 +26,7 @@ class RegressionPredictor:
         Parameters
         ----------
         request : Request
-            The stated view, clothes and interval level.
+            As for :meth:`~wbsa.estimation.methods.base.Predictor.check_request`.
         """
 
     def predict(self, subject: Subject, request: Request) -> Prediction:
@@ -35,14 +35,8 @@ class RegressionPredictor:
 
         Parameters
         ----------
-        subject : Subject
-            The segmented, measured subject.
-        request : Request
-            The stated view, clothes and interval level.
-
-        Returns
-        -------
-        Prediction
+        subject, request : Subject, Request
+            As for :meth:`~wbsa.estimation.methods.base.Predictor.predict`.
         """
         from wbsa.estimation.subject.checks import range_flags
         from wbsa.estimation.methods.regression.design import range_values, with_clothing

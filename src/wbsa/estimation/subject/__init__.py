@@ -1,6 +1,7 @@
 """The image → measured subject path every method starts from.
 
 ``mixed_pixels`` returns between two surfaces at a depth edge, snapped to one (:func:`repair_mixed_pixels`)
+``room``         the floor and the walls among the largest planes (:func:`~.room.find_room`)
 ``segment``      the subject in a room: floor, walls behind, 3-D clusters (:func:`segment_subject`)
 ``clusters``     person-sized clusters: occluders merged, low returns attached
 ``feet``         the feet grown down to the floor

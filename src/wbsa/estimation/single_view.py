@@ -198,12 +198,12 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     from wbsa.estimation.subject import checks
     from wbsa.estimation.subject.measure import measure_subject
     from wbsa.estimation.methods.base import Request, Subject
-    from wbsa.estimation.methods.dispatch import predictors_for
+    from wbsa.estimation.methods.dispatch import check_method, predictors_for
     from wbsa.estimation.methods.view import view_flags
     from wbsa.estimation.subject.mixed_pixels import repair_mixed_pixels
     from wbsa.estimation.subject.segment import segment_subject
 
-    predictors = list(predictors_for(method, model, body_fit))  # the method checked, a model read (or refused)
+    check_method(method)
     if not (checks.is_real_number(level) and 0 < level < 1):
         raise WbsaError(f"interval level {level!r} must be a number in (0, 1), e.g. 0.95")
     if segment is not None and not isinstance(segment, SegmentSettings):
@@ -221,6 +221,7 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
         checks.check_two_dimensional(depth_m)
         intrinsics = resolve_camera(camera, depth_m.shape)
     checks.check_image_size(depth_m, intrinsics)
+    predictors = list(predictors_for(method, model, body_fit))  # a model is read (and refused) before any measure
     depth_m, mixed = repair_mixed_pixels(depth_m, intrinsics.fx)
     flags: dict[str, str] = {}
     for k, predictor in enumerate(predictors):

@@ -46,6 +46,9 @@ def check_method(method: str) -> Method:
 def predictors_for(method: Method, model=None, body_fit: BodyFitSettings | None = None) -> tuple[Predictor, ...]:
     """The predictors of ``method``: one, or for ``both`` the regression's then the body fit's.
 
+    ``method`` is not checked again here (:func:`wbsa.estimation.estimate` checks it first, with
+    :func:`check_method`); a name that is none of the methods still gets that one-line refusal.
+
     Parameters
     ----------
     method : {'regression', 'body-fit', 'both'}
@@ -58,7 +61,6 @@ def predictors_for(method: Method, model=None, body_fit: BodyFitSettings | None 
     -------
     tuple of Predictor
     """
-    check_method(method)
     if method == "both":
         _check_body_fit_settings(body_fit)
         return _predictor("regression", model, None), _predictor("body-fit", None, body_fit)
@@ -96,7 +98,7 @@ def _check_body_fit_settings(body_fit) -> None:
 
 
 def _predictor(method: Method, model, body_fit) -> Predictor:
-    """The predictor of one checked method name."""
+    """The predictor of one method name (the one dispatch; a name that is no method is refused here)."""
     if method == "body-fit":
         from wbsa.estimation.methods.body_fit.predictor import BodyFitPredictor
 
@@ -105,6 +107,9 @@ def _predictor(method: Method, model, body_fit) -> Predictor:
                             "regression with it beside the body fit)")
         _check_body_fit_settings(body_fit)
         return BodyFitPredictor(body_fit)
+    if method != "regression":
+        check_method(method)  # refuses it: "both" is not one method, anything else is none
+        raise WbsaError("predictor_for takes one method; use predictors_for for both")
     if body_fit is not None:
         raise WbsaError("body-fit settings go with method body-fit or both; drop them for the regression")
     from wbsa.estimation.methods.regression.default_model import load_model

@@ -21,7 +21,7 @@ _EXPORTS = {
     "Estimate": "wbsa.estimation.single_view",
     "estimate": "wbsa.estimation.single_view",
     "repair_mixed_pixels": "wbsa.estimation.subject.mixed_pixels",
-    "SegmentSettings": "wbsa.estimation.subject.segment",
+    "SegmentSettings": "wbsa.estimation.subject.settings",
     "Segmentation": "wbsa.estimation.subject.segment",
     "segment_subject": "wbsa.estimation.subject.segment",
     "SubjectMeasures": "wbsa.estimation.subject.measure",

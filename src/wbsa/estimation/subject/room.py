@@ -7,14 +7,10 @@ normal is nearest the image's up (:func:`find_room`, used by :func:`wbsa.estimat
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 
 from wbsa.estimation.subject.cloud import Plane, ransac_plane
-
-if TYPE_CHECKING:  # pragma: no cover
-    from wbsa.estimation.subject.segment import SegmentSettings
+from wbsa.estimation.subject.settings import SegmentSettings
 
 #: A room surface reaches this close to the image's border (pixels).
 BORDER_PX = 3

@@ -12,8 +12,8 @@
    object they touch, so stray floor returns cannot chain objects together. Objects that touch in the image
    (or lie one pixel apart with no return between) with less than 0.8 m between them in depth (a body's
    near and far sides, an arm in front of the waist), or a far arm up to 1.2 m behind, are one object if
-   together they are still person-sized (:func:`~wbsa.estimation.clusters.merge_occluding`).
-   The subject's feet are then taken down to the floor (:mod:`wbsa.estimation.feet`).
+   together they are still person-sized (:func:`~wbsa.estimation.subject.clusters.merge_occluding`).
+   The subject's feet are then taken down to the floor (:mod:`wbsa.estimation.subject.feet`).
 4. A cluster is person-sized if it is 0.45–2.6 m tall (along the floor normal, or its long axis), at
    most 2.6 m wide and 0.9 m at the hips, and not seen past a nearer, larger object (inside its bounding box
    in the image and 0.4 m or more behind it: the wall between the legs; :func:`seen_past`); with several,
@@ -30,9 +30,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from wbsa.errors import WbsaError, check_field
-from wbsa.estimation.cloud import Plane, ransac_plane
-from wbsa.estimation.clusters import MAX_FOOTPRINT_M, attach_low, footprint_m, merge_occluding
-from wbsa.estimation.feet import grow_feet
+from wbsa.estimation.subject.cloud import Plane, ransac_plane
+from wbsa.estimation.subject.clusters import MAX_FOOTPRINT_M, attach_low, footprint_m, merge_occluding
+from wbsa.estimation.subject.feet import grow_feet
 
 PICKS = ("nearest", "largest", "center")
 #: Height over the floor below which returns are not used to link objects (only to extend them).
@@ -45,10 +45,10 @@ BORDER_PX = 3
 FLOOR_MAX_TILT_DEG = 75.0
 #: An object inside a nearer one's bounding box in the image and this much farther (m) is seen past it.
 #: The wall stands 0.5 m or more behind a subject's back; a body's own parts join it within 0.8 m of depth
-#: when they touch in the image (:func:`~wbsa.estimation.clusters.merge_occluding`) and are larger.
+#: when they touch in the image (:func:`~wbsa.estimation.subject.clusters.merge_occluding`) and are larger.
 SEEN_PAST_M = 0.4
 #: People standing side by side and touching span at most this at the hips (m; one person at most
-#: :data:`~wbsa.estimation.clusters.MAX_FOOTPRINT_M`); a wall spans more.
+#: :data:`~wbsa.estimation.subject.clusters.MAX_FOOTPRINT_M`); a wall spans more.
 TOUCHING_FOOTPRINT_M = 2.5
 
 
@@ -124,7 +124,7 @@ class Cluster:
     height_m, width_m : float
         Extent along the floor's normal (or its long axis) and across it.
     footprint_m : float
-        Width at the hips (:func:`~wbsa.estimation.clusters.footprint_m`).
+        Width at the hips (:func:`~wbsa.estimation.subject.clusters.footprint_m`).
     bbox_px : (int, int, int, int)
         Bounding box in the image, ``(x0, y0, x1, y1)``, inclusive.
     """

@@ -337,6 +337,44 @@ def test_numpy_and_torch_give_the_same_noise_from_one_definition():
     assert torch.all(zt.grad > 0)  # the envelope grows with depth
 
 
+#: Literals of the depth-noise models; they live in src/wbsa/sensor/ (and a camera's disparity in its record).
+_NOISE_CONSTANTS = {
+    "Nguyen axial": r"0\.0012|0\.0019",
+    "Nguyen grazing term": r"0\.0001\s*/",
+    "Nguyen lateral": r"0\.8\s*\+\s*0\.035|0\.035\s*\*\s*th",
+    "Kinect v1 focal length": r"575\.8",
+    "Kinect v1 disparity": r"(?<![\d.])0\.(?:075|125)(?!\d)",
+}
+#: Copies of them as they were once written outside the sensor package: each must be caught.
+_FORMER_COPIES = ("axial = 0.0012 + 0.0019 * (z - 0.4) ** 2", "_Q_STEP = 0.125 / (575.8 * 0.075)",
+                  "noise = ((0.0012 + 0.0019 * (z0 - 0.4).square()).square()",
+                  "baseline_m=baseline or 0.075, disparity_step_px=step or 0.125",
+                  "steep = 0.0001 / np.sqrt(z) * theta**2", "return 0.8 + 0.035 * theta / (np.pi / 2 - theta)")
+
+
+def test_the_noise_constants_are_written_only_in_the_sensor_package():
+    """A second copy of a noise constant anywhere in src/ outside wbsa/sensor/ (and the camera record table)
+    fails here: code that needs the noise calls wbsa.sensor.technology."""
+    import re
+    from pathlib import Path
+
+    import wbsa
+
+    caught = {what: [c for c in _FORMER_COPIES if re.search(p, c)] for what, p in _NOISE_CONSTANTS.items()}
+    assert all(caught.values()) and all(any(re.search(p, c) for p in _NOISE_CONSTANTS.values())
+                                        for c in _FORMER_COPIES), caught
+    root = Path(wbsa.__file__).parent
+    home = {root / "camera" / "presets.py"}
+    copies = []
+    for path in sorted(root.rglob("*.py")):
+        if path.parent == root / "sensor" or path in home:
+            continue
+        for i, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1):
+            copies += [f"{path.relative_to(root)}:{i}: {what}: {line.strip()}"
+                       for what, pattern in _NOISE_CONSTANTS.items() if re.search(pattern, line)]
+    assert not copies, "noise constants copied outside wbsa/sensor/ (call wbsa.sensor.technology):\n" + "\n".join(copies)
+
+
 # -- depth PNG -------------------------------------------------------------------------------------
 
 def test_depth_png_known_values_and_round_trip(tmp_path):

@@ -6,7 +6,7 @@ import math
 from dataclasses import asdict, dataclass
 
 from wbsa.errors import check_field
-from wbsa.sensor.technology import TECHNOLOGIES, SensorModel, sensor_model
+from wbsa.sensor.technology import TECHNOLOGIES, SensorModel, preset_record, sensor_model
 from wbsa.typing import DEPTH_TECHNOLOGIES, NOISE_MODELS, DepthTechnology, NoiseModel
 from wbsa.settings_io import check_types
 
@@ -103,7 +103,7 @@ class SensorSettings:
             a preset record and no ``technology``.
         """
         if self.noise == "camera" and self.technology is None:
-            check_field(_preset_of(camera) is not None, "noise",
+            check_field(preset_record(camera) is not None, "noise",
                         f"'camera' needs a camera preset to know its technology; camera "
                         f"{getattr(camera, 'name', 'custom')} is none (use a preset, or noise 'nguyen2012')")
         if self.range_limits:
@@ -156,7 +156,7 @@ class SensorSettings:
             disparity = disparity if has_disparity else None
             return sensor_model(self.technology, fx, disparity), disparity
         self.check_camera(camera)
-        record = _preset_of(camera)
+        record = preset_record(camera)
         return sensor_model(record.technology, fx, record.disparity), record.disparity
 
     @property
@@ -185,10 +185,3 @@ class SensorSettings:
             del d["technology"]
         return d
 
-
-def _preset_of(camera):
-    """The preset record whose intrinsics ``camera`` is, or None."""
-    from wbsa.camera.presets import CAMERAS
-
-    record = CAMERAS.get(getattr(camera, "name", None))
-    return record if record is not None and record.intrinsics == camera else None

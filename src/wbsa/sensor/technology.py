@@ -29,6 +29,7 @@ that the sensor's settings stay cheap to import for the command line.
 from __future__ import annotations
 
 import contextlib
+import functools
 import math
 from dataclasses import dataclass, replace
 
@@ -167,9 +168,50 @@ def camera_model(camera) -> SensorModel:
     return sensor_model(record.technology, record.intrinsics.fx, record.disparity)
 
 
-def kinect_v1() -> SensorModel:
-    """The Kinect v1 preset's model (structured light, Nguyen et al. 2012, 0.075 m and 1/8 px disparity)."""
-    return camera_model("kinect-v1")
+def preset_record(camera):
+    """The preset record whose intrinsics ``camera`` is, or None (a custom camera).
+
+    Parameters
+    ----------
+    camera : wbsa.camera.Intrinsics
+
+    Returns
+    -------
+    wbsa.camera.presets.CameraRecord or None
+    """
+    from wbsa.camera.presets import CAMERAS
+
+    record = CAMERAS.get(getattr(camera, "name", None))
+    return record if record is not None and record.intrinsics == camera else None
+
+
+#: Focal length (px) of the estimator's Kinect v1 envelope: the record's 575.8157 rounded, as the shipped
+#: estimator model was trained with.
+_ENVELOPE_FX_PX = 575.8
+
+
+def envelope_model(camera) -> SensorModel:
+    """The model whose :func:`envelope_m` the estimator assumes for a depth image of ``camera``: Kinect v1's
+    for every camera (its focal length rounded to 575.8 px), the envelope the shipped estimator model was
+    trained with (its planes, floor cut and mixed-pixel tolerance on the training renders used it).
+
+    Parameters
+    ----------
+    camera : wbsa.camera.Intrinsics
+
+    Returns
+    -------
+    SensorModel
+    """
+    return _trained_envelope()
+
+
+@functools.cache
+def _trained_envelope() -> SensorModel:
+    """Kinect v1's model with the envelope's focal length (built once)."""
+    from wbsa.camera.presets import CAMERAS
+
+    return sensor_model("structured-light", _ENVELOPE_FX_PX, CAMERAS["kinect-v1"].disparity)
 
 
 def _namespace(*xs):

@@ -33,6 +33,7 @@ from wbsa.errors import WbsaError, check_field
 from wbsa.estimation.subject.cloud import Plane, ransac_plane
 from wbsa.estimation.subject.clusters import MAX_FOOTPRINT_M, attach_low, footprint_m, merge_occluding
 from wbsa.estimation.subject.feet import grow_feet
+from wbsa.sensor.technology import envelope_model
 
 PICKS = ("nearest", "largest", "center")
 #: Height over the floor below which returns are not used to link objects (only to extend them).
@@ -184,13 +185,14 @@ def find_room(cloud: np.ndarray, settings: SegmentSettings, intrinsics,
               shape: tuple[int, int]) -> tuple[Plane | None, list[Plane]]:
     """Floor and walls among the largest planes of a thinned (v, 3) cloud of an (h, w) image (see the module doc)."""
     rng = np.random.default_rng(settings.seed)
+    sensor = envelope_model(intrinsics)
     free = np.ones(len(cloud), dtype=bool)
     surfaces: list[Plane] = []
     for _ in range(settings.max_planes):
         idx = np.flatnonzero(free)
         if len(idx) < max(50, settings.min_plane_fraction * len(cloud)):
             break
-        found = ransac_plane(cloud[idx], rng)
+        found = ransac_plane(cloud[idx], rng, sensor=sensor)
         if found is None:
             break
         plane, inliers = found

@@ -225,6 +225,13 @@ def _namespace(*xs):
     return np, tuple(np.asarray(x, dtype=np.float64) for x in xs)
 
 
+def _np():
+    """numpy (imported when first needed)."""
+    import numpy as np
+
+    return np
+
+
 def _quiet(xp):
     """numpy's divide-by-zero warnings off (σ is inf at grazing by design); nothing for torch."""
     import numpy as np
@@ -301,5 +308,10 @@ def envelope_m(model: SensorModel, depth_m):
     """
     xp, (z,) = _namespace(depth_m)
     axial = _face_on(model, z)
-    quant = model.depth_step_per_m * z * z / math.sqrt(12.0)
-    return xp.sqrt(axial**2 + quant**2)
+    # one quantity, (s z² / (f b))² / 12, in two orders that agree to rounding (tested): each keeps the bits
+    # the estimator's planes (numpy) and the body fit (torch, float32) were tuned and calibrated with
+    if xp is _np():
+        quant2 = (model.depth_step_per_m * z * z / math.sqrt(12.0)) ** 2
+    else:
+        quant2 = (model.depth_step_per_m * z.square()).square() / 12.0
+    return xp.sqrt(axial**2 + quant2)

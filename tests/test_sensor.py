@@ -434,6 +434,9 @@ def test_sensor_flags():
 
     with pytest.raises(WbsaError, match="range_limits needs a camera with a working range"):
         sensor_settings_from_args(p.parse_args(["--range-limits"]), Intrinsics(64, 48, 50, 50, 31.5, 23.5))
+    assert sensor_settings_from_args(p.parse_args(["--noise", "camera"]), preset("phone-lidar")).noise == "camera"
+    with pytest.raises(WbsaError, match="^noise 'camera' needs a camera preset to know its technology"):
+        sensor_settings_from_args(p.parse_args(["--noise", "camera"]), Intrinsics(64, 48, 50, 50, 31.5, 23.5))
 
 
 def test_sensor_rng_is_keyed():

@@ -202,6 +202,7 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     from wbsa.estimation.methods.view import view_flags
     from wbsa.estimation.subject.mixed_pixels import repair_mixed_pixels
     from wbsa.estimation.subject.segment import segment_subject
+    from wbsa.sensor.technology import envelope_model
 
     check_method(method)
     if not (checks.is_real_number(level) and 0 < level < 1):
@@ -222,7 +223,7 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
         intrinsics = resolve_camera(camera, depth_m.shape)
     checks.check_image_size(depth_m, intrinsics)
     predictors = list(predictors_for(method, model, body_fit))  # a model is read (and refused) before any measure
-    depth_m, mixed = repair_mixed_pixels(depth_m, intrinsics.fx)
+    depth_m, mixed = repair_mixed_pixels(depth_m, intrinsics.fx, envelope_model(intrinsics))
     flags: dict[str, str] = {}
     for k, predictor in enumerate(predictors):
         try:

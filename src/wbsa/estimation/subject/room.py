@@ -11,6 +11,7 @@ import numpy as np
 
 from wbsa.estimation.subject.cloud import Plane, ransac_plane
 from wbsa.estimation.subject.settings import SegmentSettings
+from wbsa.sensor.technology import envelope_model
 
 #: A room surface reaches this close to the image's border (pixels).
 BORDER_PX = 3
@@ -34,13 +35,14 @@ def find_room(cloud: np.ndarray, settings: SegmentSettings, intrinsics,
         The image's (h, w).
     """
     rng = np.random.default_rng(settings.seed)
+    sensor = envelope_model(intrinsics)
     free = np.ones(len(cloud), dtype=bool)
     surfaces: list[Plane] = []
     for _ in range(settings.max_planes):
         idx = np.flatnonzero(free)
         if len(idx) < max(50, settings.min_plane_fraction * len(cloud)):
             break
-        found = ransac_plane(cloud[idx], rng)
+        found = ransac_plane(cloud[idx], rng, sensor=sensor)
         if found is None:
             break
         plane, inliers = found

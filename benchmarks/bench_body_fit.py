@@ -176,8 +176,9 @@ def band_distance_m(camera, band: tuple[float, float]) -> float | None:
 def drift_chunk(population: pd.DataFrame, seed: int, draws: int, cameras: tuple[str, ...],
                 bands: tuple[tuple[float, float], ...], fit_settings) -> pd.DataFrame:
     """Fits started at the true body: each subject (a random posture) in a room, seen by each camera at each
-    distance (a random azimuth) with ``draws`` draws of its sensor's noise (Nguyen et al. 2012 axial and lateral
-    noise, grazing dropout, the camera's disparity quantisation; no holes); the subject's true pixels and floor.
+    distance (a random azimuth) with ``draws`` draws of its sensor's noise (the held-out captures' sensor of the
+    camera: its technology's axial and lateral noise, grazing dropout and disparity quantisation, the working
+    range; no holes or dropped pixels); the subject's true pixels and floor.
     Returns one row per fit: the fitted body's WBSA error against the subject's."""
     from wbsa.bodies.body_model import BodyModel, body_parameter_array
     from wbsa.bodies.posture import POSTURES, draw_angles, settle_posture
@@ -186,8 +187,7 @@ def drift_chunk(population: pd.DataFrame, seed: int, draws: int, cameras: tuple[
     from wbsa.camera.views import View
     from wbsa.estimation.methods.body_fit import fit_body
     from wbsa.estimation.subject.cloud import Plane
-    from wbsa.sensor import SensorSettings
-    from wbsa.training.capture import Capture
+    from wbsa.training.capture import Capture, CaptureSettings, sensor_for
     from wbsa.training.room import capture_room, compose_room
 
     body_model = BodyModel()
@@ -205,9 +205,9 @@ def drift_chunk(population: pd.DataFrame, seed: int, draws: int, cameras: tuple[
             cam_index = DRIFT_CAMERAS.index(camera_name) if camera_name in DRIFT_CAMERAS else 99
             record = camera_record(camera_name)
             camera = record.intrinsics
-            baseline, step = record.disparity or (0.075, 0.125)
-            sensor = SensorSettings(noise="nguyen2012", quantise=record.disparity is not None, baseline_m=baseline,
-                                    disparity_step_px=step)
+            # the held-out captures' sensor of this camera (its technology's noise, its quantisation), no holes
+            sensor = sensor_for(record, np.random.default_rng(0), CaptureSettings(max_holes_fraction=0.0,
+                                                                                 max_pixel_dropout=0.0))
             for band_index, band in enumerate(bands):
                 distance = band_distance_m(camera, band)
                 if distance is None:

@@ -177,7 +177,7 @@ def test_settings_refuse_bad_values():
     from wbsa.estimation.methods.body_fit import BodyFitSettings
 
     for bad in (dict(steps=0), dict(restarts=1.5), dict(robust_loss="l2"), dict(data_term="closest"), dict(time_budget_s=-1.0),
-                dict(density_model="bmi"), dict(vertex_spacing_m=1.0)):
+                dict(composition="constant"), dict(vertex_spacing_m=1.0)):
         with pytest.raises(SettingsError):
             BodyFitSettings(**bad)
 
@@ -212,8 +212,8 @@ def test_the_along_ray_residual_is_the_depth_difference_along_each_ray():
     and the triangle its ray meets is found; a ray past the body misses."""
     import torch
 
-    from wbsa.estimation.methods.body_fit.noise import DepthNoise
     from wbsa.estimation.methods.body_fit.rays import RayTerm
+    from wbsa.sensor.technology import camera_model
 
     # a square in the plane y = 2 - 0.5 x (view frame), seen from the origin looking along +y
     corners = np.array([[-1.0, 2.5, -1.0], [1.0, 1.5, -1.0], [1.0, 1.5, 1.0], [-1.0, 2.5, 1.0]])
@@ -222,7 +222,7 @@ def test_the_along_ray_residual_is_the_depth_difference_along_each_ray():
     dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
     t_plane = 2.0 / (dirs[:, 1] + 0.5 * dirs[:, 0])  # y + 0.5 x = 2 along t * d
     observed = dirs * (t_plane + np.array([0.03, -0.02, 0.0, 0.0]))[:, None]
-    term = RayTerm(observed, np.zeros(3), np.array([0.0, 1.0, 0.0]), DepthNoise("test"))
+    term = RayTerm(observed, np.zeros(3), np.array([0.0, 1.0, 0.0]), camera_model("kinect-v2"))
     tri, hit, sigma = term.correspondences(corners[None], faces)
     assert hit.numpy()[0].tolist() == [True, True, True, False]
     r = term.residuals_m(torch.as_tensor(corners[None], dtype=torch.float32), torch.as_tensor(tri))[0].numpy()
@@ -231,14 +231,15 @@ def test_the_along_ray_residual_is_the_depth_difference_along_each_ray():
     assert (sigma.numpy()[0, :3] > 0).all()
 
 
-def test_the_fit_expects_each_camera_s_quantisation():
+def test_the_along_ray_term_weighs_each_reading_by_its_camera_s_sigma():
     """A structured-light camera returns depth in disparity steps of z²·s/(f·b) (Kinect v1 at 4 m: 4.6 cm), which
-    widen its σ; a time-of-flight camera has none; σ grows with depth and towards grazing."""
-    from wbsa.camera import preset
-    from wbsa.estimation.methods.body_fit.noise import camera_noise
+    widen its σ by step/√12; a time-of-flight camera has none; σ grows with depth and towards grazing."""
+    from wbsa.estimation.methods.body_fit.rays import reading_sigma_m
+    from wbsa.sensor.technology import axial_sigma_m, camera_model
 
-    v1, v2 = camera_noise(preset("kinect-v1")), camera_noise(preset("kinect-v2"))
-    assert v1.step_m(4.0) == pytest.approx(16.0 * 0.125 / (575.8157 * 0.075))
-    assert v2.step_m(4.0) == 0.0
-    assert v1.sigma_m(4.0, 0.0) == pytest.approx(np.hypot(v2.sigma_m(4.0, 0.0), v1.step_m(4.0) / np.sqrt(12.0)))
-    assert v2.sigma_m(2.0, 0.0) < v2.sigma_m(4.0, 0.0) < v2.sigma_m(4.0, np.radians(80.0))
+    v1, v2 = camera_model("kinect-v1"), camera_model("kinect-v2")
+    step = 16.0 * 0.125 / (575.8157 * 0.075)
+    assert v1.depth_step_per_m * 16.0 == pytest.approx(step) and v2.depth_step_per_m == 0.0
+    assert reading_sigma_m(v1, 4.0, 0.0) == pytest.approx(np.hypot(axial_sigma_m(v1, 4.0, 0.0), step / np.sqrt(12.0)))
+    assert reading_sigma_m(v2, 4.0, 0.0) == pytest.approx(axial_sigma_m(v2, 4.0, 0.0))
+    assert reading_sigma_m(v2, 2.0, 0.0) < reading_sigma_m(v2, 4.0, 0.0) < reading_sigma_m(v2, 4.0, np.radians(80.0))

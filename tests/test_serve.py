@@ -121,7 +121,7 @@ def test_the_page_shows_the_answer_of_wbsa_estimate_for_a_rendered_body(server, 
     """A known body in a room: the page's WBSA, interval and flags are wbsa.estimate's on the same file; the
     depth picture, the 3-D view (every triangle of the surface), the view sketch, the formulae and the
     downloads are shown. A screenshot is kept as a test artefact."""
-    from wbsa.estimation.subject.checks import FLAGS
+    from wbsa.estimation.flags import FLAGS
 
     url, app = server
     est = _estimate(frames["one"]["path"], small_estimator_model)
@@ -352,13 +352,14 @@ def test_a_batch_gives_one_row_per_file_and_a_csv(server, frames, small_estimato
     assert rows[1]["wbsa_m2"] == "" and "not a depth file type" in rows[1]["error"]
 
 
-def test_the_advice_names_every_flag_and_the_answer_reads_them_from_flags():
-    from wbsa.estimation.subject.checks import FLAGS
-    from wbsa.server.advice import ADVICE, flag_rows
+def test_the_page_reads_each_flags_meaning_and_advice_from_its_record():
+    from wbsa.estimation.flags import DEFAULT_ADVICE, FLAG_RECORDS
+    from wbsa.server.advice import flag_rows
 
-    assert set(ADVICE) == set(FLAGS)
-    row = flag_rows({"cut_off": "subject pixels on the image border"})[0]
-    assert row["meaning"] == FLAGS["cut_off"] and row["todo"] == ADVICE["cut_off"]
+    row, unknown = flag_rows({"cut_off": "subject pixels on the image border", "new_flag": "detail"})
+    assert row == {"name": "cut_off", "meaning": FLAG_RECORDS["cut_off"].meaning,
+                   "detail": "subject pixels on the image border", "todo": FLAG_RECORDS["cut_off"].advice}
+    assert unknown["meaning"] == "new flag" and unknown["todo"] == DEFAULT_ADVICE
 
 
 def test_upload_names_never_carry_folders_and_messages_never_carry_the_servers_paths():

@@ -12,8 +12,9 @@ from typing import Literal, get_args
 #: How a population is made: ``random`` (paper: Virtual Random), ``survey`` (paper: Virtual NHANES),
 #: ``table`` (phenotypes read from a file).
 PopulationKind = Literal["random", "survey", "table"]
-#: Depth noise of the simulated sensor.
-NoiseModel = Literal["none", "nguyen2012"]
+#: Depth noise of the simulated sensor: none, Kinect v1's (Nguyen et al. 2012, the paper's), or the camera's own
+#: technology's (:data:`wbsa.sensor.technology.TECHNOLOGIES`).
+NoiseModel = Literal["none", "nguyen2012", "camera"]
 #: Surface reconstruction methods (each adds a ``vbsa_recon_<method>_m2`` column).
 ReconstructionMethod = Literal["grid", "ball-pivoting", "poisson"]
 #: Depth-image filters applied before reconstruction.
@@ -55,6 +56,8 @@ DepthTechnology = Literal["structured-light", "time-of-flight", "active-stereo",
 Method = Literal["regression", "body-fit", "both"]
 #: A population's ``posture`` setting: a posture name, or ``mixed`` (a random name per subject).
 PostureChoice = Literal[Literal["a-pose", "mixed"], PostureName]
+#: How the estimator picks the subject among several people (besides an (x, y) pixel of it).
+PickRule = Literal["nearest", "largest", "center"]
 #: Robust penalty of the body fit's point-to-surface residuals (:mod:`wbsa.estimation.methods.body_fit.objective`).
 RobustLoss = Literal["geman-mcclure", "huber"]
 #: The body fit's data term (:mod:`wbsa.estimation.methods.body_fit.objective`): depth compared along each camera ray,
@@ -83,3 +86,4 @@ MESH_UNITS: tuple[str, ...] = get_args(MeshUnits)
 MESH_UPS: tuple[str, ...] = get_args(MeshUp)
 ROBUST_LOSSES: tuple[str, ...] = get_args(RobustLoss)
 DATA_TERMS: tuple[str, ...] = get_args(DataTerm)
+PICK_RULES: tuple[str, ...] = get_args(PickRule)

@@ -51,12 +51,18 @@ class IntervalCalibration:
     fit: dict | None = None
 
     def interval(self, wbsa_m2: float) -> tuple[float, float]:
-        """(lo, hi) m² of a fitted WBSA."""
+        """(lo, hi) m² of a fitted WBSA.
+
+        Parameters
+        ----------
+        wbsa_m2 : float
+            The fitted body's WBSA.
+        """
         return wbsa_m2 / (1.0 + self.error_hi), wbsa_m2 / (1.0 + self.error_lo)
 
 
-#: Settings that do not change the fitted body's WBSA (a safety stop, threads, the mass's density).
-_NOT_FIT = ("time_budget_s", "threads", "density_model", "density_kg_m3")
+#: Settings that do not change the fitted body's WBSA (a safety stop, threads, the mass's composition).
+_NOT_FIT = ("time_budget_s", "threads", "composition")
 
 
 def fit_fingerprint(settings) -> dict:
@@ -69,6 +75,15 @@ def fit_fingerprint(settings) -> dict:
 
 def calibrate(errors: np.ndarray, level: float, command: str, fit: dict | None = None) -> IntervalCalibration:
     """The split-conformal bounds of relative errors ``errors (n,)`` at ``level``.
+
+    Parameters
+    ----------
+    errors : (n,) float64
+        Relative errors ``fit / truth − 1`` of the calibration fits.
+    level : float
+        The interval's coverage, in (0, 1).
+    command : str
+        The command that rebuilds the calibration.
 
     Raises
     ------
@@ -87,7 +102,14 @@ def calibrate(errors: np.ndarray, level: float, command: str, fit: dict | None =
 
 
 def save(cal: IntervalCalibration, path: Path = CALIBRATION_PATH) -> Path:
-    """Write the calibration as JSON (numbers and the rebuild command only)."""
+    """Write the calibration as JSON (numbers and the rebuild command only).
+
+    Parameters
+    ----------
+    cal : IntervalCalibration
+    path : Path
+        Where to write it (package data by default).
+    """
     from wbsa.io import write_json
 
     write_json({"level": cal.level, "error_lo": cal.error_lo, "error_hi": cal.error_hi, "n": cal.n,
@@ -96,7 +118,13 @@ def save(cal: IntervalCalibration, path: Path = CALIBRATION_PATH) -> Path:
 
 
 def load(path: Path = CALIBRATION_PATH) -> IntervalCalibration | None:
-    """The stored calibration, or None when there is none."""
+    """The stored calibration, or None when there is none.
+
+    Parameters
+    ----------
+    path : Path
+        The stored calibration (package data by default).
+    """
     if not Path(path).exists():
         return None
     try:

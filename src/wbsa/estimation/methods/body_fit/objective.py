@@ -21,7 +21,8 @@ Every term is a mean of robust penalties of residuals in units of a scale, so th
   subject, measured across the outline, where the image is sharper (about a pixel, 5 mm at 3.5 m) than the
   depth (2 cm of noise at 3.5 m);
 * **free space** (:meth:`Objective.free_space`): a camera-facing vertex in front of the surface seen at its
-  pixel by more than 1 cm plus twice the camera's face-on depth noise (quantisation included) would hide it;
+  pixel by more than 1 cm plus twice the camera's face-on depth noise (:func:`wbsa.sensor.technology.envelope_m`,
+  quantisation included) would hide it;
   Huber with scale 1 cm;
 * **priors**: the phenotypes stay near their start (weakly), the local changes near 0.
 """
@@ -30,12 +31,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from wbsa.estimation.methods.body_fit.noise import DepthNoise
 from wbsa.estimation.methods.body_fit.observation import Observation
+from wbsa.sensor.technology import envelope_m, envelope_model
 
 #: Scale (m) of the silhouette and free-space residuals; depth tolerance of the free-space term (m), to which
-#: :data:`FREE_SPACE_NOISE_K` times the camera's face-on depth noise at the vertex's depth is added
-#: (:meth:`wbsa.estimation.methods.body_fit.noise.DepthNoise.envelope_m`), so that noise does not push the body back.
+#: :data:`FREE_SPACE_NOISE_K` times the depth-noise envelope at the vertex's depth is added
+#: (:func:`wbsa.sensor.technology.envelope_m` of the observation's sensor, in torch; 2 cm at 3.5 m for Kinect v1),
+#: so that noise does not push the body back.
 SURFACE_SCALE_M = 0.01
 FREE_SPACE_TOLERANCE_M = 0.01
 FREE_SPACE_NOISE_K = 2.0
@@ -62,12 +64,9 @@ class Objective:
     obs : Observation
     robust_loss : {'geman-mcclure', 'huber'}
     robust_scale_m, silhouette_tolerance_px : float
-    noise : DepthNoise
-        The camera's depth noise (:func:`wbsa.estimation.methods.body_fit.noise.camera_noise`).
     """
 
-    def __init__(self, obs: Observation, robust_loss: str, robust_scale_m: float, silhouette_tolerance_px: float,
-                 noise: DepthNoise = DepthNoise("")):
+    def __init__(self, obs: Observation, robust_loss: str, robust_scale_m: float, silhouette_tolerance_px: float):
         import torch
 
         from wbsa.estimation.methods.body_fit.rays import RayTerm
@@ -75,6 +74,7 @@ class Objective:
         self.torch = torch
         f32 = torch.float32
         self.obs = obs
+        self.sensor = envelope_model(None) if obs.sensor is None else obs.sensor
         self.points = torch.as_tensor(obs.points, dtype=f32)
         self.basis = torch.as_tensor(obs.basis, dtype=f32)
         self.origin = torch.as_tensor(obs.origin, dtype=f32)
@@ -90,9 +90,8 @@ class Objective:
         #: the robust scale: the settings', or 1.5 times the depth noise measured on the subject if more
         self.scale = max(float(robust_scale_m), NOISE_SCALE_K * obs.noise_m)
         self.tolerance_px = float(silhouette_tolerance_px)
-        self.noise = noise
         #: the along-ray term of the observed points
-        self.rays = RayTerm(obs.points, obs.camera_position, obs.basis[:, 2], noise)
+        self.rays = RayTerm(obs.points, obs.camera_position, obs.basis[:, 2], self.sensor)
 
     # -- geometry ---------------------------------------------------------------------------
     def project(self, v):
@@ -181,7 +180,7 @@ class Objective:
         c = col.detach().round().long().clamp(0, w - 1)
         seen = self.depth[r, c]
         ok = facing & torch.isfinite(seen)
-        noise = torch.as_tensor(self.noise.envelope_m(z.detach().numpy()), dtype=z.dtype)
+        noise = envelope_m(self.sensor, z.detach())
         tol = FREE_SPACE_TOLERANCE_M + FREE_SPACE_NOISE_K * noise
         ahead = torch.where(ok, (seen - z - tol).clamp(min=0.0), torch.zeros_like(z))
         return _huber(ahead / SURFACE_SCALE_M).sum(1) / facing.sum(1).clamp(min=1)

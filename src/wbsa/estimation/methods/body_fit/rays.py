@@ -9,8 +9,8 @@ along the ray, differentiable through the intersection of the ray with that tria
     t_model = n·(a − c) / n·d,   r = (t_obs − t_model) · d_z,
 
 (``c`` the camera centre, ``d`` the ray's unit direction, ``a`` a corner and ``n`` the normal of the triangle,
-``d_z`` the ray's cosine with the optical axis, so ``r`` is a z-depth difference), in units of the sensor's
-σ(z, θ) (:class:`wbsa.estimation.methods.body_fit.noise.DepthNoise`; θ the angle between the triangle's normal and the
+``d_z`` the ray's cosine with the optical axis, so ``r`` is a z-depth difference), in units of the σ(z, θ) of a
+reading of the camera's sensor model (:func:`reading_sigma_m`; θ the angle between the triangle's normal and the
 ray). Noise that scatters returns along their rays leaves this residual centred on the true surface; the
 closest-point residual is not (the closest surface point of a return scattered behind a convex body lies
 inside it, so that term's minimum moves inward as the noise grows). Points whose ray meets no model triangle
@@ -31,6 +31,23 @@ MAX_THETA_DEG = 85.0
 MIN_COS = 0.1
 
 
+def reading_sigma_m(sensor, depth_m: np.ndarray, theta_rad: np.ndarray) -> np.ndarray:
+    """(...) float64 σ (m) of one depth reading: the sensor's axial σz(z, θ) widened by its quantisation,
+    √(σz² + step²/12), the step ``depth_step_per_m · z²`` of a camera that measures disparity (0 for the others).
+
+    Parameters
+    ----------
+    sensor : wbsa.sensor.technology.SensorModel
+    depth_m, theta_rad : (...) float64
+        z-depth (m) and angle between the surface normal and the ray (radians).
+    """
+    from wbsa.sensor.technology import axial_sigma_m
+
+    z = np.asarray(depth_m, dtype=np.float64)
+    step = sensor.depth_step_per_m * z * z
+    return np.sqrt(axial_sigma_m(sensor, z, theta_rad) ** 2 + step**2 / 12.0)
+
+
 class RayTerm:
     """Rays of the observed points and their along-ray residuals against posed bodies.
 
@@ -42,14 +59,15 @@ class RayTerm:
         The camera centre, view frame.
     optical_axis : (3,) float64
         The camera's +z axis, view frame (unit).
-    noise : wbsa.estimation.methods.body_fit.noise.DepthNoise
+    sensor : wbsa.sensor.technology.SensorModel
+        The camera's depth noise (:func:`wbsa.sensor.technology.envelope_model`).
     """
 
-    def __init__(self, points: np.ndarray, camera_position: np.ndarray, optical_axis: np.ndarray, noise) -> None:
+    def __init__(self, points: np.ndarray, camera_position: np.ndarray, optical_axis: np.ndarray, sensor) -> None:
         import torch
 
         self.torch = torch
-        self.noise = noise
+        self.sensor = sensor
         ray = np.asarray(points, dtype=np.float64) - camera_position[None]
         t_obs = np.linalg.norm(ray, axis=1)
         self.direction_np = ray / t_obs[:, None]
@@ -102,7 +120,7 @@ class RayTerm:
             n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
             cos[i] = np.abs((n * self.direction_np).sum(1))
         theta = np.minimum(np.arccos(np.clip(cos, 0.0, 1.0)), np.radians(MAX_THETA_DEG))
-        sigma = self.noise.sigma_m(np.broadcast_to(self.z_obs_np, theta.shape), theta)
+        sigma = reading_sigma_m(self.sensor, np.broadcast_to(self.z_obs_np, theta.shape), theta)
         return tri, torch.as_tensor(hit), torch.as_tensor(sigma, dtype=torch.float32)
 
     def residuals_m(self, v_all, tri):

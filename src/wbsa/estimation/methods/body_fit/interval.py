@@ -67,7 +67,17 @@ _NOT_FIT = ("time_budget_s", "threads", "composition")
 
 def fit_fingerprint(settings) -> dict:
     """The settings of a :class:`wbsa.estimation.methods.body_fit.BodyFitSettings` that shape the fitted body, as plain values:
-    a calibration holds only for fits made with the same."""
+    a calibration holds only for fits made with the same.
+
+    Parameters
+    ----------
+    settings : BodyFitSettings
+
+    Returns
+    -------
+    dict
+        Every field but the safety stop, the threads and the composition (which do not change the WBSA).
+    """
     from dataclasses import asdict
 
     return {k: v for k, v in asdict(settings).items() if k not in _NOT_FIT}

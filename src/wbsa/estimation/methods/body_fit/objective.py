@@ -148,7 +148,17 @@ class Objective:
         return self.data_points(v_all, tri, bary, scale_m).mean(1)
 
     def data_points(self, v_all, tri, bary, scale_m: float | None = None):
-        """(b, p) robust point-to-surface cost of each observed point (see :meth:`data`)."""
+        """(b, p) robust point-to-surface cost of each observed point (see :meth:`data`).
+
+        Parameters
+        ----------
+        v_all : (b, m, 3) float32 tensor
+            Vertices of the selection, view frame.
+        tri, bary : (b, p, 3) tensors
+            Each point's triangle (positions in ``v_all``) and barycentric weights.
+        scale_m : float, optional
+            The robust scale (default the objective's).
+        """
         point, n = self.surface_points(v_all, tri, bary)
         d = self.points[None] - point
         along = (d * n).sum(-1)

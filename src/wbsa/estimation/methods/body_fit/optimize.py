@@ -73,8 +73,25 @@ def _limits(torch):
 
 
 def clothes_layer(full: np.ndarray, closed_faces: np.ndarray, covered: np.ndarray, layer_m: float) -> np.ndarray:
-    """(b, n, 3) float64 offsets that dress posed bodies ``full (b, n, 3)``: ``layer_m`` along the vertex normals where
-    ``covered (n,)``, the soles kept on the bodies' lowest level (as :func:`wbsa.bodies.clothing.dressed_vertices`)."""
+    """Offsets that dress posed bodies in a layer of clothes, the soles kept on the bodies' lowest level (as
+    :func:`wbsa.bodies.clothing.dressed_vertices` does).
+
+    Parameters
+    ----------
+    full : (b, n, 3) float64
+        Every vertex of every posed body.
+    closed_faces : (m, 3) int
+        The closed mesh's triangles (for the vertex normals).
+    covered : (n,) bool
+        Vertices under the clothes.
+    layer_m : float
+        Thickness of the layer (m).
+
+    Returns
+    -------
+    (b, n, 3) float64
+        ``layer_m`` along the vertex normals where covered, 0 elsewhere.
+    """
     from wbsa.estimation.methods.body_fit.model import vertex_normals
 
     layer = layer_m * covered[None, :, None] * vertex_normals(full, closed_faces)

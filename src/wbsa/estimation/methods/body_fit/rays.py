@@ -126,7 +126,12 @@ class RayTerm:
     def residuals_m(self, v_all, tri):
         """(b, p) z-depth differences (m), observed minus model, along each point's ray.
 
-        ``v_all (b, m, 3)`` vertices, ``tri (b, p, 3)`` positions of each point's triangle in ``v_all``.
+        Parameters
+        ----------
+        v_all : (b, m, 3) float32 tensor
+            Vertices, view frame.
+        tri : (b, p, 3) int64 tensor
+            Positions in ``v_all`` of each point's triangle.
         """
         torch = self.torch
         b, p = tri.shape[:2]
@@ -145,6 +150,20 @@ class RayTerm:
         The robust scale of a point is ``max(SIGMA_SCALE_K · σ, MIN_SCALE_M)``, or ``scale_m`` while that is larger
         (the fit anneals it from coarse to fine); the cost is scaled by (scale / final scale)² so that it falls
         continuously as the scale shrinks.
+
+        Parameters
+        ----------
+        v_all : (b, m, 3) float32 tensor
+        tri : (b, p, 3) int64 tensor
+            As for :meth:`residuals_m`.
+        hit : (b, p) bool tensor
+        sigma : (b, p) float32 tensor
+            From :meth:`correspondences`.
+        scale_m : float
+            The annealed robust scale (m).
+        robust : callable
+            The robust penalty of squared residuals in units of the scale
+            (:meth:`wbsa.estimation.methods.body_fit.objective.Objective.robust`).
         """
         torch = self.torch
         final = (SIGMA_SCALE_K * sigma).clamp(min=MIN_SCALE_M)

@@ -20,6 +20,13 @@ def add_sensor_arguments(parser: argparse.ArgumentParser, *, seed: bool = False)
     ``--noise {none,nguyen2012,camera}``, ``--holes FRACTION``, ``--pixel-dropout FRACTION``,
     ``--grazing-dropout DEG``, ``--quantise``, ``--noise-scale FACTOR``, ``--no-lateral-noise``, ``--range-limits`` and, with
     ``seed=True``, ``--sensor-seed N`` (commands that have their own ``--seed`` pass that instead).
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The command's parser; changed in place.
+    seed : bool
+        Also add ``--sensor-seed``.
     """
     g = parser.add_argument_group("sensor (simulated depth camera; all off by default)")
     g.add_argument("--noise", choices=NOISE_MODELS, default="none",

@@ -60,7 +60,18 @@ class Plane:
         object.__setattr__(self, "offset", d)
 
     def height(self, points: np.ndarray) -> np.ndarray:
-        """(k,) float64 signed height of (k, 3) points above the plane (positive on the camera's side)."""
+        """(k,) float64 signed height of (k, 3) points above the plane (positive on the camera's side).
+
+        Parameters
+        ----------
+        points : (k, 3) float
+            Camera-frame points, metres.
+
+        Returns
+        -------
+        (k,) float64
+            ``n·p − d`` in metres.
+        """
         return np.asarray(points, dtype=np.float64) @ self.normal - self.offset
 
     def tolerance(self, points: np.ndarray, k_sigma: float = 2.5, floor_m: float = 0.02,
@@ -68,6 +79,23 @@ class Plane:
         """(k,) float64 how far a return of this plane may stray from it: the depth noise seen along the normal.
 
         ``scaled`` False uses the envelope alone, without the plane's measured ``noise_scale``.
+
+        Parameters
+        ----------
+        points : (k, 3) float
+            Camera-frame points, metres.
+        k_sigma : float
+            How many σ of the noise along the normal.
+        floor_m : float
+            The least tolerance, metres.
+        scaled : bool
+            Multiply the noise by the plane's ``noise_scale``.
+
+        Returns
+        -------
+        (k,) float64
+            ``max(floor_m, k_sigma · scale · σ_ray · |cos|)`` in metres, with σ_ray from :meth:`unit_noise`
+            and cos the cosine between each point's ray and the normal.
         """
         p = np.asarray(points, dtype=np.float64)
         r = np.linalg.norm(p, axis=1)
@@ -77,7 +105,18 @@ class Plane:
         return np.maximum(floor_m, k_sigma * scale * self.unit_noise(p) * cos)
 
     def unit_noise(self, points: np.ndarray) -> np.ndarray:
-        """(k,) float64 the envelope's depth noise along each point's ray (before the angle to the plane)."""
+        """(k,) float64 the envelope's depth noise along each point's ray (before the angle to the plane).
+
+        Parameters
+        ----------
+        points : (k, 3) float
+            Camera-frame points, metres (z > 0).
+
+        Returns
+        -------
+        (k,) float64
+            σ(z) · r / z in metres (:func:`depth_noise_m` of the plane's ``sensor``, r the point's range).
+        """
         p = np.asarray(points, dtype=np.float64)
         return depth_noise_m(p[:, 2], self.sensor) * np.linalg.norm(p, axis=1) / np.maximum(p[:, 2], 1e-9)
 
@@ -88,7 +127,21 @@ class Plane:
 
 
 def fit_plane(points: np.ndarray, weights: np.ndarray | None = None) -> Plane:
-    """Weighted least-squares plane through (k, 3) points (the smallest principal axis)."""
+    """Weighted least-squares plane through (k, 3) points (the smallest principal axis).
+
+    Parameters
+    ----------
+    points : (k, 3) float64
+        Camera-frame points, metres.
+    weights : (k,) float, optional
+        Weight of each point (all 1 when None).
+
+    Returns
+    -------
+    Plane
+        Through the weighted centroid, normal the right singular vector of the smallest singular value of
+        the √w-weighted centred points; ``noise_scale`` 1 and no ``sensor``.
+    """
     w = np.ones(len(points)) if weights is None else np.asarray(weights, dtype=np.float64)
     c = (w[:, None] * points).sum(axis=0) / w.sum()
     _, _, vt = np.linalg.svd(np.sqrt(w)[:, None] * (points - c), full_matrices=False)
@@ -121,10 +174,24 @@ def ransac_plane(points: np.ndarray, rng: np.random.Generator, iterations: int =
     Inliers lie within :meth:`Plane.tolerance` (the depth noise along the normal, of the envelope of
     ``sensor``, :func:`depth_noise_m`; the plane keeps it). Deterministic for ``rng``.
 
+    Parameters
+    ----------
+    points : (k, 3) float64
+        Camera-frame points, metres.
+    rng : numpy.random.Generator
+        Draws the candidate triples (and a subsample of 20 000 points when k > 20 000, on which the
+        candidates are counted).
+    iterations : int
+        Number of candidate planes (point triples).
+    k_sigma : float
+        Inlier tolerance in σ of the depth noise (:meth:`Plane.tolerance`).
+    sensor : SensorModel, optional
+        The envelope's model (:func:`depth_noise_m`); None: that of a camera without a preset.
+
     Returns
     -------
     (Plane, (k,) bool inliers) or None
-        None with fewer than 3 points.
+        None with fewer than 3 points, or when every triple is degenerate.
     """
     k = len(points)
     if k < 3:
@@ -161,6 +228,19 @@ def above_floor(points: np.ndarray, floor: Plane | None) -> np.ndarray:
 
     This is the floor cut of the measures. It uses the envelope alone (not the floor's measured noise),
     so training renders, whose floor is known, and real images lose the same strip of the feet.
+
+    Parameters
+    ----------
+    points : (k, 3) float
+        Camera-frame points, metres.
+    floor : Plane or None
+        The floor; None keeps every point.
+
+    Returns
+    -------
+    (k,) bool
+        Height above the floor greater than :meth:`Plane.tolerance` with ``floor_m`` = :data:`FLOOR_CUT_M`
+        and ``scaled=False``.
     """
     if floor is None:
         return np.ones(len(points), dtype=bool)
@@ -189,13 +269,41 @@ class BodyFrame:
     base: np.ndarray
 
     def coordinates(self, points: np.ndarray) -> np.ndarray:
-        """(k, 3) float64 (lateral, height, toward-camera) coordinates of camera-frame points, metres."""
+        """(k, 3) float64 (lateral, height, toward-camera) coordinates of camera-frame points, metres.
+
+        Parameters
+        ----------
+        points : (k, 3) float
+            Camera-frame points, metres.
+
+        Returns
+        -------
+        (k, 3) float64
+            ``(p − base)`` projected on ``right``, ``up`` and ``toward``, metres.
+        """
         q = np.asarray(points, dtype=np.float64) - self.base
         return np.stack([q @ self.right, q @ self.up, q @ self.toward], axis=1)
 
 
 def body_frame(points: np.ndarray, floor: Plane | None) -> BodyFrame:
-    """The :class:`BodyFrame` of a subject's (k, 3) camera-frame points."""
+    """The :class:`BodyFrame` of a subject's (k, 3) camera-frame points.
+
+    ``up`` is the floor's normal, or without a floor the principal axis of the points (every
+    max(1, ⌊k / 5000⌋)-th one) turned to image up (camera −y); ``toward`` is horizontal, from the points'
+    component-wise median to the camera; ``base`` is that median dropped along ``up`` to the floor (without a
+    floor, to the height of the lowest point).
+
+    Parameters
+    ----------
+    points : (k, 3) float
+        The subject's camera-frame points, metres (k ≥ 1).
+    floor : Plane or None
+        The floor, if one was found.
+
+    Returns
+    -------
+    BodyFrame
+    """
     p = np.asarray(points, dtype=np.float64)
     centre = np.median(p, axis=0)
     if floor is not None:

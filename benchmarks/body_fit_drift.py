@@ -52,8 +52,8 @@ def drift_chunk(population: pd.DataFrame, seed: int, draws: int, cameras: tuple[
                 bands: tuple[tuple[float, float], ...], fit_settings) -> pd.DataFrame:
     """Fits started at the true body: each subject (a random posture) in a room, seen by each camera at each
     distance (a random azimuth) with ``draws`` draws of its sensor's noise (the held-out captures' sensor of the
-    camera: its technology's axial and lateral noise, grazing dropout and disparity quantisation, the working
-    range; no holes or dropped pixels); the subject's true pixels and floor.
+    camera, :func:`wbsa.training.capture.sensor_for`: axial and lateral noise, grazing dropout, the camera's
+    disparity quantisation, the working range; no holes or dropped pixels); the subject's true pixels and floor.
     Returns one row per fit: the fitted body's WBSA error against the subject's."""
     from wbsa.bodies.body_model import BodyModel, body_parameter_array
     from wbsa.bodies.posture import POSTURES, draw_angles, settle_posture
@@ -80,7 +80,7 @@ def drift_chunk(population: pd.DataFrame, seed: int, draws: int, cameras: tuple[
             cam_index = DRIFT_CAMERAS.index(camera_name) if camera_name in DRIFT_CAMERAS else 99
             record = camera_record(camera_name)
             camera = record.intrinsics
-            # the held-out captures' sensor of this camera (its technology's noise, its quantisation), no holes
+            # the held-out captures' sensor of this camera (wbsa.training.capture.sensor_for), no holes
             sensor = sensor_for(record, np.random.default_rng(0), CaptureSettings(max_holes_fraction=0.0,
                                                                                  max_pixel_dropout=0.0))
             for band_index, band in enumerate(bands):

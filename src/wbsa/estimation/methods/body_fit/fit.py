@@ -110,12 +110,15 @@ def _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fi
     from wbsa.estimation.methods.body_fit.objective import Objective
     from wbsa.estimation.methods.body_fit.observation import observe
     from wbsa.estimation.methods.body_fit.optimize import optimise
+    from wbsa.sensor.technology import camera_model, preset_record
 
     t0 = time.perf_counter()
     deadline = t0 + settings.time_budget_s
     rng = np.random.default_rng(np.random.SeedSequence([int(seed), 0xB0D7]))
     obs = observe(depth, mask, camera, floor, settings.n_points, rng)
-    objective = Objective(obs, settings.robust_loss, settings.robust_scale_m, settings.silhouette_tolerance_px)
+    record = preset_record(camera)  # the data term weighs each reading by the camera technology's own noise
+    objective = Objective(obs, settings.robust_loss, settings.robust_scale_m, settings.silhouette_tolerance_px,
+                          camera_model(record if record is not None else "kinect-v1"))
     with torch.no_grad():
         starts = (first_guesses(fit_model, objective, settings.restarts, azimuth_deg, settings.child_starts)
                   if start is None else start(obs, fit_model))

@@ -64,12 +64,17 @@ class Objective:
     obs : Observation
     robust_loss : {'geman-mcclure', 'huber'}
     robust_scale_m, silhouette_tolerance_px : float
+    reading : wbsa.sensor.technology.SensorModel, optional
+        The camera technology's noise model, whose σ(z, θ) weighs the along-ray residuals
+        (:func:`wbsa.sensor.technology.camera_model` of the camera's preset; default Kinect v1's).
     """
 
-    def __init__(self, obs: Observation, robust_loss: str, robust_scale_m: float, silhouette_tolerance_px: float):
+    def __init__(self, obs: Observation, robust_loss: str, robust_scale_m: float, silhouette_tolerance_px: float,
+                 reading=None):
         import torch
 
         from wbsa.estimation.methods.body_fit.rays import RayTerm
+        from wbsa.sensor.technology import camera_model
 
         self.torch = torch
         f32 = torch.float32
@@ -91,7 +96,8 @@ class Objective:
         self.scale = max(float(robust_scale_m), NOISE_SCALE_K * obs.noise_m)
         self.tolerance_px = float(silhouette_tolerance_px)
         #: the along-ray term of the observed points
-        self.rays = RayTerm(obs.points, obs.camera_position, obs.basis[:, 2], self.sensor)
+        self.rays = RayTerm(obs.points, obs.camera_position, obs.basis[:, 2],
+                            camera_model("kinect-v1") if reading is None else reading)
 
     # -- geometry ---------------------------------------------------------------------------
     def project(self, v):

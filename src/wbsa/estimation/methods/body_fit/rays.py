@@ -60,7 +60,7 @@ class RayTerm:
     optical_axis : (3,) float64
         The camera's +z axis, view frame (unit).
     sensor : wbsa.sensor.technology.SensorModel
-        The camera's depth noise (:func:`wbsa.sensor.technology.envelope_model`).
+        The camera technology's depth noise (:func:`wbsa.sensor.technology.camera_model`).
     """
 
     def __init__(self, points: np.ndarray, camera_position: np.ndarray, optical_axis: np.ndarray, sensor) -> None:

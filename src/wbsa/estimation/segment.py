@@ -31,22 +31,18 @@ import numpy as np
 
 from wbsa.errors import WbsaError, check_field
 from wbsa.estimation.cloud import Plane, ransac_plane
-from wbsa.estimation.clusters import MAX_FOOTPRINT_M, attach_low, footprint_m, merge_occluding
+from wbsa.estimation.clusters import MAX_FOOTPRINT_M, attach_low, merge_occluding
 from wbsa.estimation.feet import grow_feet
+from wbsa.estimation.frame import Frame, image_frame
+from wbsa.estimation.people import (PICKS, Cluster, choose, describe_clusters, is_pixel, seen_past, split_touching,
+                                    why_not_a_person)
 
-PICKS = ("nearest", "largest", "center")
 #: Height over the floor below which returns are not used to link objects (only to extend them).
 LOW_BAND_M = 0.10
-#: A room surface reaches this close to the image's border (pixels).
-BORDER_PX = 3
 #: The floor's normal lies within this angle of the image's up. A camera looking down by ε sees it ε away,
 #: a wall behind the subject 90° + ε and a side wall 90° (plus the camera's roll); at 50° a camera 2 m up
 #: and 1.5 m from a child lost the floor.
 FLOOR_MAX_TILT_DEG = 75.0
-#: An object inside a nearer one's bounding box in the image and this much farther (m) is seen past it.
-#: The wall stands 0.5 m or more behind a subject's back; a body's own parts join it within 0.8 m of depth
-#: when they touch in the image (:func:`~wbsa.estimation.clusters.merge_occluding`) and are larger.
-SEEN_PAST_M = 0.4
 #: People standing side by side and touching span at most this at the hips (m; one person at most
 #: :data:`~wbsa.estimation.clusters.MAX_FOOTPRINT_M`); a wall spans more.
 TOUCHING_FOOTPRINT_M = 2.5
@@ -68,7 +64,7 @@ class SegmentSettings:
         A room surface holds at least this fraction of the thinned returns.
     behind_fraction : float
         A plane is a room surface if at most this fraction of the other returns lies behind it ...
-        It must also run out of the image (reach its border, :data:`BORDER_PX`): a floor or a wall
+        It must also run out of the image (reach its frame's border, :mod:`wbsa.estimation.frame`): a floor or a wall
         does, a body alone in the image (no room), which a plane fits loosely, does not.
     cluster_gap_m : float
         Points closer than this (or three pixel pitches, if more) belong to one object.
@@ -100,48 +96,8 @@ class SegmentSettings:
         check_field(self.voxel_m > 0, "voxel_m", f"must be a positive length in metres, got {self.voxel_m}")
         check_field(self.cluster_gap_m > 0, "cluster_gap_m",
                     f"must be a positive length in metres, got {self.cluster_gap_m}")
-        check_field(self.pick is None or self.pick in PICKS or _is_pixel(self.pick), "pick",
+        check_field(self.pick is None or self.pick in PICKS or is_pixel(self.pick), "pick",
                     f"must be one of {', '.join(PICKS)} or an (x, y) pixel, got {self.pick!r}")
-
-
-def _is_pixel(pick: object) -> bool:
-    return isinstance(pick, tuple) and len(pick) == 2 and all(isinstance(v, (int, np.integer)) for v in pick)
-
-
-@dataclass(frozen=True)
-class Cluster:
-    """One object found in the image (a candidate subject).
-
-    Attributes
-    ----------
-    label : int
-        The object's label among the image's returns.
-    n_pixels : int
-    pixel_xy : (int, int)
-        Its middle pixel (median column and row).
-    distance_m : float
-        Median range of its returns.
-    height_m, width_m : float
-        Extent along the floor's normal (or its long axis) and across it.
-    footprint_m : float
-        Width at the hips (:func:`~wbsa.estimation.clusters.footprint_m`).
-    bbox_px : (int, int, int, int)
-        Bounding box in the image, ``(x0, y0, x1, y1)``, inclusive.
-    """
-
-    label: int
-    n_pixels: int
-    pixel_xy: tuple[int, int]
-    distance_m: float
-    height_m: float
-    width_m: float
-    footprint_m: float
-    bbox_px: tuple[int, int, int, int]
-
-    def describe(self) -> str:
-        """``1.72 m tall at pixel (312, 240), 2.9 m away`` for messages."""
-        return (f"{self.height_m:.2f} m tall at pixel ({self.pixel_xy[0]}, {self.pixel_xy[1]}), "
-                f"{self.distance_m:.1f} m away")
 
 
 @dataclass(frozen=True)
@@ -181,8 +137,9 @@ def _voxelise(points: np.ndarray, voxel_m: float) -> tuple[np.ndarray, np.ndarra
 
 
 def find_room(cloud: np.ndarray, settings: SegmentSettings, intrinsics,
-              shape: tuple[int, int]) -> tuple[Plane | None, list[Plane]]:
-    """Floor and walls among the largest planes of a thinned (v, 3) cloud of an (h, w) image (see the module doc)."""
+              frame: Frame) -> tuple[Plane | None, list[Plane]]:
+    """Floor and walls among the largest planes of a thinned (v, 3) cloud of an image with this frame (see the
+    module doc)."""
     rng = np.random.default_rng(settings.seed)
     free = np.ones(len(cloud), dtype=bool)
     surfaces: list[Plane] = []
@@ -199,7 +156,7 @@ def find_room(cloud: np.ndarray, settings: SegmentSettings, intrinsics,
         free[idx[inliers]] = False
         h = plane.height(cloud)
         behind = np.count_nonzero(h < -plane.tolerance(cloud) - 0.05)
-        if behind <= settings.behind_fraction * len(cloud) and _meets_border(cloud[idx[inliers]], intrinsics, shape):
+        if behind <= settings.behind_fraction * len(cloud) and _meets_border(cloud[idx[inliers]], intrinsics, frame):
             surfaces.append(plane)
     up = np.array([0.0, -1.0, 0.0])
     floor = None
@@ -210,13 +167,13 @@ def find_room(cloud: np.ndarray, settings: SegmentSettings, intrinsics,
     return floor, walls
 
 
-def _meets_border(points: np.ndarray, intrinsics, shape: tuple[int, int]) -> bool:
-    """Whether (k, 3) camera-frame points reach within :data:`BORDER_PX` pixels of the image's border."""
-    h, w = shape
+def _meets_border(points: np.ndarray, intrinsics, frame: Frame) -> bool:
+    """Whether (k, 3) camera-frame points reach within :data:`~wbsa.estimation.frame.BORDER_PX` pixels of the
+    frame's border (:mod:`wbsa.estimation.frame`)."""
     z = np.maximum(points[:, 2], 1e-9)
     u = float(intrinsics.fx) * points[:, 0] / z + float(intrinsics.cx)
     v = float(intrinsics.fy) * points[:, 1] / z + float(intrinsics.cy)
-    return bool(np.any((u < BORDER_PX) | (u > w - 1 - BORDER_PX) | (v < BORDER_PX) | (v > h - 1 - BORDER_PX)))
+    return bool(np.any(frame.at_border(v, u)))
 
 
 def segment_subject(depth_m: np.ndarray, intrinsics, settings: SegmentSettings = SegmentSettings()) -> Segmentation:
@@ -253,7 +210,8 @@ def segment_subject(depth_m: np.ndarray, intrinsics, settings: SegmentSettings =
     pix = np.flatnonzero(ok.ravel())
     points = backproject_depth(np.where(ok, depth, 0.0), intrinsics).reshape(-1, 3)[pix].astype(np.float64)
     cloud, voxel_of = _voxelise(points, settings.voxel_m)
-    floor, walls = find_room(cloud, settings, intrinsics, (h, w))
+    frame = image_frame(ok)
+    floor, walls = find_room(cloud, settings, intrinsics, frame)
     keep = np.ones(len(cloud), dtype=bool) if floor is None else floor.height(cloud) > floor.tolerance(cloud)
     for wall in walls:
         keep &= wall.height(cloud) > wall.tolerance(cloud)
@@ -281,113 +239,31 @@ def segment_subject(depth_m: np.ndarray, intrinsics, settings: SegmentSettings =
     pixel_label[~keep[voxel_of]] = -1
     pixel_label = merge_occluding(pixel_label, pix, points, (h, w), floor, settings.max_person_height_m,
                                   settings.max_person_width_m)
-    clusters = _describe(pixel_label, pix, points, w, floor)
+    clusters = describe_clusters(pixel_label, pix, points, (h, w), floor, frame)
+    limits = (settings.min_person_height_m, settings.max_person_height_m, settings.max_person_width_m)
+    if floor is not None:
+        pixel_label, clusters = split_touching(clusters, pixel_label, pix, points, (h, w), floor, frame, limits)
     behind = seen_past(clusters)
-    clusters = [c for c in clusters if c.label not in behind]
-    people = [c for c in clusters if _person_sized(c, settings)]
+    people = [c for c in clusters if c.label not in behind and why_not_a_person(c, *limits) is None]
     if not people:
-        touching = [c for c in clusters if settings.min_person_height_m <= c.height_m <= settings.max_person_height_m
+        front = [c for c in clusters if c.label not in behind]
+        touching = [c for c in front if settings.min_person_height_m <= c.height_m <= settings.max_person_height_m
                     and MAX_FOOTPRINT_M < c.footprint_m <= TOUCHING_FOOTPRINT_M]
         if touching:
             big = max(touching, key=lambda c: c.n_pixels)
             raise WbsaError(f"an object, {big.describe()}, is {big.footprint_m:.1f} m wide at the hips: "
                             "people touching each other? capture the subject standing apart")
-        big = max(clusters, key=lambda c: c.n_pixels) if clusters else None
-        what = f"the largest object is {big.describe()}" if big else "no object is left after the floor and walls"
-        raise WbsaError(f"no person-sized object ({settings.min_person_height_m:g}–{settings.max_person_height_m:g} m "
-                        f"tall) in the depth image; {what}: check the depth scale (units per metre) and the camera")
-    chosen = _choose(people, settings.pick, (w, h), pixel_label, pix)
+        big = max(front, key=lambda c: c.n_pixels) if front else None
+        what = (f"the largest object, {big.describe()}, is not one: {why_not_a_person(big, *limits)}" if big
+                else "no object is left after the floor and walls")
+        raise WbsaError(f"no person in the depth image ({settings.min_person_height_m:g}–"
+                        f"{settings.max_person_height_m:g} m tall); {what}: check the depth scale (units per metre), "
+                        "the camera, and that the whole person is in the frame")
+    image_label = np.full(h * w, -1)
+    image_label[pix] = pixel_label
+    chosen = choose(people, clusters, settings.pick, image_label.reshape(h, w), limits)
     mask = np.zeros(h * w, dtype=bool)
     mask[pix[pixel_label == chosen.label]] = True
     mask = grow_feet(mask.reshape(h, w), pix, points, pixel_label, floor, walls, float(intrinsics.fx))
     others = tuple(c for c in people if c.label != chosen.label)
     return Segmentation(mask, floor, tuple(walls), chosen, others)
-
-
-def _describe(pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarray, width: int,
-              floor: Plane | None) -> list[Cluster]:
-    """Size, place and distance of every cluster with at least 50 pixels."""
-    labels, counts = np.unique(pixel_label[pixel_label >= 0], return_counts=True)
-    out = []
-    for lab, n in zip(labels, counts):
-        if n < 50:
-            continue
-        sel = pixel_label == lab
-        p = points[sel]
-        if floor is not None:
-            up = floor.normal
-        else:
-            q = p[:: max(1, len(p) // 2000)] - p.mean(axis=0)
-            up = np.linalg.svd(q, full_matrices=False)[2][0]
-        along = p @ up
-        height = float(np.quantile(along, 0.999) - np.quantile(along, 0.001))
-        flat = p - np.outer(along, up)
-        centre = np.median(flat, axis=0)
-        width_m = 2.0 * float(np.quantile(np.linalg.norm(flat - centre, axis=1), 0.995))
-        rows, cols = np.divmod(pix[sel], width)
-        out.append(Cluster(int(lab), int(n), (int(np.median(cols)), int(np.median(rows))),
-                           float(np.median(np.linalg.norm(p, axis=1))), height, width_m,
-                           footprint_m(p, up if up @ np.array([0.0, -1.0, 0.0]) >= 0 else -up),
-                           (int(cols.min()), int(rows.min()), int(cols.max()), int(rows.max()))))
-    return out
-
-
-def _person_sized(c: Cluster, settings: SegmentSettings) -> bool:
-    """Whether a cluster is person-sized: tall, wide and wide at the hips within the settings' bounds."""
-    return (settings.min_person_height_m <= c.height_m <= settings.max_person_height_m
-            and c.width_m <= settings.max_person_width_m and c.footprint_m <= MAX_FOOTPRINT_M)
-
-
-def seen_past(clusters: list[Cluster]) -> set[int]:
-    """Labels of the clusters seen past a nearer, larger object: inside its bounding box in the image and at
-    least :data:`SEEN_PAST_M` farther away (the wall between a subject's legs or inside a bent arm).
-
-    Such a piece can be person-sized, and lie under the image's centre, where the operator aimed at the
-    subject; it is never the subject. Any larger object may hide one, person-sized or not: two people
-    touching form one object too wide at the hips, and the wall between their legs must not then be
-    taken for a person.
-
-    Parameters
-    ----------
-    clusters : list of Cluster
-        Every object in the image.
-
-    Returns
-    -------
-    set of int
-        The labels of the clusters seen past another.
-    """
-    out = set()
-    for c in clusters:
-        x0, y0, x1, y1 = c.bbox_px
-        for o in clusters:
-            ox0, oy0, ox1, oy1 = o.bbox_px
-            if (o.n_pixels > c.n_pixels and c.distance_m > o.distance_m + SEEN_PAST_M
-                    and ox0 <= x0 and x1 <= ox1 and oy0 <= y0 and y1 <= oy1):
-                out.add(c.label)
-                break
-    return out
-
-
-def _choose(people: list[Cluster], pick, size: tuple[int, int], pixel_label: np.ndarray, pix: np.ndarray) -> Cluster:
-    w, h = size
-    if _is_pixel(pick) and not (0 <= pick[0] < w and 0 <= pick[1] < h):  # refused with one person in view too
-        raise WbsaError(f"pick pixel ({pick[0]}, {pick[1]}) lies outside the {w} x {h} depth image; "
-                        "give x,y of a pixel on the subject")
-    if len(people) == 1:
-        return people[0]
-    if pick is None:
-        listing = "; ".join(f"{i + 1}: {c.describe()}" for i, c in enumerate(sorted(people, key=lambda c: c.pixel_xy)))
-        raise WbsaError(f"{len(people)} person-sized objects in the depth image ({listing}); "
-                        "choose one with pick nearest, largest, center or x,y")
-    if pick == "nearest":
-        return min(people, key=lambda c: c.distance_m)
-    if pick == "largest":
-        return max(people, key=lambda c: c.n_pixels)
-    x, y = ((w - 1) / 2, (h - 1) / 2) if pick == "center" else pick
-    # the object under the pixel (the operator aims at the subject), else the one whose middle is nearest
-    hit = pixel_label[pix == int(round(y)) * w + int(round(x))]
-    for c in people:
-        if hit.size and c.label == hit[0]:
-            return c
-    return min(people, key=lambda c: (c.pixel_xy[0] - x) ** 2 + (c.pixel_xy[1] - y) ** 2)

@@ -1,0 +1,397 @@
+"""Which objects of a depth image are people, and which person a pick chooses.
+
+An object (a 3-D cluster, :mod:`wbsa.estimation.segment`) is a person when it is person-sized (0.45–2.6 m
+tall, at most 2.6 m wide and 0.9 m at the hips) and, with a floor seen:
+
+* its top stands at most 2.6 m over the floor, and the frame's top does not cut it (a head is seen);
+* its lower half is seen: its lowest return is at most half its top's height over the floor (a head or a
+  lamp seen over other people is not a person to measure);
+* it has a head: its top :data:`HEAD_BAND_M` spans at most :data:`HEAD_MAX_WIDTH_M` across the floor;
+* it is not flat: its returns lie farther off their best plane (RMS) than :data:`FLAT_NOISE_RATIO` times
+  the depth noise at its distance (:func:`~wbsa.estimation.cloud.depth_noise_m`): a board, a door or a
+  piece of wall is flat.
+
+Measured on PCL's ``five_people.pcd`` (tests/fixtures): the five people are 2.0–2.8 m away, heads 0.21–0.32 m
+wide, 4.6–12 times the noise off their plane; the room's pieces that passed the size test stand 2.6–3.8 m
+tall over the floor, or show only their top, or span 0.4–1.6 m at the top, or lie within 1.0 times the noise
+of a plane.
+
+People standing side by side who touch form one object; :func:`split_touching` splits it at the valleys
+between their heads (:func:`~wbsa.estimation.clusters.split_people`) when every part is a person.
+
+A pick (:func:`choose`) is ``nearest``, ``largest``, ``center`` (the object under the image's centre, else
+the person whose middle is nearest to it) or an ``(x, y)`` pixel: the person under the pixel, else the
+person with a pixel within :data:`PICK_REACH_PX`, else the person the object under it is seen past (the
+wall between the legs); an object under the pixel that is not a person, or no person near, is refused in
+one line.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from wbsa.errors import WbsaError
+from wbsa.estimation.cloud import Plane, depth_noise_m
+from wbsa.estimation.clusters import MAX_FOOTPRINT_M, footprint_m, split_people
+from wbsa.estimation.frame import Frame
+
+#: Top of an object (m, along the floor's normal; at most this share of its height) where its head is ...
+HEAD_BAND_M = 0.2
+HEAD_BAND_SHARE = 0.12
+#: ... which spans at most this across the floor (m): a head 0.16 m wide, with hair and mixed returns.
+HEAD_MAX_WIDTH_M = 0.5
+#: A person lies farther off its best plane (RMS) than this many times the depth noise at its distance.
+FLAT_NOISE_RATIO = 1.5
+#: The lowest return of a person is at most this share of its top's height over the floor.
+LOWER_HALF = 0.5
+#: A person standing on a seen floor has returns this close to it (m): the feet.
+FLOOR_CONTACT_M = 0.15
+#: A pixel pick chooses a person with a pixel this close (pixels) when no object lies under it.
+PICK_REACH_PX = 5
+#: An object inside a nearer one's bounding box in the image and this much farther (m) is seen past it.
+#: The wall stands 0.5 m or more behind a subject's back; a body's own parts join it within 0.8 m of depth
+#: when they touch in the image (:func:`~wbsa.estimation.clusters.merge_occluding`) and are larger.
+SEEN_PAST_M = 0.4
+PICKS = ("nearest", "largest", "center")
+
+
+@dataclass(frozen=True)
+class Cluster:
+    """One object found in the image (a candidate subject).
+
+    Attributes
+    ----------
+    label : int
+        The object's label among the image's returns.
+    n_pixels : int
+    pixel_xy : (int, int)
+        Its middle pixel (median column and row).
+    distance_m : float
+        Median range of its returns.
+    height_m, width_m : float
+        Extent along the floor's normal (or its long axis) and across it.
+    footprint_m : float
+        Width at the hips (:func:`~wbsa.estimation.clusters.footprint_m`).
+    bbox_px : (int, int, int, int)
+        Bounding box in the image, ``(x0, y0, x1, y1)``, inclusive.
+    top_m, bottom_m : float
+        Its highest and lowest returns over the floor (NaN without a floor).
+    head_width_m : float
+        Width of its top :data:`HEAD_BAND_M` across the floor (NaN without a floor).
+    off_plane_m, noise_m : float
+        RMS distance of its returns from their best plane, and the depth noise at its distance (m).
+    top_cut, bottom_cut : bool
+        Its top reaches the frame's top border; its lowest returns reach the frame's bottom border or have no
+        returns below them down to the image's border (:func:`bottom_open`).
+    """
+
+    label: int
+    n_pixels: int
+    pixel_xy: tuple[int, int]
+    distance_m: float
+    height_m: float
+    width_m: float
+    footprint_m: float
+    bbox_px: tuple[int, int, int, int]
+    top_m: float = math.nan
+    bottom_m: float = math.nan
+    head_width_m: float = math.nan
+    off_plane_m: float = math.nan
+    noise_m: float = math.nan
+    top_cut: bool = False
+    bottom_cut: bool = False
+
+    def describe(self) -> str:
+        """``1.72 m tall at pixel (312, 240), 2.9 m away`` for messages."""
+        return (f"{self.height_m:.2f} m tall at pixel ({self.pixel_xy[0]}, {self.pixel_xy[1]}), "
+                f"{self.distance_m:.1f} m away")
+
+
+def describe_clusters(pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarray, shape: tuple[int, int],
+                      floor: Plane | None, frame: Frame, labels: np.ndarray | None = None) -> list[Cluster]:
+    """Size, place, distance and person cues of every cluster (of those ``labels``) with at least 50 pixels.
+
+    Parameters
+    ----------
+    pixel_label : (k,) int
+        Cluster of every return (−1: none); ``pix`` (k,) int its flat pixel index in an image of ``shape``
+        (h, w), ``points`` (k, 3) float64 its camera-frame point.
+    floor : Plane or None
+    frame : Frame
+        The image's frame (:func:`~wbsa.estimation.frame.image_frame`).
+    labels : (n,) int, optional
+        The clusters to describe (default: all).
+
+    Returns
+    -------
+    list of Cluster
+    """
+    h, w = shape
+    if labels is None:
+        labels = np.unique(pixel_label[pixel_label >= 0])
+    lowest_return = _lowest_return_rows(pix, shape)
+    out = []
+    for lab in labels:
+        sel = pixel_label == lab
+        n = int(np.count_nonzero(sel))
+        if n < 50:
+            continue
+        p = points[sel]
+        if floor is not None:
+            up = floor.normal
+        else:
+            q = p[:: max(1, len(p) // 2000)] - p.mean(axis=0)
+            up = np.linalg.svd(q, full_matrices=False)[2][0]
+        along = p @ up
+        height = float(np.quantile(along, 0.999) - np.quantile(along, 0.001))
+        flat = p - np.outer(along, up)
+        centre = np.median(flat, axis=0)
+        width_m = 2.0 * float(np.quantile(np.linalg.norm(flat - centre, axis=1), 0.995))
+        rows, cols = np.divmod(pix[sel], w)
+        distance = float(np.median(np.linalg.norm(p, axis=1)))
+        cues = {}
+        if floor is not None:
+            over = floor.height(p)
+            top, bottom = float(np.quantile(over, 0.998)), float(np.quantile(over, 0.002))
+            cues = dict(top_m=top, bottom_m=bottom,
+                        head_width_m=_across(p[over > top - min(HEAD_BAND_M, HEAD_BAND_SHARE * (top - bottom))], up))
+        sub = p[:: max(1, len(p) // 3000)]
+        cues["off_plane_m"] = float(np.linalg.svd(sub - sub.mean(axis=0), compute_uv=False)[2] / math.sqrt(len(sub)))
+        cues["noise_m"] = float(depth_noise_m(np.median(p[:, 2])))
+        out.append(Cluster(int(lab), n, (int(np.median(cols)), int(np.median(rows))), distance, height, width_m,
+                           footprint_m(p, up if up @ np.array([0.0, -1.0, 0.0]) >= 0 else -up),
+                           (int(cols.min()), int(rows.min()), int(cols.max()), int(rows.max())),
+                           top_cut=bool(frame.at_top(rows.min())),
+                           bottom_cut=bottom_open(rows, cols, lowest_return, frame), **cues))
+    return out
+
+
+def _across(points: np.ndarray, up: np.ndarray) -> float:
+    """Horizontal extent (m, bounding-box diagonal of the 2–98 % quantiles) of (k, 3) points across ``up``."""
+    if len(points) < 3:
+        return 0.0
+    e1 = np.array([1.0, 0.0, 0.0]) - up[0] * up
+    e1 /= np.linalg.norm(e1)
+    q = np.stack([points @ e1, points @ np.cross(up, e1)], axis=1)
+    return float(np.hypot(*(np.quantile(q, 0.98, axis=0) - np.quantile(q, 0.02, axis=0))))
+
+
+def _lowest_return_rows(pix: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+    """(w,) int: the lowest image row holding a return in every column (−1: none)."""
+    rows, cols = np.divmod(pix, shape[1])
+    out = np.full(shape[1], -1)
+    np.maximum.at(out, cols, rows)
+    return out
+
+
+def bottom_open(rows: np.ndarray, cols: np.ndarray, lowest_return: np.ndarray, frame: Frame) -> bool:
+    """Whether an object's lowest returns end at the frame's bottom border or over nothing.
+
+    Its feet end (the columns whose lowest pixel lies in the object's lowest twentieth) is open when most of
+    those columns hold no return below the object's own lowest pixel in them (a band without returns down
+    to the image's border), or reach the frame's bottom border.
+
+    Parameters
+    ----------
+    rows, cols : (n,) int
+        The object's pixels.
+    lowest_return : (w,) int
+        The lowest row with a return in every column of the image.
+    frame : Frame
+    """
+    low = np.full(len(lowest_return), -1)
+    np.maximum.at(low, cols, rows)
+    used = np.flatnonzero(low >= 0)
+    span = int(rows.max() - rows.min()) + 1
+    feet = used[low[used] >= rows.max() - max(span // 20, 2)]
+    open_below = (lowest_return[feet] <= low[feet]) | frame.at_bottom(low[feet])
+    return bool(np.count_nonzero(open_below) * 2 > len(feet))
+
+
+def why_not_a_person(c: Cluster, min_height_m: float, max_height_m: float, max_width_m: float) -> str | None:
+    """Why an object is not a person (a clause for messages), or None when it is one (see the module doc)."""
+    if not min_height_m <= c.height_m <= max_height_m:
+        return f"it is {c.height_m:.2f} m tall, a person {min_height_m:g}–{max_height_m:g} m"
+    if c.width_m > max_width_m:
+        return f"it is {c.width_m:.1f} m wide, a person at most {max_width_m:g} m"
+    if c.footprint_m > MAX_FOOTPRINT_M:
+        return f"it is {c.footprint_m:.1f} m wide at the hips, a person at most {MAX_FOOTPRINT_M:g} m"
+    if c.top_cut:
+        return "the top of the frame cuts it off (no head seen)"
+    if math.isnan(c.top_m):
+        return None
+    if c.top_m > max_height_m:
+        return f"its top is {c.top_m:.1f} m over the floor"
+    if c.bottom_m > LOWER_HALF * c.top_m:
+        return f"only its top is seen ({c.bottom_m:.1f}–{c.top_m:.1f} m over the floor)"
+    if c.head_width_m > HEAD_MAX_WIDTH_M:
+        return f"it has no head: its top is {c.head_width_m:.1f} m wide"
+    if c.off_plane_m < FLAT_NOISE_RATIO * c.noise_m:
+        return (f"it is flat ({100 * c.off_plane_m:.0f} cm off a plane, the depth noise there "
+                f"{100 * c.noise_m:.0f} cm): a board, a door or a wall")
+    return None
+
+
+def feet_unseen(c: Cluster, floor: Plane | None) -> str | None:
+    """Why a person's feet are not seen (a clause), or None when they stand on the seen floor.
+
+    The feet are not seen when the lowest returns end at the frame's bottom or over a band without returns
+    (``bottom_cut``), or stand more than :data:`FLOOR_CONTACT_M` over a seen floor (hidden), unless they
+    touch the floor. Without a floor and with open feet nothing is known; a body alone in the image (no
+    room, nothing cut) passes.
+    """
+    if floor is not None and c.bottom_m <= FLOOR_CONTACT_M:
+        return None
+    if c.bottom_cut:
+        return ("its lowest returns end at the bottom of the frame or over a band without returns"
+                + (f", {c.bottom_m:.2f} m over the floor" if floor is not None else ", with no floor seen"))
+    if floor is not None:
+        return f"its lowest returns are {c.bottom_m:.2f} m over the floor (the feet are hidden)"
+    return None
+
+
+def seen_past(clusters: list[Cluster]) -> set[int]:
+    """Labels of the clusters seen past a nearer, larger object: inside its bounding box in the image and at
+    least :data:`SEEN_PAST_M` farther away (the wall between a subject's legs or inside a bent arm).
+
+    Such a piece can be person-sized, and lie under the image's centre, where the operator aimed at the
+    subject; it is never the subject. Any larger object may hide one, person-sized or not: two people
+    touching form one object too wide at the hips, and the wall between their legs must not then be
+    taken for a person.
+
+    Parameters
+    ----------
+    clusters : list of Cluster
+        Every object in the image.
+
+    Returns
+    -------
+    set of int
+        The labels of the clusters seen past another.
+    """
+    return {c.label for c in clusters if _seen_past_one(c, clusters) is not None}
+
+
+def _seen_past_one(c: Cluster, clusters: list[Cluster]) -> Cluster | None:
+    """The first nearer, larger object ``c`` is seen past (see :func:`seen_past`), or None."""
+    x0, y0, x1, y1 = c.bbox_px
+    for o in clusters:
+        ox0, oy0, ox1, oy1 = o.bbox_px
+        if (o.n_pixels > c.n_pixels and c.distance_m > o.distance_m + SEEN_PAST_M
+                and ox0 <= x0 and x1 <= ox1 and oy0 <= y0 and y1 <= oy1):
+            return o
+    return None
+
+
+def split_touching(clusters: list[Cluster], pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarray,
+                   shape: tuple[int, int], floor: Plane, frame: Frame,
+                   limits: tuple[float, float, float]) -> tuple[np.ndarray, list[Cluster]]:
+    """Objects that are not one person, split into the people they hold
+    (:func:`~wbsa.estimation.clusters.split_people`) when every part is a person (:func:`why_not_a_person` with ``limits``: least and greatest height, greatest
+    width, m).
+
+    Returns the labels of every return (k,) int and the clusters, the parts under new labels.
+    """
+    out, kept = pixel_label, []
+    for c in clusters:
+        if c.height_m < limits[0] or why_not_a_person(c, *limits) is None:
+            kept.append(c)
+            continue
+        sel = np.flatnonzero(out == c.label)
+        person = split_people(points[sel], floor, limits[0])
+        if person.max() == 0:
+            kept.append(c)
+            continue
+        trial = out.copy()
+        trial[sel] = out.max() + 1 + person
+        parts = describe_clusters(trial, pix, points, shape, floor, frame, labels=np.unique(trial[sel]))
+        if len(parts) > 1 and all(why_not_a_person(p, *limits) is None for p in parts):
+            out = trial
+            kept.extend(parts)
+        else:
+            kept.append(c)
+    return out, kept
+
+
+def choose(people: list[Cluster], clusters: list[Cluster], pick, image_label: np.ndarray,
+           limits: tuple[float, float, float]) -> Cluster:
+    """The person a pick chooses (see the module doc), or a one-line :class:`~wbsa.errors.WbsaError`.
+
+    Parameters
+    ----------
+    people : list of Cluster
+        The persons (at least one).
+    clusters : list of Cluster
+        Every object described (people included).
+    pick : None, str or (int, int)
+    image_label : (h, w) int
+        The object of every pixel (−1: none).
+    limits : (float, float, float)
+        Least and greatest height, greatest width of a person (m), for the refusal's reason.
+    """
+    h, w = image_label.shape
+    if is_pixel(pick) and not (0 <= pick[0] < w and 0 <= pick[1] < h):  # refused with one person in view too
+        raise WbsaError(f"pick pixel ({pick[0]}, {pick[1]}) lies outside the {w} x {h} depth image; "
+                        "give x,y of a pixel on the subject")
+    if is_pixel(pick):
+        return _at_pixel(people, clusters, (int(pick[0]), int(pick[1])), image_label, limits)
+    if len(people) == 1:
+        return people[0]
+    if pick is None:
+        listing = "; ".join(f"{i + 1}: {c.describe()}" for i, c in enumerate(sorted(people, key=lambda c: c.pixel_xy)))
+        raise WbsaError(f"{len(people)} people in the depth image ({listing}); "
+                        "choose one with pick nearest, largest, center or x,y")
+    if pick == "nearest":
+        return min(people, key=lambda c: c.distance_m)
+    if pick == "largest":
+        return max(people, key=lambda c: c.n_pixels)
+    x, y = (w - 1) / 2, (h - 1) / 2
+    # the object under the centre (the operator aims at the subject), else the one whose middle is nearest
+    hit = image_label[int(round(y)), int(round(x))]
+    for c in people:
+        if c.label == hit:
+            return c
+    return min(people, key=lambda c: (c.pixel_xy[0] - x) ** 2 + (c.pixel_xy[1] - y) ** 2)
+
+
+def _at_pixel(people: list[Cluster], clusters: list[Cluster], xy: tuple[int, int], image_label: np.ndarray,
+              limits: tuple[float, float, float]) -> Cluster:
+    """The person a pixel pick ``xy`` chooses (see the module doc)."""
+    x, y = xy
+    by_label = {c.label: c for c in clusters}
+    hit = int(image_label[y, x])
+    person = next((c for c in people if c.label == hit), None)
+    if person is not None:
+        return person
+    under = by_label.get(hit)
+    if under is not None:
+        behind = _seen_past_one(under, clusters)
+        if behind is not None and behind in people:
+            return behind
+        why = why_not_a_person(under, *limits) or "it is seen past a nearer object"
+        raise WbsaError(f"pick pixel ({x}, {y}) lies on an object that is not a person ({under.describe()}: {why}); "
+                        f"{_people_hint(people)}")
+    r = PICK_REACH_PX
+    y0, x0 = max(y - r, 0), max(x - r, 0)
+    window = image_label[y0:y + r + 1, x0:x + r + 1]
+    wy, wx = np.nonzero(window >= 0)
+    d2 = (wx + x0 - x) ** 2 + (wy + y0 - y) ** 2
+    near = [(int(d2[window[wy, wx] == c.label].min()), c.label, c) for c in people if np.any(window == c.label)]
+    if near:
+        return min(near, key=lambda t: t[:2])[2]
+    raise WbsaError(f"no person at pick pixel ({x}, {y}) or within {PICK_REACH_PX} pixels of it; "
+                    f"{_people_hint(people)}")
+
+
+def _people_hint(people: list[Cluster]) -> str:
+    """``people found: 1.72 m tall at pixel (312, 240), 2.9 m away; ...; pick a pixel on one``."""
+    return ("people found: " + "; ".join(c.describe() for c in sorted(people, key=lambda c: c.pixel_xy))
+            + "; pick a pixel on one")
+
+
+def is_pixel(pick: object) -> bool:
+    """Whether ``pick`` is an ``(x, y)`` pixel (two integers)."""
+    return isinstance(pick, tuple) and len(pick) == 2 and all(isinstance(v, (int, np.integer)) for v in pick)

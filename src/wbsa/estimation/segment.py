@@ -177,7 +177,8 @@ def _meets_border(points: np.ndarray, intrinsics, frame: Frame) -> bool:
 
 
 def segment_subject(depth_m: np.ndarray, intrinsics, settings: SegmentSettings = SegmentSettings()) -> Segmentation:
-    """Find the subject in a depth image (see the module doc).
+    """Find the subject in a depth image (see the module doc): the people (:func:`find_people`), the one
+    ``settings.pick`` chooses (:func:`~wbsa.estimation.people.choose`), its feet down to the floor.
 
     Parameters
     ----------
@@ -193,7 +194,73 @@ def segment_subject(depth_m: np.ndarray, intrinsics, settings: SegmentSettings =
     Raises
     ------
     WbsaError
-        No returns in the depth range, no person-sized object, or several without a ``pick``.
+        No returns in the depth range, no person, several without a ``pick``, or a pick on no person.
+    """
+    scene = find_people(depth_m, intrinsics, settings)
+    chosen = choose(scene.people, scene.clusters, settings.pick, scene.image_label, scene.limits)
+    h, w = scene.image_label.shape
+    mask = np.zeros(h * w, dtype=bool)
+    mask[scene.pix[scene.pixel_label == chosen.label]] = True
+    mask = grow_feet(mask.reshape(h, w), scene.pix, scene.points, scene.pixel_label, scene.floor, list(scene.walls),
+                     float(intrinsics.fx))
+    others = tuple(c for c in scene.people if c.label != chosen.label)
+    return Segmentation(mask, scene.floor, scene.walls, chosen, others)
+
+
+@dataclass(frozen=True)
+class Scene:
+    """The objects of a depth image and which of them are people (:func:`find_people`).
+
+    Attributes
+    ----------
+    floor : Plane or None
+    walls : tuple of Plane
+    frame : Frame
+        The image's frame (:mod:`wbsa.estimation.frame`).
+    clusters : tuple of Cluster
+        Every object of at least 50 pixels.
+    people : tuple of Cluster
+        Those that are people (at least one).
+    image_label : (h, w) int
+        The object of every pixel (−1: none).
+    pix : (k,) int
+        Flat pixel index of every return in the depth range; ``points`` (k, 3) float64 its camera-frame point,
+        ``pixel_label`` (k,) int its object.
+    limits : (float, float, float)
+        Least and greatest height and greatest width of a person (m).
+    """
+
+    floor: Plane | None
+    walls: tuple[Plane, ...]
+    frame: Frame
+    clusters: tuple[Cluster, ...]
+    people: tuple[Cluster, ...]
+    image_label: np.ndarray = field(repr=False)
+    pix: np.ndarray = field(repr=False)
+    points: np.ndarray = field(repr=False)
+    pixel_label: np.ndarray = field(repr=False)
+    limits: tuple[float, float, float] = (0.45, 2.6, 2.6)
+
+
+def find_people(depth_m: np.ndarray, intrinsics, settings: SegmentSettings = SegmentSettings()) -> Scene:
+    """The room, the objects and the people of a depth image (steps 1–4 of the module doc).
+
+    Parameters
+    ----------
+    depth_m : (h, w) float
+        z-depth in metres, 0 = no return.
+    intrinsics : wbsa.camera.Intrinsics
+    settings : SegmentSettings
+        Its ``pick`` is not used here.
+
+    Returns
+    -------
+    Scene
+
+    Raises
+    ------
+    WbsaError
+        No returns in the depth range, or no person.
     """
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
@@ -261,9 +328,5 @@ def segment_subject(depth_m: np.ndarray, intrinsics, settings: SegmentSettings =
                         "the camera, and that the whole person is in the frame")
     image_label = np.full(h * w, -1)
     image_label[pix] = pixel_label
-    chosen = choose(people, clusters, settings.pick, image_label.reshape(h, w), limits)
-    mask = np.zeros(h * w, dtype=bool)
-    mask[pix[pixel_label == chosen.label]] = True
-    mask = grow_feet(mask.reshape(h, w), pix, points, pixel_label, floor, walls, float(intrinsics.fx))
-    others = tuple(c for c in people if c.label != chosen.label)
-    return Segmentation(mask, floor, tuple(walls), chosen, others)
+    return Scene(floor, tuple(walls), frame, tuple(clusters), tuple(people), image_label.reshape(h, w), pix, points,
+                 pixel_label, limits)

@@ -32,8 +32,8 @@ def person_view(body_model):
 
 def test_the_dispatch_point_picks_one_predictor_per_method():
     from wbsa.estimation.methods import predictor_for, predictors_for
-    from wbsa.estimation.methods.body_fit import BodyFitPredictor
-    from wbsa.estimation.methods.regression import RegressionPredictor
+    from wbsa.estimation.methods.body_fit.predictor import BodyFitPredictor
+    from wbsa.estimation.methods.regression.predictor import RegressionPredictor
 
     assert isinstance(predictor_for("regression"), RegressionPredictor)
     assert isinstance(predictor_for("body-fit"), BodyFitPredictor)
@@ -102,7 +102,7 @@ def test_what_a_route_cannot_serve_is_refused_before_any_work(person_view, tmp_p
 
 def test_the_body_fit_reads_its_shipped_interval_and_its_level():
     """The calibration ships in wbsa/data; a level it was not calibrated at is refused in one line."""
-    from wbsa.estimation.bodyfit.interval import load
+    from wbsa.estimation.methods.body_fit.interval import load
     from wbsa.estimation.methods import Request, predictor_for
 
     calibration = load()

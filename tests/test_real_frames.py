@@ -13,9 +13,9 @@ from wbsa.errors import WbsaError
 @pytest.fixture(scope="module")
 def five_people():
     """The frame's depth, its camera (the tum preset: its points fit fx = 525, c = (319.5, 239.5)) and its
-    people (:func:`wbsa.estimation.segment.find_people`)."""
+    people (:func:`wbsa.estimation.subject.segment.find_people`)."""
     from wbsa.camera.presets import resolve_camera
-    from wbsa.estimation.segment import find_people
+    from wbsa.estimation.subject.segment import find_people
 
     depth, camera = pcd_depth(), resolve_camera("tum")
     return depth, camera, find_people(depth, camera)
@@ -28,7 +28,7 @@ def _box_error_px(a, b) -> int:
 def test_the_five_people_are_found_apart_with_their_boxes(five_people):
     """Five people, two of them one object in 3-D (an arm on an arm), each found within 15 pixels of the box
     read off the image by eye; the frame's bands without returns are its border, so the floor is found."""
-    from wbsa.estimation.frame import Frame
+    from wbsa.estimation.subject.frame import Frame
 
     _, _, scene = five_people
     assert scene.floor is not None and scene.frame == Frame(top=28, bottom=475, left=21, right=611)
@@ -41,7 +41,7 @@ def test_the_five_people_are_found_apart_with_their_boxes(five_people):
 
 
 def test_every_person_is_picked_by_a_pixel_on_them_or_within_five_pixels(five_people):
-    from wbsa.estimation.people import choose
+    from wbsa.estimation.subject.people import choose
 
     _, _, scene = five_people
     picked = set()
@@ -66,7 +66,7 @@ def test_every_person_is_picked_by_a_pixel_on_them_or_within_five_pixels(five_pe
     ((5, 5), r"no person at pick pixel"),  # the band without returns
 ])
 def test_a_pick_on_no_person_is_refused_in_one_line(five_people, pixel, message):
-    from wbsa.estimation.people import choose
+    from wbsa.estimation.subject.people import choose
 
     _, _, scene = five_people
     with pytest.raises(WbsaError, match=message) as err:

@@ -121,7 +121,7 @@ def test_the_page_shows_the_answer_of_wbsa_estimate_for_a_rendered_body(server, 
     """A known body in a room: the page's WBSA, interval and flags are wbsa.estimate's on the same file; the
     depth picture, the 3-D view (every triangle of the surface), the view sketch, the formulae and the
     downloads are shown. A screenshot is kept as a test artefact."""
-    from wbsa.estimation.checks import FLAGS
+    from wbsa.estimation.subject.checks import FLAGS
 
     url, app = server
     est = _estimate(frames["one"]["path"], small_estimator_model)
@@ -353,7 +353,7 @@ def test_a_batch_gives_one_row_per_file_and_a_csv(server, frames, small_estimato
 
 
 def test_the_advice_names_every_flag_and_the_answer_reads_them_from_flags():
-    from wbsa.estimation.checks import FLAGS
+    from wbsa.estimation.subject.checks import FLAGS
     from wbsa.server.advice import ADVICE, flag_rows
 
     assert set(ADVICE) == set(FLAGS)

@@ -55,7 +55,7 @@ DepthTechnology = Literal["structured-light", "time-of-flight", "active-stereo",
 Method = Literal["regression", "body-fit", "both"]
 #: A population's ``posture`` setting: a posture name, or ``mixed`` (a random name per subject).
 PostureChoice = Literal[Literal["a-pose", "mixed"], PostureName]
-#: Robust penalty of the body fit's point-to-surface residuals (:mod:`wbsa.estimation.bodyfit.objective`).
+#: Robust penalty of the body fit's point-to-surface residuals (:mod:`wbsa.estimation.methods.body_fit.objective`).
 RobustLoss = Literal["geman-mcclure", "huber"]
 
 POPULATION_KINDS: tuple[str, ...] = get_args(PopulationKind)

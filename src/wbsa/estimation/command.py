@@ -88,7 +88,7 @@ def run_estimate(args: argparse.Namespace) -> int:
     from wbsa.camera.presets import resolve_camera
     from wbsa.core.depth_image import read_depth
     from wbsa.errors import WbsaError
-    from wbsa.estimation.segment import SegmentSettings
+    from wbsa.estimation.subject.segment import SegmentSettings
     from wbsa.estimation.single_view import estimate
 
     _check_outputs(args)

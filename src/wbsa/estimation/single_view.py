@@ -1,7 +1,7 @@
 """WBSA from one depth image: find the subject, measure it, estimate the view, predict with an interval.
 
 :func:`estimate` is the library entry point (``wbsa.estimate`` calls it). Every number it returns carries
-its flags (:data:`wbsa.estimation.checks.FLAGS`); what cannot be measured raises a one-line
+its flags (:data:`wbsa.estimation.subject.checks.FLAGS`); what cannot be measured raises a one-line
 :class:`~wbsa.errors.WbsaError`.
 """
 
@@ -13,8 +13,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from wbsa.errors import WbsaError
-from wbsa.estimation.segment import SegmentSettings
-from wbsa.estimation.view import ViewEstimate
+from wbsa.estimation.subject.segment import SegmentSettings
+from wbsa.estimation.methods.view import ViewEstimate
 from wbsa.typing import Method
 
 
@@ -36,7 +36,7 @@ class Estimate:
     view_used : (float, float)
         Azimuth and elevation the prediction used (the stated ones where given).
     flags : dict of str to str
-        Named warnings (see :data:`wbsa.estimation.checks.FLAGS`); empty when all checks passed.
+        Named warnings (see :data:`wbsa.estimation.subject.checks.FLAGS`); empty when all checks passed.
     clothing_m : float
         The stated layer of clothes the estimate allows for (m; 0: none or tight-fitting).
     method, model, camera : str
@@ -48,7 +48,7 @@ class Estimate:
         which the measures cut in training too (the VBSA is that of these pixels).
     surface : wbsa.core.TriangleMesh
         The reconstructed visible surface (camera frame, metres).
-    body : wbsa.estimation.bodyfit.BodyFit or None
+    body : wbsa.estimation.methods.body_fit.BodyFit or None
         With ``method="body-fit"`` or ``"both"``: the whole body fitted to the image (its meshes, stature, mass,
         posture).
     routes : dict of str to Prediction
@@ -127,7 +127,7 @@ def _depth_array(depth, depth_scale: float | None) -> np.ndarray:
 
         return read_depth(depth, depth_scale=depth_scale)
     from wbsa.core.depth_image import metres_from_units
-    from wbsa.estimation.checks import is_real_number
+    from wbsa.estimation.subject.checks import is_real_number
 
     raw = np.asarray(depth) if not isinstance(depth, np.ndarray) else depth
     if raw.dtype.kind not in "iuf":
@@ -154,7 +154,7 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     camera : str, path or wbsa.camera.Intrinsics
         A preset name (``kinect-v2``, ``realsense-d435``, ...) or an Open3D intrinsics JSON.
     model : EstimatorModel, path or None
-        None: the model shipped with wbsa (:func:`wbsa.estimation.default_model.default_model`). A path: an
+        None: the model shipped with wbsa (:func:`wbsa.estimation.methods.regression.default_model.default_model`). A path: an
         estimator model file (``.npz``, e.g. from ``wbsa train``) or a ``wbsa fit`` model file (``.json``).
     method : {'regression', 'body-fit', 'both'}
         The estimation route (:mod:`wbsa.estimation.methods`): the regression on the image's measures (the
@@ -187,11 +187,13 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     """
     from wbsa.camera.presets import resolve_camera
     from wbsa.camera.views import check_angle
-    from wbsa.estimation import checks
-    from wbsa.estimation.measure import measure_subject
-    from wbsa.estimation.methods import Request, Subject, check_method, predictors_for
-    from wbsa.estimation.mixed_pixels import repair_mixed_pixels
-    from wbsa.estimation.segment import segment_subject
+    from wbsa.estimation.subject import checks
+    from wbsa.estimation.subject.measure import measure_subject
+    from wbsa.estimation.methods.base import Request, Subject
+    from wbsa.estimation.methods.dispatch import check_method, predictors_for
+    from wbsa.estimation.methods.view import view_flags
+    from wbsa.estimation.subject.mixed_pixels import repair_mixed_pixels
+    from wbsa.estimation.subject.segment import segment_subject
 
     check_method(method)
     if not (checks.is_real_number(level) and 0 < level < 1):
@@ -253,7 +255,7 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
             raise WbsaError(f"the {route.model_name} model gave no finite estimate ({route.wbsa_m2}); check the "
                             "model file, or rebuild it")
     view = prediction.view
-    flags.update(checks.view_flags((azimuth_deg, elevation_deg), view))
+    flags.update(view_flags((azimuth_deg, elevation_deg), view))
     for name, text in prediction.flags.items():  # the image's own checks keep their wording
         flags.setdefault(name, text)
     for name, text in _agreement_flags(routes).items():

@@ -4,7 +4,7 @@
 ``uploads``   upload checks: size, type and image size from the bytes, fields without paths
 ``jobs``      one estimate off the event loop (:func:`measure`, :class:`Runner`), results kept in memory
 ``answer``    an Estimate as the page shows it: number, flags, view, meshes, formulae, downloads, depth picture
-``advice``    what to do about each flag (:data:`ADVICE`, beside :data:`wbsa.estimation.checks.FLAGS`)
+``advice``    what to do about each flag (:data:`ADVICE`, beside :data:`wbsa.estimation.subject.checks.FLAGS`)
 ``batch``     several files: rows, progress, CSV
 ``command``   the ``wbsa serve`` subcommand (uvicorn on 127.0.0.1 and a free port by default)
 ``static/``   the page: HTML, CSS and JavaScript (a small WebGL viewer), no build step, nothing fetched from

@@ -1,4 +1,4 @@
-"""What the operator should do about each flag of an estimate: one table beside :data:`~wbsa.estimation.checks.FLAGS`.
+"""What the operator should do about each flag of an estimate: one table beside :data:`~wbsa.estimation.subject.checks.FLAGS`.
 
 The page shows, for every flag an estimate carries, the flag's meaning (``FLAGS``, the one place it is
 written), the estimate's own detail (``Estimate.flags``) and the step below. A test checks that this table
@@ -60,7 +60,7 @@ def flag_rows(flags: dict[str, str]) -> list[dict[str, str]]:
     >>> flag_rows({"cut_off": "subject pixels on the image border"})[0]["meaning"]
     'the subject touches the image border and may be cut off'
     """
-    from wbsa.estimation.checks import FLAGS
+    from wbsa.estimation.subject.checks import FLAGS
 
     return [{"name": name, "meaning": FLAGS.get(name, name.replace("_", " ")), "detail": detail,
              "todo": ADVICE.get(name, "Check the picture and take it again if in doubt.")}

@@ -147,7 +147,7 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
     from wbsa.server.jobs import ResultStore, Runner, internal_error, measure, new_id
 
     if model is not None and not hasattr(model, "predict"):
-        from wbsa.estimation.default_model import load_model
+        from wbsa.estimation.methods.regression.default_model import load_model
 
         model = load_model(model)
     presets = [k for k in PRESETS if k != "tum"] + ["tum"]

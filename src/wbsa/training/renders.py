@@ -4,8 +4,8 @@
 :data:`~wbsa.bodies.posture.PoseBody` callable (swap in another posture model without touching
 anything else), draws captures (:func:`~wbsa.training.capture.sample_capture`), renders each with
 :func:`wbsa.simulate.simulate_view` (sensor on), by default standing in a room whose floor and subject are
-then found by :func:`~wbsa.estimation.segment.segment_subject` as in a real image, and measures the sensed
-frame with :func:`~wbsa.estimation.measure.measure_subject`. A share of the bodies is dressed in a layer of
+then found by :func:`~wbsa.estimation.subject.segment.segment_subject` as in a real image, and measures the sensed
+frame with :func:`~wbsa.estimation.subject.measure.measure_subject`. A share of the bodies is dressed in a layer of
 clothes (:mod:`wbsa.bodies.clothing`) whose thickness the row records (``clothing_m``), as a user states it;
 the truth stays the bare skin's WBSA. Sample ``i`` draws from its own
 stream ``SeedSequence([seed, i])``: the same seed gives the same rows whatever the chunking or workers.
@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from wbsa.estimation.cloud import Plane
+from wbsa.estimation.subject.cloud import Plane
 from wbsa.training.capture import as_scan_render, sample_capture
 from wbsa.training.samples import Samples
 from wbsa.training.settings import RenderSettings
@@ -45,8 +45,8 @@ def render_chunk(population: pd.DataFrame, first_sample: int, settings: RenderSe
     from wbsa.bodies.clothing import COVERED_BONES, dressed_vertices
     from wbsa.camera.extrinsics import pose_from_view
     from wbsa.camera.scene import MeshScene
-    from wbsa.estimation.measure import measure_subject
-    from wbsa.estimation.mixed_pixels import repair_mixed_pixels
+    from wbsa.estimation.subject.measure import measure_subject
+    from wbsa.estimation.subject.mixed_pixels import repair_mixed_pixels
     from wbsa.training.room import with_edge_pixels
     from wbsa.bodies.posture import RandomPosture
     from wbsa.parallel import keep_large_allocations, single_threaded_math
@@ -122,9 +122,9 @@ def _room_capture(mesh, cap, alone: bool, rng: np.random.Generator, edge_rng: np
     """(depth (h, w) float64 in whole millimetres, mixed returns, subject mask or None, detected floor) of
     ``mesh`` in a room, or ``alone`` (no floor, no wall)."""
     from wbsa.errors import WbsaError
-    from wbsa.estimation.mixed_pixels import repair_mixed_pixels
+    from wbsa.estimation.subject.mixed_pixels import repair_mixed_pixels
     from wbsa.training.room import capture_room, compose_room, with_edge_pixels
-    from wbsa.estimation.segment import SegmentSettings, segment_subject
+    from wbsa.estimation.subject.segment import SegmentSettings, segment_subject
 
     if alone:
         room = compose_room(mesh, cap.view.azimuth_deg, wall_behind_m=None, floor=False)

@@ -25,7 +25,7 @@ class RenderSettings:
     room : bool
         Stand the body on a floor before a wall (``wall_behind_m`` behind it, uniform), store the depth
         in millimetres and find the subject and the floor with
-        :func:`~wbsa.estimation.segment.segment_subject`: the measures then see what they see in a real
+        :func:`~wbsa.estimation.subject.segment.segment_subject`: the measures then see what they see in a real
         image (the segmentation's edges, the detected floor). False: the body alone, its own pixels and
         the render's floor.
     alone_share : float
@@ -70,7 +70,7 @@ class RenderSettings:
 def check_clothing_settings(clothed_share: float, clothing_m: tuple[float, float]) -> None:
     """Refuse a share of dressed captures outside [0, 1] or a thickness range outside 0–5 cm (one-line WbsaError)."""
     from wbsa.errors import WbsaError
-    from wbsa.estimation.checks import MAX_CLOTHING_M
+    from wbsa.estimation.subject.checks import MAX_CLOTHING_M
 
     if not 0.0 <= clothed_share <= 1.0:
         raise WbsaError(f"clothed_share {clothed_share} must be a share of the captures in [0, 1]")

@@ -7,7 +7,7 @@ way. Such returns float in the gap behind the body's silhouette: they join the b
 else the estimator therefore checks every return against its eight neighbours:
 
 - a return *agrees* with a neighbour when their depths differ by at most ``max(4 σ(z), tan 80° · z / f)``
-  (times √2 on the diagonals): four times the depth noise (:func:`wbsa.estimation.cloud.depth_noise_m`),
+  (times √2 on the diagonals): four times the depth noise (:func:`wbsa.estimation.subject.cloud.depth_noise_m`),
   or a surface inclined 80° to the ray;
 - a return that agrees with fewer than :data:`MIN_AGREEING` of its neighbours, and has both a nearer and
   a farther neighbour it does not agree with, lies between two surfaces: it is *mixed*. It takes the
@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from wbsa.estimation.cloud import depth_noise_m
+from wbsa.estimation.subject.cloud import depth_noise_m
 
 #: Fewer agreeing neighbours than this (of eight) can make a return mixed.
 MIN_AGREEING = 4

@@ -1,7 +1,7 @@
 """The view from the image: elevation from the floor (or the body's axis), azimuth learned from renders.
 
 The elevation is geometry: the angle of the camera above the horizontal through the subject's centre, the
-horizontal being the floor (:func:`wbsa.estimation.measure.measure_subject`; the body's long axis when no
+horizontal being the floor (:func:`wbsa.estimation.subject.measure.measure_subject`; the body's long axis when no
 floor is seen). The azimuth is learned: bodies are left/right symmetric, so θ and −θ are one view and the
 estimator returns ψ = |θ| in [0, 180]. Two boosted-tree models read the view descriptor (depth and width
 profiles over height, unchanged by a mirror image): one the angle from the front–back axis,
@@ -14,21 +14,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from wbsa.estimation.trees import TreeEnsemble
+from wbsa.estimation.methods.regression.trees import TreeEnsemble
+from wbsa.estimation.methods.view import ViewEstimate
 
 #: Elevation uncertainty (standard deviation, degrees) with and without a floor; measured on training
 #: renders when a model is fitted and stored with it, these are only the defaults.
 ELEVATION_SD_DEG = {"floor": 1.5, "axis": 3.0}
-
-
-def fold_azimuth(azimuth_deg) -> np.ndarray:
-    """Mirror-equivalent azimuth ψ = |θ| in [0, 180] (θ and −θ are the same view of a symmetric body)."""
-    return np.abs((np.asarray(azimuth_deg, dtype=np.float64) + 180.0) % 360.0 - 180.0)
-
-
-def azimuth_error_deg(estimate_deg, truth_deg) -> np.ndarray:
-    """Mirror-equivalent azimuth error |ψ̂ − ψ| in degrees (0–180)."""
-    return np.abs(fold_azimuth(estimate_deg) - fold_azimuth(truth_deg))
 
 
 def azimuth_sd_deg(psi_deg, p_front, axis_sd_deg: float) -> np.ndarray:
@@ -52,23 +43,6 @@ def azimuth_sd_deg(psi_deg, p_front, axis_sd_deg: float) -> np.ndarray:
     axis_deg = np.minimum(psi, 180.0 - psi)
     flip = np.minimum(p_front, 1.0 - np.asarray(p_front, dtype=np.float64))
     return np.sqrt(axis_sd_deg**2 + flip * (1.0 - flip) * (180.0 - 2.0 * axis_deg) ** 2)
-
-
-@dataclass(frozen=True)
-class ViewEstimate:
-    """Estimated view, paper convention, with standard deviations (degrees)."""
-
-    azimuth_deg: float
-    azimuth_sd_deg: float
-    elevation_deg: float
-    elevation_sd_deg: float
-    p_front: float
-
-    def to_dict(self) -> dict:
-        """JSON-ready fields; a value not estimated (a fitted body's spreads) is None."""
-        values = {k: float(getattr(self, k)) for k in ("azimuth_deg", "azimuth_sd_deg", "elevation_deg",
-                                                        "elevation_sd_deg", "p_front")}
-        return {k: round(v, 3) if np.isfinite(v) else None for k, v in values.items()}
 
 
 @dataclass(frozen=True)
@@ -109,7 +83,7 @@ class ViewModel:
 
     def estimate(self, measures) -> ViewEstimate:
         """The view of a measured subject: azimuth from its view descriptor, elevation measured
-        (:class:`~wbsa.estimation.measure.SubjectMeasures`), with their spreads."""
+        (:class:`~wbsa.estimation.subject.measure.SubjectMeasures`), with their spreads."""
         psi, sd, p = (float(v[0]) for v in self.predict(measures.descriptor[None]))
         el_sd = self.elevation_sd_deg["floor" if measures.floor_seen else "axis"]
         return ViewEstimate(psi, sd, measures.elevation_deg, el_sd, p)
@@ -143,20 +117,3 @@ class ViewModel:
         return cls(TreeEnsemble.from_arrays(arrays, "view_axis_", source),
                    TreeEnsemble.from_arrays(arrays, "view_front_", source),
                    float(spreads["view_axis_sd_deg"][0]), {"floor": float(el[0]), "axis": float(el[1])})
-
-
-#: An estimated azimuth spread (degrees) above which the estimate is flagged ``uncertain_view``.
-UNCERTAIN_AZIMUTH_SD_DEG = 30.0
-
-
-def view_used(view: ViewEstimate, azimuth_deg: float | None,
-              elevation_deg: float | None) -> tuple[tuple[float, float], dict[str, str]]:
-    """The view a prediction uses: the stated azimuth (folded, :func:`fold_azimuth`) and elevation where given,
-    else the estimated ones; flags ``uncertain_view`` when the azimuth is estimated and unsure."""
-    az = view.azimuth_deg if azimuth_deg is None else float(fold_azimuth(azimuth_deg))
-    el = view.elevation_deg if elevation_deg is None else float(elevation_deg)
-    flags: dict[str, str] = {}
-    if azimuth_deg is None and not view.azimuth_sd_deg <= UNCERTAIN_AZIMUTH_SD_DEG:
-        flags["uncertain_view"] = (f"azimuth {view.azimuth_deg:.0f}° ± {view.azimuth_sd_deg:.0f}° (camera in front "
-                                   f"with probability {view.p_front:.2f}); give --azimuth if you know it")
-    return (az, el), flags

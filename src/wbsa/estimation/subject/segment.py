@@ -12,8 +12,8 @@
    object they touch, so stray floor returns cannot chain objects together. Objects that touch in the image
    (or lie one pixel apart with no return between) with less than 0.8 m between them in depth (a body's
    near and far sides, an arm in front of the waist), or a far arm up to 1.2 m behind, are one object if
-   together they are still person-sized (:func:`~wbsa.estimation.clusters.merge_occluding`).
-   The subject's feet are then taken down to the floor (:mod:`wbsa.estimation.feet`).
+   together they are still person-sized (:func:`~wbsa.estimation.subject.clusters.merge_occluding`).
+   The subject's feet are then taken down to the floor (:mod:`wbsa.estimation.subject.feet`).
 4. A cluster is person-sized if it is 0.45–2.6 m tall (along the floor normal, or its long axis), at
    most 2.6 m wide and 0.9 m at the hips, and not seen past a nearer, larger object (inside its bounding box
    in the image and 0.4 m or more behind it: the wall between the legs; :func:`seen_past`); with several,
@@ -30,12 +30,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from wbsa.errors import WbsaError, check_field
-from wbsa.estimation.cloud import Plane, ransac_plane
-from wbsa.estimation.clusters import MAX_FOOTPRINT_M, attach_low, merge_occluding
-from wbsa.estimation.feet import grow_feet
-from wbsa.estimation.frame import Frame, image_frame
-from wbsa.estimation.people import (PICKS, Cluster, choose, describe_clusters, is_pixel, seen_past, split_touching,
-                                    why_not_a_person)
+from wbsa.estimation.subject.cloud import Plane, ransac_plane
+from wbsa.estimation.subject.clusters import MAX_FOOTPRINT_M, attach_low, merge_occluding
+from wbsa.estimation.subject.feet import grow_feet
+from wbsa.estimation.subject.frame import Frame, image_frame
+from wbsa.estimation.subject.people import (PICKS, Cluster, choose, describe_clusters, is_pixel, seen_past,
+                                            split_touching, why_not_a_person)
 
 #: Height over the floor below which returns are not used to link objects (only to extend them).
 LOW_BAND_M = 0.10
@@ -44,7 +44,7 @@ LOW_BAND_M = 0.10
 #: and 1.5 m from a child lost the floor.
 FLOOR_MAX_TILT_DEG = 75.0
 #: People standing side by side and touching span at most this at the hips (m; one person at most
-#: :data:`~wbsa.estimation.clusters.MAX_FOOTPRINT_M`); a wall spans more.
+#: :data:`~wbsa.estimation.subject.clusters.MAX_FOOTPRINT_M`); a wall spans more.
 TOUCHING_FOOTPRINT_M = 2.5
 
 
@@ -64,7 +64,7 @@ class SegmentSettings:
         A room surface holds at least this fraction of the thinned returns.
     behind_fraction : float
         A plane is a room surface if at most this fraction of the other returns lies behind it ...
-        It must also run out of the image (reach its frame's border, :mod:`wbsa.estimation.frame`): a floor or a wall
+        It must also run out of the image (reach its frame's border, :mod:`wbsa.estimation.subject.frame`): a floor or a wall
         does, a body alone in the image (no room), which a plane fits loosely, does not.
     cluster_gap_m : float
         Points closer than this (or three pixel pitches, if more) belong to one object.
@@ -168,8 +168,8 @@ def find_room(cloud: np.ndarray, settings: SegmentSettings, intrinsics,
 
 
 def _meets_border(points: np.ndarray, intrinsics, frame: Frame) -> bool:
-    """Whether (k, 3) camera-frame points reach within :data:`~wbsa.estimation.frame.BORDER_PX` pixels of the
-    frame's border (:mod:`wbsa.estimation.frame`)."""
+    """Whether (k, 3) camera-frame points reach within :data:`~wbsa.estimation.subject.frame.BORDER_PX` pixels of the
+    frame's border (:mod:`wbsa.estimation.subject.frame`)."""
     z = np.maximum(points[:, 2], 1e-9)
     u = float(intrinsics.fx) * points[:, 0] / z + float(intrinsics.cx)
     v = float(intrinsics.fy) * points[:, 1] / z + float(intrinsics.cy)
@@ -178,7 +178,7 @@ def _meets_border(points: np.ndarray, intrinsics, frame: Frame) -> bool:
 
 def segment_subject(depth_m: np.ndarray, intrinsics, settings: SegmentSettings = SegmentSettings()) -> Segmentation:
     """Find the subject in a depth image (see the module doc): the people (:func:`find_people`), the one
-    ``settings.pick`` chooses (:func:`~wbsa.estimation.people.choose`), its feet down to the floor.
+    ``settings.pick`` chooses (:func:`~wbsa.estimation.subject.people.choose`), its feet down to the floor.
 
     Parameters
     ----------
@@ -216,7 +216,7 @@ class Scene:
     floor : Plane or None
     walls : tuple of Plane
     frame : Frame
-        The image's frame (:mod:`wbsa.estimation.frame`).
+        The image's frame (:mod:`wbsa.estimation.subject.frame`).
     clusters : tuple of Cluster
         Every object of at least 50 pixels.
     people : tuple of Cluster

@@ -1,8 +1,8 @@
 """The body-fit method: anny fitted to the one depth view (shape, posture, camera pose), its rest-pose skin measured.
 
-The whole body is fitted to the segmented subject's points and silhouette (:func:`wbsa.estimation.bodyfit.fit_body`); the
-WBSA is the fitted body's skin at rest, with the split-conformal interval of :mod:`wbsa.estimation.bodyfit.interval`. The
-fitted body (:class:`~wbsa.estimation.bodyfit.result.BodyFit`: stature, mass, tapes, posture, meshes) rides along in
+The whole body is fitted to the segmented subject's points and silhouette (:func:`wbsa.estimation.methods.body_fit.fit_body`); the
+WBSA is the fitted body's skin at rest, with the split-conformal interval of :mod:`wbsa.estimation.methods.body_fit.interval`. The
+fitted body (:class:`~wbsa.estimation.methods.body_fit.result.BodyFit`: stature, mass, tapes, posture, meshes) rides along in
 :attr:`Prediction.body`.
 """
 
@@ -11,8 +11,8 @@ from __future__ import annotations
 import math
 
 from wbsa.errors import WbsaError
-from wbsa.estimation.methods import Prediction, Request, Subject
-from wbsa.estimation.view import ViewEstimate, fold_azimuth
+from wbsa.estimation.methods.base import Prediction, Request, Subject
+from wbsa.estimation.methods.view import ViewEstimate, fold_azimuth
 
 
 class BodyFitPredictor:
@@ -21,14 +21,14 @@ class BodyFitPredictor:
     name = "body-fit"
 
     def __init__(self, settings=None) -> None:
-        from wbsa.estimation.bodyfit.settings import BodyFitSettings
+        from wbsa.estimation.methods.body_fit.settings import BodyFitSettings
 
         self.settings = settings or BodyFitSettings()
 
     def check_request(self, request: Request) -> None:
         """Refuse stated clothes (the body fit does not yet allow for them) and an interval level other than the
         one its interval was calibrated at."""
-        from wbsa.estimation.bodyfit.interval import load
+        from wbsa.estimation.methods.body_fit.interval import load
 
         if request.clothing_m > 0:
             raise WbsaError("the body fit does not yet allow for clothes (--clothing-cm > 0); use --method regression")
@@ -39,7 +39,7 @@ class BodyFitPredictor:
 
     def predict(self, subject: Subject, request: Request) -> Prediction:
         """WBSA of the fitted body at rest; its flags (``not_converged`` ...) become the estimate's."""
-        from wbsa.estimation.bodyfit.fit import fit_body
+        from wbsa.estimation.methods.body_fit.fit import fit_body
 
         fit = fit_body(subject.depth_m, subject.mask, subject.camera, subject.floor, clothing_m=request.clothing_m,
                        azimuth_deg=request.azimuth_deg, settings=self.settings)

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from wbsa.bodies.body_model import PHENOTYPE_COLUMNS
-from wbsa.estimation.bodyfit.settings import ANGLE_LIMITS_DEG, BodyFitSettings
+from wbsa.estimation.methods.body_fit.settings import ANGLE_LIMITS_DEG, BodyFitSettings
 
 _N_PH = len(PHENOTYPE_COLUMNS)
 _AGE = PHENOTYPE_COLUMNS.index("p_age")
@@ -73,12 +73,12 @@ def _limits(torch):
 
 
 def optimise(fit_body, objective, starts, settings: BodyFitSettings, deadline: float) -> Optimum:
-    """Fit every start of ``starts`` (:class:`wbsa.estimation.bodyfit.init.Starts`) to ``objective``'s observation.
+    """Fit every start of ``starts`` (:class:`wbsa.estimation.methods.body_fit.init.Starts`) to ``objective``'s observation.
 
     Parameters
     ----------
-    fit_body : wbsa.estimation.bodyfit.model.FitBody
-    objective : wbsa.estimation.bodyfit.objective.Objective
+    fit_body : wbsa.estimation.methods.body_fit.model.FitBody
+    objective : wbsa.estimation.methods.body_fit.objective.Objective
     starts : Starts
     settings : BodyFitSettings
     deadline : float
@@ -87,7 +87,7 @@ def optimise(fit_body, objective, starts, settings: BodyFitSettings, deadline: f
     """
     import torch
 
-    from wbsa.estimation.bodyfit.model import yaw_matrix
+    from wbsa.estimation.methods.body_fit.model import yaw_matrix
 
     f32, f64 = torch.float32, torch.float64
     phen0 = torch.as_tensor(starts.params[:, :_N_PH], dtype=f64)

@@ -86,7 +86,7 @@ def first_guesses(fit_body, objective, n: int, azimuth_deg: float | None = None,
     import torch
     from scipy.spatial import cKDTree
 
-    from wbsa.estimation.bodyfit.model import subset_rest_normals, yaw_matrix
+    from wbsa.estimation.methods.body_fit.model import subset_rest_normals, yaw_matrix
 
     obs = objective.obs
     stature = obs.top_m + 0.01  # the crown is rarely seen from below head height

@@ -14,7 +14,7 @@ from importlib import resources
 from pathlib import Path
 
 from wbsa.errors import WbsaError
-from wbsa.estimation.model import EstimatorModel
+from wbsa.estimation.methods.regression.model import EstimatorModel
 
 #: File names of the shipped model and its card, in ``wbsa/data``.
 DEFAULT_MODEL_FILE = "estimator-default.npz"

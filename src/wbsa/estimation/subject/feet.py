@@ -11,7 +11,7 @@ subject in the image):
   neighbourhood, by its median height, stands above what the same median reaches on the bare floor;
 * **elsewhere**: returns above the measures' floor cut and the floor's own measured noise.
 
-The measures (:func:`~wbsa.estimation.measure.measure_subject`) cut the floor strip again, as in training,
+The measures (:func:`~wbsa.estimation.subject.measure.measure_subject`) cut the floor strip again, as in training,
 so these rules shape the subject's mask far more than its VBSA.
 
 Every function is pure numpy on the returns of one depth image: ``pix`` (k,) int flat pixel indices of an
@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from wbsa.estimation.cloud import Plane, above_floor
+from wbsa.estimation.subject.cloud import Plane, above_floor
 
 #: Subject returns this close to the floor (m) end the runs the soles are looked for under.
 FEET_BAND_M = 0.12

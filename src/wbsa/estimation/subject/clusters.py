@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from wbsa.estimation.cloud import Plane
+from wbsa.estimation.subject.cloud import Plane
 
 #: Parts that touch in the image are merged when a fifth of their contact has a depth step under this (m)
 MERGE_DEPTH_GAP_M = 0.8

@@ -21,7 +21,7 @@ class BodyFit:
         Skin area of the fitted body at rest, measured as the population's ``wbsa_m2`` (anny's skin: the shell
         without eyeballs, tongue and the inner faces of eyes and mouth; fingers and toes included).
     wbsa_lo_m2, wbsa_hi_m2 : float
-        The split-conformal interval of :mod:`wbsa.estimation.bodyfit.interval` (NaN when no calibration is stored).
+        The split-conformal interval of :mod:`wbsa.estimation.methods.body_fit.interval` (NaN when no calibration is stored).
     level : float
         Its coverage (NaN without one).
     stature_m, volume_m3, mass_kg, bmi : float
@@ -46,10 +46,10 @@ class BodyFit:
     inlier_share : float
         Share of the observed points within 3 cm of the fitted surface.
     loss : float
-        The fit's final objective (:mod:`wbsa.estimation.bodyfit.objective`).
+        The fit's final objective (:mod:`wbsa.estimation.methods.body_fit.objective`).
     converged : bool
     flags : dict of str to str
-        Named warnings (:data:`wbsa.estimation.bodyfit.fit.FLAGS`); empty when every check passed.
+        Named warnings (:data:`wbsa.estimation.methods.body_fit.fit.FLAGS`); empty when every check passed.
     seconds : float
         Wall time of the fit (without loading anny, done once per process).
     steps, restarts : int

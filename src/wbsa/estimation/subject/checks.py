@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from wbsa.estimation.bodyfit.fit import FLAGS as BODY_FIT_FLAGS
+from wbsa.estimation.methods.body_fit.fit import FLAGS as BODY_FIT_FLAGS
 from wbsa.errors import WbsaError
 
 #: Every flag an estimate can carry, with what it means.
@@ -49,8 +49,6 @@ HUMAN_HEIGHT_M = (0.5, 2.5)
 #: benchmark's clean images (edges kept) 1 of 299 is above; with 10 % of the depth edges mixed the median
 #: is about 0.09, with all of them 0.5 (docs/estimate.md, "Depth edges").
 MIXED_PER_OUTLINE_PIXEL = 0.1
-#: A stated view further than this (degrees) from the estimated one is flagged.
-VIEW_TOLERANCE_DEG = 30.0
 #: Thickest layer of clothes (m) that can be stated; the default model is trained on 0–1.5 cm (flagged beyond).
 MAX_CLOTHING_M = 0.05
 
@@ -161,27 +159,10 @@ def mixed_pixel_flags(mixed_share: float) -> dict[str, str]:
     ----------
     mixed_share : float
         Mixed returns within 2 pixels of the subject per pixel of its outline
-        (:func:`wbsa.estimation.mixed_pixels.outline_shares`).
+        (:func:`wbsa.estimation.subject.mixed_pixels.outline_shares`).
     """
     if not mixed_share > MIXED_PER_OUTLINE_PIXEL:
         return {}
     return {"mixed_pixels": f"returns at the subject's outline ({mixed_share:.0%} of its length) lay between two "
                             "surfaces and were snapped to one; the area may be off by several per cent; turn on the "
                             "camera's flying-pixel filter or keep a plain background well behind the subject"}
-
-
-def view_flags(stated: tuple[float | None, float | None], estimated, tolerance_deg: float = VIEW_TOLERANCE_DEG
-               ) -> dict[str, str]:
-    """``{"view_disagrees": ...}`` if a stated azimuth or elevation is more than ``tolerance_deg`` off."""
-    from wbsa.estimation.view import azimuth_error_deg
-
-    az, el = stated
-    parts = []
-    if az is not None and math.isfinite(estimated.azimuth_deg):
-        err = float(azimuth_error_deg(az, estimated.azimuth_deg))
-        if err > tolerance_deg:
-            spread = f" ± {estimated.azimuth_sd_deg:.0f}°" if math.isfinite(estimated.azimuth_sd_deg) else ""
-            parts.append(f"azimuth stated {az:g}°, estimated {estimated.azimuth_deg:.0f}°{spread} (mirror-equivalent)")
-    if el is not None and abs(el - estimated.elevation_deg) > tolerance_deg:
-        parts.append(f"elevation stated {el:g}°, estimated {estimated.elevation_deg:.0f}°")
-    return {"view_disagrees": "; ".join(parts)} if parts else {}

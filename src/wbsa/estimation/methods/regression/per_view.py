@@ -8,8 +8,8 @@ shipped default model's view model (a ``wbsa fit`` model has none).
 from __future__ import annotations
 
 from wbsa.errors import WbsaError
-from wbsa.estimation.methods import Prediction, Request, Subject
-from wbsa.estimation.view import azimuth_error_deg, view_used
+from wbsa.estimation.methods.base import Prediction, Request, Subject
+from wbsa.estimation.methods.view import azimuth_error_deg, view_used
 
 
 class PerViewPredictor:
@@ -28,7 +28,7 @@ class PerViewPredictor:
 
     def predict(self, subject: Subject, request: Request) -> Prediction:
         """WBSA from the nearest fitted view; flags ``model_mismatch`` and ``uncertain_view``."""
-        from wbsa.estimation.default_model import default_model
+        from wbsa.estimation.methods.regression.default_model import default_model
 
         measures, camera = subject.measures, subject.camera
         view = default_model().view.estimate(measures)

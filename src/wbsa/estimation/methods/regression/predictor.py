@@ -1,15 +1,15 @@
 """The regression method: an estimator model's WBSA from the subject's measures and the view found in the image.
 
-See :mod:`wbsa.estimation.model` for what the model reads and how its interval is calibrated.
+See :mod:`wbsa.estimation.methods.regression.model` for what the model reads and how its interval is calibrated.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from wbsa.estimation.methods import Prediction, Request, Subject
-from wbsa.estimation.model import EstimatorModel
-from wbsa.estimation.view import view_used
+from wbsa.estimation.methods.base import Prediction, Request, Subject
+from wbsa.estimation.methods.regression.model import EstimatorModel
+from wbsa.estimation.methods.view import view_used
 
 
 class RegressionPredictor:
@@ -26,8 +26,8 @@ class RegressionPredictor:
     def predict(self, subject: Subject, request: Request) -> Prediction:
         """WBSA of ``subject`` with the model's split-conformal interval; flags ``uncertain_view``,
         ``out_of_training_range`` and ``interval_unsure``."""
-        from wbsa.estimation.checks import range_flags
-        from wbsa.estimation.design import range_values, with_clothing
+        from wbsa.estimation.subject.checks import range_flags
+        from wbsa.estimation.methods.regression.design import range_values, with_clothing
 
         model, measures = self.model, subject.measures
         view = model.view.estimate(measures)

@@ -25,11 +25,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from wbsa.estimation.bodyfit.observation import Observation
+from wbsa.estimation.methods.body_fit.observation import Observation
 
 #: Scale (m) of the silhouette and free-space residuals; depth tolerance of the free-space term (m), to which
 #: :data:`FREE_SPACE_NOISE_K` times the depth-noise envelope at the vertex's depth is added
-#: (:func:`wbsa.estimation.cloud.depth_noise_m`, the noisiest supported camera: 2 cm at 3.5 m), so that noise
+#: (:func:`wbsa.estimation.subject.cloud.depth_noise_m`, the noisiest supported camera: 2 cm at 3.5 m), so that noise
 #: does not push the body back.
 SURFACE_SCALE_M = 0.01
 FREE_SPACE_TOLERANCE_M = 0.01
@@ -218,7 +218,7 @@ class Objective:
         Parameters
         ----------
         full : (b, n, 3) float64
-            Every vertex of every body, view frame (:meth:`wbsa.estimation.bodyfit.model.FitBody.full_posed`).
+            Every vertex of every body, view frame (:meth:`wbsa.estimation.methods.body_fit.model.FitBody.full_posed`).
         skin_faces, closed_faces : (m, 3) int
         subset : (k,) int
             The vertices the fit moves at every step.
@@ -236,7 +236,7 @@ class Objective:
         """
         import open3d as o3d
 
-        from wbsa.estimation.bodyfit.model import vertex_normals
+        from wbsa.estimation.methods.body_fit.model import vertex_normals
 
         torch = self.torch
         cam = self.obs.camera_position

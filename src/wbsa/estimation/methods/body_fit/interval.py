@@ -15,6 +15,7 @@ from __future__ import annotations
 import json
 import math
 from dataclasses import dataclass
+from importlib import resources
 from pathlib import Path
 
 import numpy as np
@@ -22,7 +23,7 @@ import numpy as np
 from wbsa.errors import WbsaError
 
 #: Where the calibration is stored (package data, ``wbsa/data``; rebuilt by the command in its ``command`` field).
-CALIBRATION_PATH = Path(__file__).resolve().parents[2] / "data" / "bodyfit_interval.json"
+CALIBRATION_PATH = Path(str(resources.files("wbsa") / "data" / "bodyfit_interval.json"))
 
 
 @dataclass(frozen=True)

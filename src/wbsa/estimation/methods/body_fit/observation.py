@@ -52,7 +52,7 @@ class Observation:
     n_returns : int
         The subject's returns before subsampling (floor cut applied).
     noise_m : float
-        The depth noise measured on the subject (:func:`wbsa.estimation.measure.measured_depth_noise`), metres.
+        The depth noise measured on the subject (:func:`wbsa.estimation.subject.measure.measured_depth_noise`), metres.
     contour_px : (c, 2) float64
         Crop (row, col) of the subject's outline pixels that border the background (not an occluder in front,
         not the image border), a seeded subsample of at most :data:`MAX_CONTOUR`.
@@ -115,7 +115,7 @@ def check_inputs(depth_m: np.ndarray, mask: np.ndarray, camera) -> tuple[np.ndar
 
 def view_frame(points_cam: np.ndarray, floor) -> tuple[np.ndarray, np.ndarray]:
     """The view frame (basis rows, origin) of a subject's (k, 3) camera-frame points (see the module docstring)."""
-    from wbsa.estimation.cloud import body_frame
+    from wbsa.estimation.subject.cloud import body_frame
 
     frame = body_frame(points_cam, floor)
     ez = frame.up
@@ -129,7 +129,7 @@ def observe(depth_m: np.ndarray, mask: np.ndarray, camera, floor, n_points: int,
             rng: np.random.Generator) -> Observation:
     """The :class:`Observation` of a checked depth image and subject mask (:func:`check_inputs`).
 
-    Returns on the floor (within its noise, :func:`wbsa.estimation.cloud.above_floor`) are dropped from
+    Returns on the floor (within its noise, :func:`wbsa.estimation.subject.cloud.above_floor`) are dropped from
     the points; the silhouette keeps every subject pixel (the feet reach the floor).
 
     Raises
@@ -140,8 +140,8 @@ def observe(depth_m: np.ndarray, mask: np.ndarray, camera, floor, n_points: int,
     from scipy import ndimage
 
     from wbsa.core.backproject import ray_directions
-    from wbsa.estimation.cloud import above_floor
-    from wbsa.estimation.measure import measured_depth_noise
+    from wbsa.estimation.subject.cloud import above_floor
+    from wbsa.estimation.subject.measure import measured_depth_noise
 
     valid = mask & (depth_m > 0)
     rows, cols = np.nonzero(valid)

@@ -1,4 +1,4 @@
-"""Settings of the whole-body fit to one depth view (:func:`wbsa.estimation.bodyfit.fit_body`)."""
+"""Settings of the whole-body fit to one depth view (:func:`wbsa.estimation.methods.body_fit.fit_body`)."""
 
 from __future__ import annotations
 
@@ -21,7 +21,7 @@ class BodyFitSettings:
     Attributes
     ----------
     vertex_spacing_m : float
-        Spacing of the model vertices the fit moves (:func:`wbsa.estimation.bodyfit.model.even_vertex_subset`); the
+        Spacing of the model vertices the fit moves (:func:`wbsa.estimation.methods.body_fit.model.even_vertex_subset`); the
         measures are always taken on the whole mesh.
     n_points : int
         Observed points kept (a seeded, even subsample of the subject's returns).
@@ -31,7 +31,7 @@ class BodyFitSettings:
         After this share of the steps only the ``keep_restarts`` restarts with the lowest loss go on.
     child_starts : bool
         Make a third of the starts (from a stature of 1.3 m up) children stretched to the stature
-        (:data:`wbsa.estimation.bodyfit.init.CHILD_AGE`), as anny's random population has; off, a tall person is an adult.
+        (:data:`wbsa.estimation.methods.body_fit.init.CHILD_AGE`), as anny's random population has; off, a tall person is an adult.
     steps : int
         Most optimiser steps.
     refresh_every : int
@@ -52,7 +52,7 @@ class BodyFitSettings:
         Weak quadratic pulls of the phenotypes towards their start (SD 0.5) and of the local changes towards 0.
     age_prior_sd : float
         SD of the pull of anny's age parameter towards its start, the typical age of the measured stature
-        (:func:`wbsa.estimation.bodyfit.init.age_for_stature`): one view tells a child from a short adult poorly.
+        (:func:`wbsa.estimation.methods.body_fit.init.age_for_stature`): one view tells a child from a short adult poorly.
     local_changes : bool
         Fit anny's four local changes (waist, hips, belly, buttocks) besides the phenotypes.
     time_budget_s : float

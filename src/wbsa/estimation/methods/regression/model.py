@@ -1,6 +1,6 @@
 """The estimator's model file: view model, WBSA regression continuous in view and distance, calibrated interval.
 
-WBSA is predicted on the log scale from what :func:`~wbsa.estimation.measure.measure_subject` measures and
+WBSA is predicted on the log scale from what :func:`~wbsa.estimation.subject.measure.measure_subject` measures and
 the view: a ridge regression of log WBSA on log VBSA, log stature (paper eq. 8), log silhouette area,
 width and thickness, each times a view basis (1, cos ψ, cos 2ψ, cos 3ψ, sin φ), plus distance, pixel
 pitch, how the camera treated the outline (mixed returns, gaps: the area read through the outline
@@ -28,10 +28,10 @@ from pathlib import Path
 import numpy as np
 
 from wbsa.errors import WbsaError
-from wbsa.estimation.design import (DESIGN_TERMS, RANGE_KEYS, SPREAD_TERMS, check_measures, design, range_values,
+from wbsa.estimation.methods.regression.design import (DESIGN_TERMS, RANGE_KEYS, SPREAD_TERMS, check_measures, design, range_values,
                                     spread_design, tree_features, with_clothing)
-from wbsa.estimation.trees import TreeEnsemble
-from wbsa.estimation.view import ViewModel
+from wbsa.estimation.methods.regression.trees import TreeEnsemble
+from wbsa.estimation.methods.regression.view_model import ViewModel
 
 FORMAT = "wbsa-estimator"
 VERSION = 6
@@ -221,7 +221,7 @@ class EstimatorModel:
     @classmethod
     def load(cls, path: str | os.PathLike) -> "EstimatorModel":
         """Read a model written by :meth:`save` (numbers only; no code is loaded)."""
-        from wbsa.estimation.checks import check_finite_model
+        from wbsa.estimation.subject.checks import check_finite_model
 
         import zipfile
 

@@ -1,6 +1,6 @@
 """Which objects of a depth image are people, and which person a pick chooses.
 
-An object (a 3-D cluster, :mod:`wbsa.estimation.segment`) is a person when it is person-sized (0.45–2.6 m
+An object (a 3-D cluster, :mod:`wbsa.estimation.subject.segment`) is a person when it is person-sized (0.45–2.6 m
 tall, at most 2.6 m wide and 0.9 m at the hips) and, with a floor seen:
 
 * its top stands at most 2.6 m over the floor, and the frame's top does not cut it (a head is seen);
@@ -8,7 +8,7 @@ tall, at most 2.6 m wide and 0.9 m at the hips) and, with a floor seen:
   lamp seen over other people is not a person to measure);
 * it has a head: its top :data:`HEAD_BAND_M` spans at most :data:`HEAD_MAX_WIDTH_M` across the floor;
 * it is not flat: its returns lie farther off their best plane (RMS) than :data:`FLAT_NOISE_RATIO` times
-  the depth noise at its distance (:func:`~wbsa.estimation.cloud.depth_noise_m`): a board, a door or a
+  the depth noise at its distance (:func:`~wbsa.estimation.subject.cloud.depth_noise_m`): a board, a door or a
   piece of wall is flat.
 
 Measured on PCL's ``five_people.pcd`` (tests/fixtures): the five people are 2.0–2.8 m away, heads 0.21–0.32 m
@@ -17,7 +17,7 @@ tall over the floor, or show only their top, or span 0.4–1.6 m at the top, or 
 of a plane.
 
 People standing side by side who touch form one object; :func:`split_touching` splits it at the valleys
-between their heads (:func:`~wbsa.estimation.clusters.split_people`) when every part is a person.
+between their heads (:func:`~wbsa.estimation.subject.clusters.split_people`) when every part is a person.
 
 A pick (:func:`choose`) is ``nearest``, ``largest``, ``center`` (the object under the image's centre, else
 the person whose middle is nearest to it) or an ``(x, y)`` pixel: the person under the pixel, else the
@@ -34,9 +34,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from wbsa.errors import WbsaError
-from wbsa.estimation.cloud import Plane, depth_noise_m
-from wbsa.estimation.clusters import MAX_FOOTPRINT_M, footprint_m, split_people
-from wbsa.estimation.frame import Frame
+from wbsa.estimation.subject.cloud import Plane, depth_noise_m
+from wbsa.estimation.subject.clusters import MAX_FOOTPRINT_M, footprint_m, split_people
+from wbsa.estimation.subject.frame import Frame
 
 #: Top of an object (m, along the floor's normal; at most this share of its height) where its head is ...
 HEAD_BAND_M = 0.2
@@ -53,7 +53,7 @@ FLOOR_CONTACT_M = 0.15
 PICK_REACH_PX = 5
 #: An object inside a nearer one's bounding box in the image and this much farther (m) is seen past it.
 #: The wall stands 0.5 m or more behind a subject's back; a body's own parts join it within 0.8 m of depth
-#: when they touch in the image (:func:`~wbsa.estimation.clusters.merge_occluding`) and are larger.
+#: when they touch in the image (:func:`~wbsa.estimation.subject.clusters.merge_occluding`) and are larger.
 SEEN_PAST_M = 0.4
 PICKS = ("nearest", "largest", "center")
 
@@ -74,7 +74,7 @@ class Cluster:
     height_m, width_m : float
         Extent along the floor's normal (or its long axis) and across it.
     footprint_m : float
-        Width at the hips (:func:`~wbsa.estimation.clusters.footprint_m`).
+        Width at the hips (:func:`~wbsa.estimation.subject.clusters.footprint_m`).
     bbox_px : (int, int, int, int)
         Bounding box in the image, ``(x0, y0, x1, y1)``, inclusive.
     top_m, bottom_m : float
@@ -121,7 +121,7 @@ def describe_clusters(pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarr
         (h, w), ``points`` (k, 3) float64 its camera-frame point.
     floor : Plane or None
     frame : Frame
-        The image's frame (:func:`~wbsa.estimation.frame.image_frame`).
+        The image's frame (:func:`~wbsa.estimation.subject.frame.image_frame`).
     labels : (n,) int, optional
         The clusters to describe (default: all).
 
@@ -290,7 +290,7 @@ def split_touching(clusters: list[Cluster], pixel_label: np.ndarray, pix: np.nda
                    shape: tuple[int, int], floor: Plane, frame: Frame,
                    limits: tuple[float, float, float]) -> tuple[np.ndarray, list[Cluster]]:
     """Objects that are not one person, split into the people they hold
-    (:func:`~wbsa.estimation.clusters.split_people`) when every part is a person (:func:`why_not_a_person` with ``limits``: least and greatest height, greatest
+    (:func:`~wbsa.estimation.subject.clusters.split_people`) when every part is a person (:func:`why_not_a_person` with ``limits``: least and greatest height, greatest
     width, m).
 
     Returns the labels of every return (k,) int and the clusters, the parts under new labels.

@@ -15,8 +15,8 @@ import time
 
 import numpy as np
 
-from wbsa.estimation.bodyfit.result import BodyFit
-from wbsa.estimation.bodyfit.settings import ANGLE_LIMITS_DEG, BodyFitSettings
+from wbsa.estimation.methods.body_fit.result import BodyFit
+from wbsa.estimation.methods.body_fit.settings import ANGLE_LIMITS_DEG, BodyFitSettings
 from wbsa.errors import WbsaError
 
 #: The flags a :class:`BodyFit` may carry, with their meaning.
@@ -45,7 +45,7 @@ def _models(spacing_m: float):
 
     from wbsa.bodies.anthropometry import Anthropometer
     from wbsa.bodies.body_model import BodyModel
-    from wbsa.estimation.bodyfit.model import FitBody
+    from wbsa.estimation.methods.body_fit.model import FitBody
 
     body_model = BodyModel()
     return body_model, FitBody(body_model, spacing_m), Anthropometer(body_model)
@@ -61,9 +61,9 @@ def fit_body(depth_m: np.ndarray, mask: np.ndarray, camera, floor, *, clothing_m
     depth_m : (h, w) float64
         z-depth in metres, 0 = no return.
     mask : (h, w) bool
-        The subject's pixels (:func:`wbsa.estimation.segment.segment_subject`).
+        The subject's pixels (:func:`wbsa.estimation.subject.segment.segment_subject`).
     camera : wbsa.camera.Intrinsics
-    floor : wbsa.estimation.cloud.Plane or None
+    floor : wbsa.estimation.subject.cloud.Plane or None
         The floor in the camera frame (returns within its noise are not fitted; the body stands on it).
     clothing_m : float
         A stated layer of clothes (m). Only 0 is fitted today: a layer raises.
@@ -85,7 +85,7 @@ def fit_body(depth_m: np.ndarray, mask: np.ndarray, camera, floor, *, clothing_m
     """
     import torch
 
-    from wbsa.estimation.bodyfit.observation import check_inputs
+    from wbsa.estimation.methods.body_fit.observation import check_inputs
 
     if not (isinstance(clothing_m, (int, float)) and math.isfinite(clothing_m) and clothing_m >= 0):
         raise WbsaError(f"clothing_m must be a layer of 0 m or more, got {clothing_m!r}")
@@ -109,11 +109,11 @@ def _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fi
 
     from wbsa.bodies.posing import pose_vertices
     from wbsa.bodies.posture import ANGLE_COLUMNS
-    from wbsa.estimation.bodyfit.init import first_guesses
-    from wbsa.estimation.bodyfit.measures import measure_body
-    from wbsa.estimation.bodyfit.objective import Objective
-    from wbsa.estimation.bodyfit.observation import observe
-    from wbsa.estimation.bodyfit.optimize import optimise
+    from wbsa.estimation.methods.body_fit.init import first_guesses
+    from wbsa.estimation.methods.body_fit.measures import measure_body
+    from wbsa.estimation.methods.body_fit.objective import Objective
+    from wbsa.estimation.methods.body_fit.observation import observe
+    from wbsa.estimation.methods.body_fit.optimize import optimise
 
     t0 = time.perf_counter()
     deadline = t0 + settings.time_budget_s
@@ -168,7 +168,7 @@ def _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fi
         flags["steep_view"] = f"elevation {elevation:.0f}°"
 
     m = body["measures"]
-    from wbsa.estimation.bodyfit.interval import load
+    from wbsa.estimation.methods.body_fit.interval import load
 
     cal = load()
     lo, hi = cal.interval(float(m["wbsa_m2"])) if cal is not None else (math.nan, math.nan)

@@ -3,8 +3,8 @@
 :func:`design` (the ridge regression's columns), :func:`tree_features` (the residual trees'),
 :func:`spread_design` (the interval's spread s(x)), :func:`range_values` (the values whose training range is
 checked) and :func:`with_clothing` (the stated layer of clothes added to the measures). Pure functions of the
-measures (:meth:`~wbsa.estimation.measure.SubjectMeasures.features`) and the view, shared by the run-time
-prediction (:class:`~wbsa.estimation.model.EstimatorModel`) and the fit (:mod:`wbsa.training.fit`).
+measures (:meth:`~wbsa.estimation.subject.measure.SubjectMeasures.features`) and the view, shared by the run-time
+prediction (:class:`~wbsa.estimation.methods.regression.model.EstimatorModel`) and the fit (:mod:`wbsa.training.fit`).
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ from wbsa.errors import WbsaError
 #: Values whose training range is recorded and checked (flag ``out_of_training_range``; :func:`range_values`).
 RANGE_KEYS = ("vbsa_m2", "stature_m", "distance_m", "elevation_deg", "depth_noise_px", "clothing_m")
 _BASE = ("vbsa_m2", "stature_m", "silhouette_m2", "width_m", "thickness_m")
-#: How the camera treated the subject's outline (:func:`wbsa.estimation.mixed_pixels.outline_shares`).
+#: How the camera treated the subject's outline (:func:`wbsa.estimation.subject.mixed_pixels.outline_shares`).
 _OUTLINE = ("mixed_share", "gap_share", "edge_gap_share")
 #: How the image was taken besides: its depth noise (taken per pixel pitch) and whether a floor was seen.
 _SCENE = ("depth_noise_m", "floor_seen")

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from wbsa.core.mesh import TriangleMesh
-from wbsa.estimation.cloud import BodyFrame, Plane, above_floor, body_frame
+from wbsa.estimation.subject.cloud import BodyFrame, Plane, above_floor, body_frame
 
 #: Height bins of the view descriptor's profiles (stature units) and half-width of its central strip.
 PROFILE_HEIGHT = np.linspace(0.0, 1.04, 41)
@@ -55,7 +55,7 @@ class SubjectMeasures:
     n_pixels : int
     mixed_share, gap_share, edge_gap_share : float
         How the camera treated the subject's outline: mixed returns beside it, one-pixel gaps along it and
-        the share of its depth edges behind a gap (:func:`wbsa.estimation.mixed_pixels.outline_shares`).
+        the share of its depth edges behind a gap (:func:`wbsa.estimation.subject.mixed_pixels.outline_shares`).
     depth_noise_m : float
         The depth noise on the subject (:func:`measured_depth_noise`), metres: the VBSA of a noisy image differs
         from that of a smooth one, and cameras differ in their noise.
@@ -109,7 +109,7 @@ def measured_depth_noise(depth_m: np.ndarray, mask: np.ndarray) -> float:
     median absolute second difference (× 1.4826) over the triples inside the mask eroded by two pixels,
     rows and columns together. On depth in whole millimetres that median moves in half-millimetre steps,
     so the result does in steps of 0.6 mm (an ideal render reads 0.6 mm, quantised disparity often 0).
-    (Not :func:`wbsa.estimation.cloud.depth_noise_m`, the noise envelope assumed for plane fits.)
+    (Not :func:`wbsa.estimation.subject.cloud.depth_noise_m`, the noise envelope assumed for plane fits.)
 
     Parameters
     ----------
@@ -170,12 +170,12 @@ def measure_subject(depth_m: np.ndarray, mask: np.ndarray, intrinsics, floor: Pl
     depth_m : (h, w) float
         z-depth in metres.
     mask : (h, w) bool
-        The subject's pixels (from :func:`wbsa.estimation.segment.segment_subject`, or a render's).
+        The subject's pixels (from :func:`wbsa.estimation.subject.segment.segment_subject`, or a render's).
     intrinsics : wbsa.camera.Intrinsics
     floor : Plane or None
         The floor in the camera frame; returns within its noise are cut (feet soles), as in training.
     mixed : (h, w) bool, optional
-        Returns found mixed before segmentation (:func:`wbsa.estimation.mixed_pixels.repair_mixed_pixels`),
+        Returns found mixed before segmentation (:func:`wbsa.estimation.subject.mixed_pixels.repair_mixed_pixels`),
         for ``mixed_share``.
 
     Returns
@@ -185,7 +185,7 @@ def measure_subject(depth_m: np.ndarray, mask: np.ndarray, intrinsics, floor: Pl
     from wbsa.core.backproject import frame_from_depth_image, ray_directions
     from wbsa.surface import reconstruct
 
-    from wbsa.estimation.mixed_pixels import outline_shares
+    from wbsa.estimation.subject.mixed_pixels import outline_shares
 
     depth = np.asarray(depth_m, dtype=np.float64)
     mask = np.asarray(mask, dtype=bool) & np.isfinite(depth) & (depth > 0)

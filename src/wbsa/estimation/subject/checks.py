@@ -34,6 +34,9 @@ FLAGS: dict[str, str] = {
     "methods_disagree": "the regression's and the body fit's intervals do not overlap (method both)",
     "body_fit_failed": "with method both, the body fit could not serve this image; the regression's answer stands",
     "no_interval": "the body fit has no calibrated interval; its bounds are the estimate",
+    "feet_not_seen": "the subject's feet are not seen (cut off by the frame or hidden); the stated stature was used",
+    "clothes_unstated": "no clothes were stated; they were taken as none or tight-fitting (clothes worn read high, "
+                        "about 9 % per cm of layer): state them (--clothes underwear, thin-gown, light or street)",
     **{name: text for name, text in BODY_FIT_FLAGS.items() if name not in ("cut_off", "no_floor")},
 }
 #: The silhouette of a standing person (:func:`person_shape_flags`): the share of its bounding box
@@ -101,6 +104,15 @@ def check_height(stature_m: float) -> None:
 def is_real_number(value: object) -> bool:
     """Whether ``value`` is a real number (int, float or a NumPy real scalar; not a bool, str or complex)."""
     return (isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_)))
+
+
+def check_stated_stature(stature_m: float) -> float:
+    """A stated stature (m) as a float, or a one-line error if it is not a human height (:data:`HUMAN_HEIGHT_M`)."""
+    lo, hi = HUMAN_HEIGHT_M
+    if not (is_real_number(stature_m) and math.isfinite(float(stature_m)) and lo <= float(stature_m) <= hi):
+        raise WbsaError(f"the stated stature {stature_m!r} m must be a height of {lo:g} to {hi:g} m, e.g. 1.72 "
+                        "(on the command line --stature-cm 172)")
+    return float(stature_m)
 
 
 def check_clothing(clothing_m: float) -> None:

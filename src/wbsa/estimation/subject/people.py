@@ -36,7 +36,7 @@ import numpy as np
 from wbsa.errors import WbsaError
 from wbsa.estimation.subject.cloud import Plane, depth_noise_m
 from wbsa.estimation.subject.clusters import MAX_FOOTPRINT_M, footprint_m, split_people
-from wbsa.estimation.subject.frame import Frame
+from wbsa.estimation.subject.frame import Frame, image_frame
 
 #: Top of an object (m, along the floor's normal; at most this share of its height) where its head is ...
 HEAD_BAND_M = 0.2
@@ -250,6 +250,15 @@ def feet_unseen(c: Cluster, floor: Plane | None) -> str | None:
                 + (f", {c.bottom_m:.2f} m over the floor" if floor is not None else ", with no floor seen"))
     if floor is not None:
         return f"its lowest returns are {c.bottom_m:.2f} m over the floor (the feet are hidden)"
+    return None
+
+
+def open_feet(mask: np.ndarray) -> str | None:
+    """:func:`feet_unseen` of a subject that is every return of the image (no segmentation, no floor): its
+    lowest returns reach the image's bottom border (a clause), or None."""
+    rows = np.flatnonzero(mask.any(axis=1))
+    if len(rows) and image_frame(mask).at_bottom(rows[-1]):
+        return "its lowest returns end at the bottom of the frame, with no floor seen"
     return None
 
 

@@ -51,6 +51,11 @@ ADVICE: dict[str, str] = {
     "poor_fit": "The fitted body explains the picture poorly (clothes, something in front of the person, or not "
                 "a person): check the outline and take the picture again.",
     "steep_view": "Put the camera at about chest height, level, and take the picture again.",
+    "feet_not_seen": "The feet are not in the picture, so the height typed was used: step the person back, or "
+                     "turn the camera down, so that the whole body and the floor under the feet show, and take "
+                     "the picture again.",
+    "clothes_unstated": "Say what the person wears (underwear, a thin gown, light clothes or street clothes): "
+                        "clothes make the answer read high.",
 }
 
 

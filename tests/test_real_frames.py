@@ -72,3 +72,127 @@ def test_a_pick_on_no_person_is_refused_in_one_line(five_people, pixel, message)
     with pytest.raises(WbsaError, match=message) as err:
         choose(scene.people, scene.clusters, pixel, scene.image_label, scene.limits)
     assert "\n" not in str(err.value) and "people found: " in str(err.value)
+
+
+# ------------------------------------------------- the estimate on the real frame and on renders of its cases
+def test_the_person_cut_at_the_knees_is_refused_and_answered_with_a_stature(five_people, tmp_path):
+    """The nearest person of the real frame (dark shirt, 2 m) is cut by the frame at the knees: refused in one
+    line (exit 2); with a stated stature, answered at that stature and flagged ``feet_not_seen``."""
+    from helpers.cli import assert_one_line_error, run_cli
+
+    import json
+
+    depth, _, _ = five_people
+    path = tmp_path / "five_people.npy"
+    np.save(path, depth)
+    base = ["estimate", path, "--camera", "tum", "--pick", "530,250"]
+    assert_one_line_error(*run_cli(*base)[::2], "feet not seen", "--stature-cm")
+    code, out, err = run_cli(*base, "--stature-cm", "180", "--json")
+    est = json.loads(out)
+    assert code == 0 and est["stature_m"] == 1.8 and est["stature_stated_m"] == 1.8
+    assert "feet_not_seen" in est["flags"] and "clothes_unstated" in est["flags"] and not est["clothing_stated"]
+    assert est["wbsa_lo_m2"] < est["wbsa_m2"] < est["wbsa_hi_m2"] and est["wbsa_m2"] > 1.6  # an adult's, not a child's
+    assert_one_line_error(*run_cli("estimate", path, "--camera", "tum", "--pick", "260,150")[::2],
+                          "pick pixel (260, 150) lies on an object that is not a person")
+
+
+@pytest.fixture(scope="module")
+def side_by_side(body_model):
+    """Two people side by side in a room, 1 m apart (a man in the A-pose, a woman arms down), Kinect v2 at
+    3 m and 10° with its noise: the depth, the man's pixels, everything's pixels."""
+    from test_estimate import _posed, _room_frame
+
+    from wbsa.bodies.anthropometry import reference_adult
+    from wbsa.camera import View, preset
+    from wbsa.training.room import compose_room
+
+    man = body_model.skin_mesh(_posed(body_model, body_model.rest_bodies(reference_adult(0.0)), "a-pose"))
+    woman = body_model.skin_mesh(_posed(body_model, body_model.rest_bodies(reference_adult(1.0)), "arms-down"))
+    room = compose_room(man, 0.0, wall_behind_m=0.8, others=((woman, 1.0),))
+    frame = _room_frame(room, preset("kinect-v2"), View(0.0, 10.0, 3.0))
+    t, n = frame.triangle_id, room.n_subject_faces
+    return frame.depth_m, (t >= 0) & (t < n), (t >= 0) & (t < n + len(woman.faces))
+
+
+def _pick(truth) -> tuple[int, int]:
+    ys, xs = np.nonzero(truth)
+    return int(np.median(xs)), int(np.median(ys))
+
+
+def test_a_render_cut_at_the_knees_is_refused_unless_its_stature_is_stated(side_by_side):
+    """The render's rows below the man's knees blanked (a frame cut there): refused, not read as a child;
+    stated, his stature is used. The legs' area stays unseen: the answer reads low (measured: 19 % below
+    the whole frame's)."""
+    import wbsa
+    from wbsa.estimation import SegmentSettings
+
+    depth, man, _ = side_by_side
+    rows = np.flatnonzero(man.any(axis=1))
+    cut = depth.copy()
+    cut[int(rows[-1] - 0.27 * (rows[-1] - rows[0])):] = 0.0  # the knees: 27 % of the stature up
+    settings = SegmentSettings(pick=_pick(man))
+    whole = wbsa.estimate(depth, "kinect-v2", segment=settings)
+    assert "feet_not_seen" not in whole.flags and 1.8 < whole.stature_m < 1.95
+    with pytest.raises(WbsaError, match=r"feet not seen: its lowest returns end at the bottom of the frame") as err:
+        wbsa.estimate(cut, "kinect-v2", segment=settings)
+    assert "\n" not in str(err.value)
+    stated = wbsa.estimate(cut, "kinect-v2", segment=settings, stature_m=whole.stature_m)
+    assert "feet_not_seen" in stated.flags and stated.stature_m == whole.stature_m
+    assert 0.7 * whole.wbsa_m2 < stated.wbsa_m2 < whole.wbsa_m2
+    with pytest.raises(WbsaError, match=r"stated stature .* must be a height of 0.5 to 2.5 m"):
+        wbsa.estimate(cut, "kinect-v2", segment=settings, stature_m=18.0)
+
+
+def test_only_legs_nobody_or_a_pick_on_no_person_is_one_line(side_by_side):
+    from wbsa.estimation.subject.segment import SegmentSettings, segment_subject
+    from wbsa.camera import preset
+
+    depth, man, everyone = side_by_side
+    camera = preset("kinect-v2")
+    rows = np.flatnonzero(man.any(axis=1))
+    legs = depth.copy()
+    legs[:int(rows[-1] - 0.45 * (rows[-1] - rows[0]))] = 0.0  # the frame's top at the hips
+    with pytest.raises(WbsaError, match=r"no person in the depth image.*the top of the frame cuts it off"):
+        segment_subject(legs, camera, SegmentSettings(pick="nearest"))
+    nobody = np.where(everyone, 0.0, depth)
+    with pytest.raises(WbsaError, match=r"no person in the depth image|holds only floor and walls"):
+        segment_subject(nobody, camera, SegmentSettings(pick="nearest"))
+    with pytest.raises(WbsaError, match=r"no person at pick pixel \(40, 100\) or within 5 pixels"):
+        segment_subject(depth, camera, SegmentSettings(pick=(40, 100)))
+    for truth in (man, everyone & ~man):  # each picked by a pixel on them
+        seg = segment_subject(depth, camera, SegmentSettings(pick=_pick(truth)))
+        assert (seg.mask & truth).sum() > 0.97 * truth.sum() and len(seg.others) == 1
+
+
+def test_named_clothes_widen_the_interval_and_unstated_clothes_are_flagged(side_by_side):
+    """A named layer predicts as its thickness stated explicitly, with an interval wider on each side by the
+    change of the estimate over the layer's uncertainty; nothing stated answers as 0 cm, flagged, and the
+    FHIR method says so."""
+    import wbsa
+    from wbsa.estimation import SegmentSettings
+    from wbsa.estimation.clothes import CLOTHES
+    from wbsa.estimation.fhir import fhir_observation
+
+    depth, man, _ = side_by_side
+    kw = dict(segment=SegmentSettings(pick=_pick(man)))
+    light = CLOTHES["light"]
+    named = wbsa.estimate(depth, "kinect-v2", clothing="light", **kw)
+    explicit = wbsa.estimate(depth, "kinect-v2", clothing_m=light.layer_m, **kw)
+    thicker = wbsa.estimate(depth, "kinect-v2", clothing_m=light.layer_m + light.sd_m, **kw)
+    delta = explicit.wbsa_m2 - thicker.wbsa_m2
+    assert named.wbsa_m2 == explicit.wbsa_m2 and delta > 0.01
+    assert named.wbsa_lo_m2 == pytest.approx(explicit.wbsa_lo_m2 - delta, abs=1e-12)
+    assert named.wbsa_hi_m2 == pytest.approx(explicit.wbsa_hi_m2 + delta, abs=1e-12)
+    unstated = wbsa.estimate(depth, "kinect-v2", **kw)
+    zero = wbsa.estimate(depth, "kinect-v2", clothing_m=0.0, **kw)
+    assert (unstated.wbsa_m2, unstated.wbsa_lo_m2, unstated.wbsa_hi_m2) == (zero.wbsa_m2, zero.wbsa_lo_m2,
+                                                                            zero.wbsa_hi_m2)
+    assert "clothes_unstated" in unstated.flags and "clothes_unstated" not in zero.flags
+    assert unstated.to_dict()["clothing_stated"] is False and named.to_dict()["clothes"] == "light"
+    assert "clothes not stated" in fhir_observation(unstated)["method"]["text"]
+    assert "clothes stated: light clothes" in fhir_observation(named)["method"]["text"]
+    assert "0.0 cm layer" in fhir_observation(zero)["method"]["text"]
+    for bad, message in ((dict(clothing="coat"), "unknown clothes 'coat'"),
+                         (dict(clothing="light", clothing_m=0.01), "not both")):
+        with pytest.raises(WbsaError, match=message):
+            wbsa.estimate(depth, "kinect-v2", **bad, **kw)

@@ -98,20 +98,11 @@ def test_the_person_cut_at_the_knees_is_refused_and_answered_with_a_stature(five
 
 @pytest.fixture(scope="module")
 def side_by_side(body_model):
-    """Two people side by side in a room, 1 m apart (a man in the A-pose, a woman arms down), Kinect v2 at
-    3 m and 10° with its noise: the depth, the man's pixels, everything's pixels."""
-    from test_estimate import _posed, _room_frame
+    """Two people side by side in a room (:func:`wbsa.testing.frames.side_by_side`): the depth, the man's
+    pixels, both people's."""
+    from wbsa.testing.frames import side_by_side as render
 
-    from wbsa.bodies.anthropometry import reference_adult
-    from wbsa.camera import View, preset
-    from wbsa.training.room import compose_room
-
-    man = body_model.skin_mesh(_posed(body_model, body_model.rest_bodies(reference_adult(0.0)), "a-pose"))
-    woman = body_model.skin_mesh(_posed(body_model, body_model.rest_bodies(reference_adult(1.0)), "arms-down"))
-    room = compose_room(man, 0.0, wall_behind_m=0.8, others=((woman, 1.0),))
-    frame = _room_frame(room, preset("kinect-v2"), View(0.0, 10.0, 3.0))
-    t, n = frame.triangle_id, room.n_subject_faces
-    return frame.depth_m, (t >= 0) & (t < n), (t >= 0) & (t < n + len(woman.faces))
+    return render(body_model)
 
 
 def _pick(truth) -> tuple[int, int]:

@@ -22,16 +22,6 @@ FIVE_PEOPLE_BOXES = (
 
 def pcd_depth(path: Path = FIVE_PEOPLE) -> np.ndarray:
     """(h, w) float64 depth image (z in metres, 0 = no return) of an organised PCD file."""
-    import open3d as o3d
+    from wbsa.testing.frames import read_pcd_depth
 
-    cloud = o3d.io.read_point_cloud(str(path), remove_nan_points=False, remove_infinite_points=False)
-    z = np.asarray(cloud.points)[:, 2]
-    header = {}
-    with open(path, "rb") as f:
-        for line in iter(f.readline, b""):  # the text header ends at the DATA line
-            key, _, value = line.decode("ascii").strip().partition(" ")
-            if key == "DATA":
-                break
-            header[key] = value
-    h, w = int(header["HEIGHT"]), int(header["WIDTH"])
-    return np.where(np.isfinite(z), z, 0.0).reshape(h, w)
+    return read_pcd_depth(path)

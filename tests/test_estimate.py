@@ -810,7 +810,8 @@ def test_estimate_finds_the_view_flags_and_writes_outputs(room_view, small_model
     obs = json.loads(capsys.readouterr().out)
     assert obs["code"]["coding"][0]["code"] == "8277-6" and obs["valueQuantity"]["code"] == "m2"
     assert obs["status"] == "preliminary" and len(obs["component"]) == 2 and obs["subject"]["reference"] == "Patient/7"
-    assert "clothes stated as none or tight-fitting" in obs["method"]["text"]  # a clinical record keeps the assumption
+    assert "clothes not stated (taken as none" in obs["method"]["text"]  # a clinical record says nothing was stated
+    assert any(n["text"].startswith("clothes_unstated: ") for n in obs["note"])
     for argv, words in ((["--camera", "kinect-v1"], "kinect-v1 is 640x480"), (["--depth-scale", "200"], "depth scale"),
                         (["--model", str(tmp_path / "none.npz")], "does not exist")):
         rc = main(base + argv)

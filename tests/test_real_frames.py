@@ -31,7 +31,7 @@ def test_the_five_people_are_found_apart_with_their_boxes(five_people):
     from wbsa.estimation.subject.frame import Frame
 
     _, _, scene = five_people
-    assert scene.floor is not None and scene.frame == Frame(top=28, bottom=475, left=21, right=611)
+    assert scene.floor is not None and scene.frame == Frame(top=27, bottom=476, left=20, right=612)
     found = sorted(scene.people, key=lambda c: c.bbox_px[0])
     assert len(found) == 5
     for person, (box, feet) in zip(found, FIVE_PEOPLE_BOXES):
@@ -94,6 +94,8 @@ def test_the_person_cut_at_the_knees_is_refused_and_answered_with_a_stature(five
     assert est["wbsa_lo_m2"] < est["wbsa_m2"] < est["wbsa_hi_m2"] and est["wbsa_m2"] > 1.6  # an adult's, not a child's
     assert_one_line_error(*run_cli("estimate", path, "--camera", "tum", "--pick", "260,150")[::2],
                           "pick pixel (260, 150) lies on an object that is not a person")
+    assert_one_line_error(*run_cli(*base, "--clothes", "coat")[::2], "--clothes", "coat")
+    assert_one_line_error(*run_cli(*base, "--clothes", "light", "--clothing-cm", "1")[::2], "not both")
 
 
 @pytest.fixture(scope="module")
@@ -187,3 +189,23 @@ def test_named_clothes_widen_the_interval_and_unstated_clothes_are_flagged(side_
                          (dict(clothing="light", clothing_m=0.01), "not both")):
         with pytest.raises(WbsaError, match=message):
             wbsa.estimate(depth, "kinect-v2", **bad, **kw)
+
+
+def test_the_frame_moves_in_past_bands_without_returns_but_not_past_a_head_or_a_body_alone():
+    """A band without returns along an edge, next to rows seen across, is the frame's edge (a registered
+    camera's band, a blanked bottom); the empty space over a wall with a head in it, or around a body alone
+    in the image, is not."""
+    from wbsa.estimation.subject.frame import Frame, image_frame
+
+    room = np.zeros((100, 200), dtype=bool)
+    room[30:, :] = True  # a wall and floor under an empty top
+    assert image_frame(room) == Frame(30, 99, 0, 199)
+    blanked = room.copy()
+    blanked[80:] = False  # the bottom blanked
+    assert image_frame(blanked) == Frame(30, 79, 0, 199)
+    head = room.copy()
+    head[18:30, 95:105] = True  # a head 12 rows over the wall's top
+    assert image_frame(head).top == 0
+    alone = np.zeros((100, 200), dtype=bool)
+    alone[10:90, 90:110] = True  # a body alone: narrow rows, empty around
+    assert image_frame(alone) == Frame(0, 99, 0, 199)

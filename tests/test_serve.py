@@ -350,6 +350,9 @@ def test_a_batch_gives_one_row_per_file_and_a_csv(server, frames, small_estimato
     assert [r["file"] for r in rows] == ["a.png", "b.txt", "c.png"]
     assert float(rows[0]["wbsa_m2"]) == pytest.approx(est.wbsa_m2, abs=5e-4) and rows[0]["flags"] == ";".join(est.flags)
     assert rows[1]["wbsa_m2"] == "" and "not a depth file type" in rows[1]["error"]
+    # nothing stated of the clothes or the stature: the CSV says so
+    assert (rows[0]["clothing_stated"], rows[0]["clothes"], rows[0]["stature_stated_m"]) == ("False", "", "")
+    assert "clothes_unstated" in rows[0]["flags"].split(";")
 
 
 def test_the_advice_names_every_flag_and_the_answer_reads_them_from_flags():

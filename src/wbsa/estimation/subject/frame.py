@@ -6,12 +6,15 @@ below some row. What lies at the edge of such a band is at the edge of what the 
 what lies on the image's border: a floor running into the band reaches the border; a person whose
 lowest returns end at it may be cut off there.
 
-An edge band is the run of rows (columns) from an edge that hold returns in under :data:`BAND_MAX_SHARE`
-of their pixels, when the rows (columns) just inside it are seen across: within :data:`BAND_EDGE_PX` of
-the band, one holds returns in at least :data:`BAND_FULL_SHARE` of its pixels. A subject alone in the
-image (no room) leaves empty rows above and below it, but its own rows are narrow, so they make no band.
-A band along the left or right edge is at most :data:`SIDE_BAND_MAX` of the image's width: a column
-through a standing body near the camera is most of the image's height.
+An edge band is the run of rows (columns) from an edge that hold (almost) no returns (under
+:data:`BAND_MAX_SHARE` of their pixels), when the rows (columns) just inside it are seen across: within
+:data:`BAND_EDGE_PX` of the band, one holds returns in at least :data:`BAND_FULL_SHARE` of its pixels (a
+registered Kinect v1 frame's ragged band edge reaches that within 4 rows or columns). A subject alone in
+the image (no room) leaves empty rows above and below it, but its own rows are narrow, so they make no
+band; nor does the empty space over a wall's top with a head in it, unless the head stands less than
+:data:`BAND_EDGE_PX` rows over the wall's top. A band along the left or right edge is at most
+:data:`SIDE_BAND_MAX` of the image's width: a column through a standing body near the camera is most of
+the image's height.
 """
 
 from __future__ import annotations
@@ -21,10 +24,10 @@ from dataclasses import dataclass
 import numpy as np
 
 #: Rows (columns) holding returns in less than this share of their pixels can be part of an edge band ...
-BAND_MAX_SHARE = 0.05
+BAND_MAX_SHARE = 0.005
 #: ... which ends where, within this many pixels, a row (column) holds returns in this share of its pixels.
-BAND_EDGE_PX = 8
-BAND_FULL_SHARE = 0.5
+BAND_EDGE_PX = 5
+BAND_FULL_SHARE = 0.4
 #: Widest band along the left or right edge, as a share of the image's width.
 SIDE_BAND_MAX = 0.1
 #: Within this many pixels of the frame's edge is on the frame's border.
@@ -54,10 +57,6 @@ class Frame:
     def at_bottom(self, rows: np.ndarray, margin_px: int = BORDER_PX) -> np.ndarray:
         """(n,) bool: rows within ``margin_px`` of the frame's bottom edge (or below)."""
         return np.asarray(rows) > self.bottom - margin_px
-
-    def banded(self, shape: tuple[int, int]) -> bool:
-        """Whether the frame is smaller than an image of ``shape`` (h, w): it has an edge band."""
-        return (self.top, self.bottom, self.left, self.right) != (0, shape[0] - 1, 0, shape[1] - 1)
 
 
 def _band(share: np.ndarray, max_px: int) -> int:

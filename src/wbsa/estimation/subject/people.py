@@ -84,8 +84,8 @@ class Cluster:
     off_plane_m, noise_m : float
         RMS distance of its returns from their best plane, and the depth noise at its distance (m).
     top_cut, bottom_cut : bool
-        Its top reaches the frame's top border; its lowest returns reach the frame's bottom border or have no
-        returns below them down to the image's border (:func:`bottom_open`).
+        Its top reaches the frame's top border; its lowest returns reach the frame's bottom border (the
+        image's, or a band without returns along it: :mod:`~wbsa.estimation.subject.frame`).
     """
 
     label: int
@@ -132,7 +132,6 @@ def describe_clusters(pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarr
     h, w = shape
     if labels is None:
         labels = np.unique(pixel_label[pixel_label >= 0])
-    lowest_return = _lowest_return_rows(pix, shape)
     out = []
     for lab in labels:
         sel = pixel_label == lab
@@ -165,7 +164,7 @@ def describe_clusters(pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarr
                            footprint_m(p, up if up @ np.array([0.0, -1.0, 0.0]) >= 0 else -up),
                            (int(cols.min()), int(rows.min()), int(cols.max()), int(rows.max())),
                            top_cut=bool(frame.at_top(rows.min())),
-                           bottom_cut=bottom_open(rows, cols, lowest_return, frame), **cues))
+                           bottom_cut=bool(frame.at_bottom(rows.max())), **cues))
     return out
 
 
@@ -177,38 +176,6 @@ def _across(points: np.ndarray, up: np.ndarray) -> float:
     e1 /= np.linalg.norm(e1)
     q = np.stack([points @ e1, points @ np.cross(up, e1)], axis=1)
     return float(np.hypot(*(np.quantile(q, 0.98, axis=0) - np.quantile(q, 0.02, axis=0))))
-
-
-def _lowest_return_rows(pix: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
-    """(w,) int: the lowest image row holding a return in every column (−1: none)."""
-    rows, cols = np.divmod(pix, shape[1])
-    out = np.full(shape[1], -1)
-    np.maximum.at(out, cols, rows)
-    return out
-
-
-def bottom_open(rows: np.ndarray, cols: np.ndarray, lowest_return: np.ndarray, frame: Frame) -> bool:
-    """Whether an object's lowest returns end at the frame's bottom border or over nothing.
-
-    Its feet end (the columns whose lowest pixel lies in the object's lowest twentieth) is open when most of
-    those columns hold no return below the object's own lowest pixel in them (a band without returns down
-    to the image's border), or reach the frame's bottom border.
-
-    Parameters
-    ----------
-    rows, cols : (n,) int
-        The object's pixels.
-    lowest_return : (w,) int
-        The lowest row with a return in every column of the image.
-    frame : Frame
-    """
-    low = np.full(len(lowest_return), -1)
-    np.maximum.at(low, cols, rows)
-    used = np.flatnonzero(low >= 0)
-    span = int(rows.max() - rows.min()) + 1
-    feet = used[low[used] >= rows.max() - max(span // 20, 2)]
-    open_below = (lowest_return[feet] <= low[feet]) | frame.at_bottom(low[feet])
-    return bool(np.count_nonzero(open_below) * 2 > len(feet))
 
 
 def why_not_a_person(c: Cluster, min_height_m: float, max_height_m: float, max_width_m: float) -> str | None:
@@ -238,15 +205,15 @@ def why_not_a_person(c: Cluster, min_height_m: float, max_height_m: float, max_w
 def feet_unseen(c: Cluster, floor: Plane | None) -> str | None:
     """Why a person's feet are not seen (a clause), or None when they stand on the seen floor.
 
-    The feet are not seen when the lowest returns end at the frame's bottom or over a band without returns
-    (``bottom_cut``), or stand more than :data:`FLOOR_CONTACT_M` over a seen floor (hidden), unless they
-    touch the floor. Without a floor and with open feet nothing is known; a body alone in the image (no
-    room, nothing cut) passes.
+    The feet are not seen when the lowest returns end at the frame's bottom (the image's, or a band without
+    returns along it: ``bottom_cut``), or stand more than :data:`FLOOR_CONTACT_M` over a seen floor
+    (hidden), unless they touch the floor. Without a floor and with the feet inside the frame nothing is
+    known; a body alone in the image (no room) passes.
     """
     if floor is not None and c.bottom_m <= FLOOR_CONTACT_M:
         return None
     if c.bottom_cut:
-        return ("its lowest returns end at the bottom of the frame or over a band without returns"
+        return ("its lowest returns end at the bottom of the frame (the image's, or a band without returns)"
                 + (f", {c.bottom_m:.2f} m over the floor" if floor is not None else ", with no floor seen"))
     if floor is not None:
         return f"its lowest returns are {c.bottom_m:.2f} m over the floor (the feet are hidden)"

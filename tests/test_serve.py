@@ -75,11 +75,11 @@ def browser():
         yield driver
 
 
-def _estimate(path, model, pick=None):
+def _estimate(path, model, pick=None, **kw):
     import wbsa
     from wbsa.estimation import SegmentSettings
 
-    return wbsa.estimate(str(path), "kinect-v2", str(model), segment=SegmentSettings(pick=pick))
+    return wbsa.estimate(str(path), "kinect-v2", str(model), segment=SegmentSettings(pick=pick), **kw)
 
 
 def _wait(driver, script: str, timeout: float = 60):
@@ -124,7 +124,8 @@ def test_the_page_shows_the_answer_of_wbsa_estimate_for_a_rendered_body(server, 
     from wbsa.estimation.subject.checks import FLAGS
 
     url, app = server
-    est = _estimate(frames["one"]["path"], small_estimator_model)
+    # the page states its clothes field (0 cm unless changed) and the height typed, as the stature
+    est = _estimate(frames["one"]["path"], small_estimator_model, clothing_m=0.0, stature_m=1.86)
     _upload(browser, url, frames["one"]["path"], height_cm="186", mass_kg="84")
     _wait(browser, "document.body.dataset.answer && document.getElementById('viewer').dataset.triangles > 0")
     shown = _answer(browser)
@@ -157,7 +158,7 @@ def test_a_click_on_the_second_person_measures_that_person(server, browser, fram
     two = frames["two"]
     _upload(browser, url, two["path"])
     _wait(browser, "!document.getElementById('error').hidden && document.getElementById('depth-img').naturalWidth > 0")
-    assert "2 person-sized objects" in _answer(browser)["error"]
+    assert "2 people in the depth image" in _answer(browser)["error"]
     img = browser.find_element("id", "depth-img")
     results = {}
     for who in ("woman", "man"):

@@ -12,7 +12,7 @@ tall, at most 2.6 m wide and 0.9 m at the hips) and, with a floor seen:
   piece of wall is flat.
 
 Measured on PCL's ``five_people.pcd`` (tests/fixtures): the five people are 2.0–2.8 m away, heads 0.21–0.32 m
-wide, 4.6–12 times the noise off their plane; the room's pieces that passed the size test stand 2.6–3.8 m
+wide, 4.3–13 times the noise off their plane; the room's pieces that passed the size test stand 2.6–3.8 m
 tall over the floor, or show only their top, or span 0.4–1.6 m at the top, or lie within 1.0 times the noise
 of a plane.
 

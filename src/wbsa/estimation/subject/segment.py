@@ -1,8 +1,9 @@
-"""Find the subject in a depth image of a room: floor, walls behind, 3-D clusters, the person-sized one.
+"""Find the subject in a depth image of a room: floor, walls behind, 3-D clusters, the people, the one picked.
 
 1. Returns within the depth range are back-projected and thinned to one point per voxel.
 2. Room surfaces: the largest planes (RANSAC, inliers within the depth noise along the normal) that have
-   (almost) nothing behind them as seen from the camera and run out of the image (reach its border): a
+   (almost) nothing behind them as seen from the camera and run out of the image (reach its frame's border,
+   :mod:`~wbsa.estimation.subject.frame`: the image less the bands without returns along its edges): a
    floor or a wall does both; a body's chest has its sides behind it, and a body alone in the image (no
    room), which a plane fits loosely, is inside the frame.
    The floor is the room surface whose normal is closest to the image's up (within 75°); the others are
@@ -13,14 +14,15 @@
    (or lie one pixel apart with no return between) with less than 0.8 m between them in depth (a body's
    near and far sides, an arm in front of the waist), or a far arm up to 1.2 m behind, are one object if
    together they are still person-sized (:func:`~wbsa.estimation.subject.clusters.merge_occluding`).
-   The subject's feet are then taken down to the floor (:mod:`wbsa.estimation.subject.feet`).
-4. A cluster is person-sized if it is 0.45–2.6 m tall (along the floor normal, or its long axis), at
-   most 2.6 m wide and 0.9 m at the hips, and not seen past a nearer, larger object (inside its bounding box
-   in the image and 0.4 m or more behind it: the wall between the legs; :func:`seen_past`); with several,
-   ``pick`` chooses (``nearest``, ``largest``, ``center`` of the image, or an ``(x, y)`` pixel: the object
-   under that pixel, else the one whose middle pixel is nearest to it), else a
-   :class:`~wbsa.errors.WbsaError` lists them. With none, people side by side and touching (up to 2.5 m
-   at the hips) get an error that says so.
+4. The people (:mod:`~wbsa.estimation.subject.people`): person-sized objects (0.45–2.6 m tall, at most
+   2.6 m wide and 0.9 m at the hips) with a head, their lower half seen, not flat, not cut by the frame's
+   top, and not seen past a nearer, larger object (the wall between the legs); an object that is not one
+   person is split into the people it holds, told apart by their heads. :func:`find_people` stops here.
+5. ``pick`` chooses (``nearest``, ``largest``, ``center`` of the image, or an ``(x, y)`` pixel: the person
+   under it or within 5 pixels, else a one-line refusal); without a pick several people are listed in a
+   :class:`~wbsa.errors.WbsaError`. With none, people side by side and touching who cannot be told apart
+   (up to 2.5 m at the hips) get an error that says so. The subject's feet are then taken down to the floor
+   (:mod:`wbsa.estimation.subject.feet`).
 """
 
 from __future__ import annotations
@@ -113,7 +115,7 @@ class Segmentation:
     walls : tuple of Plane
     subject : Cluster
     others : tuple of Cluster
-        Other person-sized objects (when ``pick`` chose among several).
+        The other people (when ``pick`` chose among several).
     """
 
     mask: np.ndarray

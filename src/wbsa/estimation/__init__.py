@@ -5,6 +5,7 @@
 ``methods``      the method slot: :class:`Predictor` (``methods.base``), one dispatch point (:func:`predictor_for`),
                  the methods ``regression`` (the estimator model, the shipped default model) and ``body_fit``
 ``single_view``  :func:`estimate`, the entry point (``wbsa.estimate`` calls it)
+``clothes``      the clothes a user states: the table of named layers and their uncertainty
 ``fhir``         the FHIR R4 Observation
 ``command``      ``wbsa estimate``
 

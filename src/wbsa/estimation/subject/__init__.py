@@ -1,8 +1,10 @@
 """The image → measured subject path every method starts from.
 
 ``mixed_pixels`` returns between two surfaces at a depth edge, snapped to one (:func:`repair_mixed_pixels`)
-``segment``      the subject in a room: floor, walls behind, 3-D clusters (:func:`segment_subject`)
-``clusters``     person-sized clusters: occluders merged, low returns attached
+``segment``      the subject in a room: floor, walls behind, 3-D clusters (:func:`segment_subject`, :func:`find_people`)
+``frame``        the image's frame: its border moved in past bands without returns
+``people``       which objects are people (split by their heads when they touch), the pick, the feet seen
+``clusters``     person-sized clusters: occluders merged, low returns attached, people split at their heads
 ``feet``         the feet grown down to the floor
 ``cloud``        planes, the floor cut and the body frame of a point cloud
 ``measure``      VBSA, stature, size and view cues of the subject's pixels (:func:`measure_subject`)
@@ -20,6 +22,7 @@ _EXPORTS = {
     "SegmentSettings": "wbsa.estimation.subject.segment",
     "Segmentation": "wbsa.estimation.subject.segment",
     "segment_subject": "wbsa.estimation.subject.segment",
+    "find_people": "wbsa.estimation.subject.segment",
     "SubjectMeasures": "wbsa.estimation.subject.measure",
     "measure_subject": "wbsa.estimation.subject.measure",
 }

@@ -7,8 +7,10 @@ tall, at most 2.6 m wide and 0.9 m at the hips) and, with a floor seen:
 * its lower half is seen: its lowest return is at most half its top's height over the floor (a head or a
   lamp seen over other people is not a person to measure);
 * it has a head: its top :data:`HEAD_BAND_M` spans at most :data:`HEAD_MAX_WIDTH_M` across the floor;
-* it is not flat: its returns lie farther off their best plane (RMS) than :data:`FLAT_NOISE_RATIO` times
-  the depth noise at its distance (:func:`~wbsa.estimation.subject.cloud.depth_noise_m`): a board, a door or a
+* it is not flat: its returns lie off their best plane by at least :data:`FLAT_MIN_M` (RMS, its depth
+  noise taken out in quadrature: the noise measured on it,
+  :func:`~wbsa.estimation.subject.measure.measured_depth_noise`, or where quantised depth reads none, the
+  noise envelope at its distance, :func:`~wbsa.estimation.subject.cloud.depth_noise_m`): a board, a door or a
   piece of wall is flat.
 
 Measured on PCL's ``five_people.pcd`` (tests/fixtures): the five people are 2.0–2.8 m away, heads 0.21–0.32 m
@@ -43,8 +45,11 @@ HEAD_BAND_M = 0.2
 HEAD_BAND_SHARE = 0.12
 #: ... which spans at most this across the floor (m): a head 0.16 m wide, with hair and mixed returns.
 HEAD_MAX_WIDTH_M = 0.5
-#: A person lies farther off its best plane (RMS) than this many times the depth noise at its distance.
-FLAT_NOISE_RATIO = 1.5
+#: A person's returns lie off their best plane (RMS, less its depth noise) by at least this (m): rendered
+#: people 2.5–6.8 cm (adults of 1.71–2.04 m and a child of 0.82 m, front, side and back views, Kinect v2 with
+#: Kinect v1's noise; the child 2.5 cm from the front), PCL's five people 4.5–9.2 cm; a board 0 cm, the
+#: cabinet and a panel of five_people 0 cm.
+FLAT_MIN_M = 0.018
 #: The lowest return of a person is at most this share of its top's height over the floor.
 LOWER_HALF = 0.5
 #: A person standing on a seen floor has returns this close to it (m): the feet.
@@ -82,7 +87,8 @@ class Cluster:
     head_width_m : float
         Width of its top :data:`HEAD_BAND_M` across the floor (NaN without a floor).
     off_plane_m, noise_m : float
-        RMS distance of its returns from their best plane, and the depth noise at its distance (m).
+        RMS distance of its returns from their best plane, and its depth noise (measured on it, or the
+        envelope at its distance where quantised depth reads none) (m).
     top_cut, bottom_cut : bool
         Its top reaches the frame's top border; its lowest returns reach the frame's bottom border (the
         image's, or a band without returns along it: :mod:`~wbsa.estimation.subject.frame`).
@@ -159,13 +165,23 @@ def describe_clusters(pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarr
                         head_width_m=_across(p[over > top - min(HEAD_BAND_M, HEAD_BAND_SHARE * (top - bottom))], up))
         sub = p[:: max(1, len(p) // 3000)]
         cues["off_plane_m"] = float(np.linalg.svd(sub - sub.mean(axis=0), compute_uv=False)[2] / math.sqrt(len(sub)))
-        cues["noise_m"] = float(depth_noise_m(np.median(p[:, 2])))
+        cues["noise_m"] = _own_noise_m(rows, cols, p[:, 2]) or float(depth_noise_m(np.median(p[:, 2])))
         out.append(Cluster(int(lab), n, (int(np.median(cols)), int(np.median(rows))), distance, height, width_m,
                            footprint_m(p, up if up @ np.array([0.0, -1.0, 0.0]) >= 0 else -up),
                            (int(cols.min()), int(rows.min()), int(cols.max()), int(rows.max())),
                            top_cut=bool(frame.at_top(rows.min())),
                            bottom_cut=bool(frame.at_bottom(rows.max())), **cues))
     return out
+
+
+def _own_noise_m(rows: np.ndarray, cols: np.ndarray, z: np.ndarray) -> float:
+    """Depth noise (m) measured on an object's pixels (rows, cols: (n,) int; z: (n,) float64 their depth)."""
+    from wbsa.estimation.subject.measure import measured_depth_noise
+
+    r0, c0 = rows.min(), cols.min()
+    depth = np.zeros((rows.max() - r0 + 1, cols.max() - c0 + 1))
+    depth[rows - r0, cols - c0] = z
+    return measured_depth_noise(depth, depth > 0)
 
 
 def _across(points: np.ndarray, up: np.ndarray) -> float:
@@ -196,9 +212,10 @@ def why_not_a_person(c: Cluster, min_height_m: float, max_height_m: float, max_w
         return f"only its top is seen ({c.bottom_m:.1f}–{c.top_m:.1f} m over the floor)"
     if c.head_width_m > HEAD_MAX_WIDTH_M:
         return f"it has no head: its top is {c.head_width_m:.1f} m wide"
-    if c.off_plane_m < FLAT_NOISE_RATIO * c.noise_m:
-        return (f"it is flat ({100 * c.off_plane_m:.0f} cm off a plane, the depth noise there "
-                f"{100 * c.noise_m:.0f} cm): a board, a door or a wall")
+    shape_m = math.sqrt(max(c.off_plane_m ** 2 - c.noise_m ** 2, 0.0))
+    if shape_m < FLAT_MIN_M:
+        return (f"it is flat ({100 * shape_m:.1f} cm off a plane beyond its depth noise, a person at least "
+                f"{100 * FLAT_MIN_M:g} cm): a board, a door or a wall")
     return None
 
 

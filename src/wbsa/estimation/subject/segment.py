@@ -73,7 +73,9 @@ class SegmentSettings:
     min_person_height_m, max_person_height_m, max_person_width_m : float
         What counts as a person-sized cluster.
     pick : {'nearest', 'largest', 'center'} or (int, int) or None
-        Which person-sized cluster to take when there are several; None = refuse and list them.
+        Which person to take when there are several (None: refuse and list them); an ``(x, y)`` pixel is
+        always used: the person under it or within 5 pixels, else refused
+        (:func:`~wbsa.estimation.subject.people.choose`).
     seed : int
         Seed of the RANSAC plane search (same seed, same mask).
     """

@@ -30,7 +30,8 @@ from wbsa.server.uploads import MAX_UPLOAD_BYTES, UploadError, check_depth_uploa
 
 STATIC = Path(__file__).parent / "static"
 #: Text fields of ``POST /api/estimate`` and ``POST /api/batch``.
-FIELDS = {"camera", "clothes", "clothing_cm", "method", "height_cm", "mass_kg", "sex", "pick", "azimuth_deg", "elevation_deg"}
+FIELDS = {"camera", "clothes", "clothing_cm", "method", "height_cm", "mass_kg", "sex", "pick", "azimuth_deg",
+          "elevation_deg"}
 #: File fields.
 FILES = {"depth", "intrinsics"}
 #: Headers on every response: no script, style or image from anywhere but this server.

@@ -283,8 +283,8 @@ def split_touching(clusters: list[Cluster], pixel_label: np.ndarray, pix: np.nda
                    shape: tuple[int, int], floor: Plane, frame: Frame,
                    limits: tuple[float, float, float]) -> tuple[np.ndarray, list[Cluster]]:
     """Objects that are not one person, split into the people they hold
-    (:func:`~wbsa.estimation.subject.clusters.split_people`) when every part is a person (:func:`why_not_a_person` with ``limits``: least and greatest height, greatest
-    width, m).
+    (:func:`~wbsa.estimation.subject.clusters.split_people`) when every part is a person
+    (:func:`why_not_a_person` with ``limits``: least and greatest height, greatest width, m).
 
     Returns the labels of every return (k,) int and the clusters, the parts under new labels.
     """

@@ -329,9 +329,9 @@ def test_the_wall_seen_between_the_legs_is_never_the_subject(body_model, monkeyp
     monkeypatch.setattr(segment, "find_room", lambda *args: (find_room(*args)[0], []))  # the floor only
     seg = segment.segment_subject(frame.depth_m, camera, settings)
     assert (seg.mask & truth).sum() / truth.sum() > 0.98 and (seg.mask & ~truth).sum() / seg.mask.sum() < 0.01
-    import wbsa.estimation.subject.people as people
+    import wbsa.estimation.subject.pick as pick
 
-    monkeypatch.setattr(people, "_seen_past_one", lambda c, clusters: None)  # the wall piece is then refused
+    monkeypatch.setattr(pick, "seen_past_object", lambda c, clusters: None)  # the wall piece is then refused
     with pytest.raises(WbsaError, match=r"pick pixel .* lies on an object that is not a person .*flat"):
         segment.segment_subject(frame.depth_m, camera, settings)
 
@@ -427,7 +427,8 @@ def test_several_people_are_listed_or_picked(room_view):
 def test_pick_center_takes_the_object_under_the_image_centre():
     """The operator aims at the subject: the object under the centre pixel wins over one whose middle pixel
     lies nearer the centre (a tall subject's middle is below a short object's behind it; bench image 107)."""
-    from wbsa.estimation.subject.people import Cluster, choose
+    from wbsa.estimation.subject.people import Cluster
+    from wbsa.estimation.subject.pick import choose
 
     label = np.full((101, 101), -1)
     label[50, 50] = 0  # the centre pixel is the subject's

@@ -41,7 +41,7 @@ def test_the_five_people_are_found_apart_with_their_boxes(five_people):
 
 
 def test_every_person_is_picked_by_a_pixel_on_them_or_within_five_pixels(five_people):
-    from wbsa.estimation.subject.people import choose
+    from wbsa.estimation.subject.pick import choose
 
     _, _, scene = five_people
     picked = set()
@@ -66,7 +66,7 @@ def test_every_person_is_picked_by_a_pixel_on_them_or_within_five_pixels(five_pe
     ((5, 5), r"no person at pick pixel"),  # the band without returns
 ])
 def test_a_pick_on_no_person_is_refused_in_one_line(five_people, pixel, message):
-    from wbsa.estimation.subject.people import choose
+    from wbsa.estimation.subject.pick import choose
 
     _, _, scene = five_people
     with pytest.raises(WbsaError, match=message) as err:

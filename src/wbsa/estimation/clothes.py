@@ -70,6 +70,17 @@ def clothes_help() -> str:
 def stated_clothes(clothing: str | None = None, clothing_m: float | None = None) -> Clothes:
     """The clothes stated by name (:data:`CLOTHES`) or as an explicit thickness (m), or :data:`UNSTATED`.
 
+    Parameters
+    ----------
+    clothing : str, optional
+        A name of :data:`CLOTHES`.
+    clothing_m : float, optional
+        Or an explicit layer (m), 0 to 0.05.
+
+    Returns
+    -------
+    Clothes
+
     Raises
     ------
     WbsaError

@@ -3,7 +3,8 @@
 ``mixed_pixels`` returns between two surfaces at a depth edge, snapped to one (:func:`repair_mixed_pixels`)
 ``segment``      the subject in a room: floor, walls behind, 3-D clusters (:func:`segment_subject`, :func:`find_people`)
 ``frame``        the image's frame: its border moved in past bands without returns
-``people``       which objects are people (split by their heads when they touch), the pick, the feet seen
+``people``       which objects are people (split by their heads when they touch), the feet seen
+``pick``         which person a pick chooses, or a one-line refusal
 ``clusters``     person-sized clusters: occluders merged, low returns attached, people split at their heads
 ``feet``         the feet grown down to the floor
 ``cloud``        planes, the floor cut and the body frame of a point cloud

@@ -45,17 +45,48 @@ class Frame:
     right: int
 
     def at_border(self, rows: np.ndarray, cols: np.ndarray, margin_px: int = BORDER_PX) -> np.ndarray:
-        """(n,) bool: pixels (rows, cols: (n,) float or int) within ``margin_px`` of the frame's edge (or beyond)."""
+        """Pixels within ``margin_px`` of the frame's edge (or beyond it).
+
+        Parameters
+        ----------
+        rows, cols : (n,) float or int
+            The pixels' rows and columns.
+        margin_px : int
+
+        Returns
+        -------
+        (n,) bool
+        """
         rows, cols = np.asarray(rows), np.asarray(cols)
         return ((rows < self.top + margin_px) | (rows > self.bottom - margin_px)
                 | (cols < self.left + margin_px) | (cols > self.right - margin_px))
 
     def at_top(self, rows: np.ndarray, margin_px: int = BORDER_PX) -> np.ndarray:
-        """(n,) bool: rows within ``margin_px`` of the frame's top edge (or above)."""
+        """Rows within ``margin_px`` of the frame's top edge (or above it).
+
+        Parameters
+        ----------
+        rows : (n,) float or int
+        margin_px : int
+
+        Returns
+        -------
+        (n,) bool
+        """
         return np.asarray(rows) < self.top + margin_px
 
     def at_bottom(self, rows: np.ndarray, margin_px: int = BORDER_PX) -> np.ndarray:
-        """(n,) bool: rows within ``margin_px`` of the frame's bottom edge (or below)."""
+        """Rows within ``margin_px`` of the frame's bottom edge (or below it).
+
+        Parameters
+        ----------
+        rows : (n,) float or int
+        margin_px : int
+
+        Returns
+        -------
+        (n,) bool
+        """
         return np.asarray(rows) > self.bottom - margin_px
 
 

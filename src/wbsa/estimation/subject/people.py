@@ -20,12 +20,8 @@ of a plane.
 
 People standing side by side who touch form one object; :func:`split_touching` splits it at the valleys
 between their heads (:func:`~wbsa.estimation.subject.clusters.split_people`) when every part is a person.
+Which person a pick chooses is :mod:`~wbsa.estimation.subject.pick`.
 
-A pick (:func:`choose`) is ``nearest``, ``largest``, ``center`` (the object under the image's centre, else
-the person whose middle is nearest to it) or an ``(x, y)`` pixel: the person under the pixel, else the
-person with a pixel within :data:`PICK_REACH_PX`, else the person the object under it is seen past (the
-wall between the legs); an object under the pixel that is not a person, or no person near, is refused in
-one line.
 """
 
 from __future__ import annotations
@@ -35,7 +31,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from wbsa.errors import WbsaError
 from wbsa.estimation.subject.cloud import Plane, depth_noise_m
 from wbsa.estimation.subject.clusters import MAX_FOOTPRINT_M, footprint_m, split_people
 from wbsa.estimation.subject.frame import Frame, image_frame
@@ -54,13 +49,10 @@ FLAT_MIN_M = 0.018
 LOWER_HALF = 0.5
 #: A person standing on a seen floor has returns this close to it (m): the feet.
 FLOOR_CONTACT_M = 0.15
-#: A pixel pick chooses a person with a pixel this close (pixels) when no object lies under it.
-PICK_REACH_PX = 5
 #: An object inside a nearer one's bounding box in the image and this much farther (m) is seen past it.
 #: The wall stands 0.5 m or more behind a subject's back; a body's own parts join it within 0.8 m of depth
 #: when they touch in the image (:func:`~wbsa.estimation.subject.clusters.merge_occluding`) and are larger.
 SEEN_PAST_M = 0.4
-PICKS = ("nearest", "largest", "center")
 
 
 @dataclass(frozen=True)
@@ -195,7 +187,18 @@ def _across(points: np.ndarray, up: np.ndarray) -> float:
 
 
 def why_not_a_person(c: Cluster, min_height_m: float, max_height_m: float, max_width_m: float) -> str | None:
-    """Why an object is not a person (a clause for messages), or None when it is one (see the module doc)."""
+    """Why an object is not a person (a clause for messages), or None when it is one (see the module doc).
+
+    Parameters
+    ----------
+    c : Cluster
+    min_height_m, max_height_m, max_width_m : float
+        Least and greatest height and greatest width of a person (m).
+
+    Returns
+    -------
+    str or None
+    """
     if not min_height_m <= c.height_m <= max_height_m:
         return f"it is {c.height_m:.2f} m tall, a person {min_height_m:g}–{max_height_m:g} m"
     if c.width_m > max_width_m:
@@ -226,6 +229,16 @@ def feet_unseen(c: Cluster, floor: Plane | None) -> str | None:
     returns along it: ``bottom_cut``), or stand more than :data:`FLOOR_CONTACT_M` over a seen floor
     (hidden), unless they touch the floor. Without a floor and with the feet inside the frame nothing is
     known; a body alone in the image (no room) passes.
+
+    Parameters
+    ----------
+    c : Cluster
+        The subject.
+    floor : Plane or None
+
+    Returns
+    -------
+    str or None
     """
     if floor is not None and c.bottom_m <= FLOOR_CONTACT_M:
         return None
@@ -239,7 +252,17 @@ def feet_unseen(c: Cluster, floor: Plane | None) -> str | None:
 
 def open_feet(mask: np.ndarray) -> str | None:
     """:func:`feet_unseen` of a subject that is every return of the image (no segmentation, no floor): its
-    lowest returns reach the image's bottom border (a clause), or None."""
+    lowest returns reach the image's bottom border (a clause), or None.
+
+    Parameters
+    ----------
+    mask : (h, w) bool
+        The subject's pixels.
+
+    Returns
+    -------
+    str or None
+    """
     rows = np.flatnonzero(mask.any(axis=1))
     if len(rows) and image_frame(mask).at_bottom(rows[-1]):
         return "its lowest returns end at the bottom of the frame, with no floor seen"
@@ -265,11 +288,22 @@ def seen_past(clusters: list[Cluster]) -> set[int]:
     set of int
         The labels of the clusters seen past another.
     """
-    return {c.label for c in clusters if _seen_past_one(c, clusters) is not None}
+    return {c.label for c in clusters if seen_past_object(c, clusters) is not None}
 
 
-def _seen_past_one(c: Cluster, clusters: list[Cluster]) -> Cluster | None:
-    """The first nearer, larger object ``c`` is seen past (see :func:`seen_past`), or None."""
+def seen_past_object(c: Cluster, clusters: list[Cluster]) -> Cluster | None:
+    """The first nearer, larger object ``c`` is seen past (see :func:`seen_past`), or None.
+
+    Parameters
+    ----------
+    c : Cluster
+    clusters : list of Cluster
+        Every object in the image.
+
+    Returns
+    -------
+    Cluster or None
+    """
     x0, y0, x1, y1 = c.bbox_px
     for o in clusters:
         ox0, oy0, ox1, oy1 = o.bbox_px
@@ -286,7 +320,21 @@ def split_touching(clusters: list[Cluster], pixel_label: np.ndarray, pix: np.nda
     (:func:`~wbsa.estimation.subject.clusters.split_people`) when every part is a person
     (:func:`why_not_a_person` with ``limits``: least and greatest height, greatest width, m).
 
-    Returns the labels of every return (k,) int and the clusters, the parts under new labels.
+    Parameters
+    ----------
+    clusters : list of Cluster
+        Every object described (:func:`describe_clusters`).
+    pixel_label : (k,) int
+        The object of every return; ``pix`` (k,) int its flat pixel index in an image of ``shape`` (h, w),
+        ``points`` (k, 3) float64 its camera-frame point.
+    floor : Plane
+    frame : Frame
+    limits : (float, float, float)
+
+    Returns
+    -------
+    (k,) int, list of Cluster
+        The labels of every return and the clusters, the parts under new labels.
     """
     out, kept = pixel_label, []
     for c in clusters:
@@ -307,84 +355,3 @@ def split_touching(clusters: list[Cluster], pixel_label: np.ndarray, pix: np.nda
         else:
             kept.append(c)
     return out, kept
-
-
-def choose(people: list[Cluster], clusters: list[Cluster], pick, image_label: np.ndarray,
-           limits: tuple[float, float, float]) -> Cluster:
-    """The person a pick chooses (see the module doc), or a one-line :class:`~wbsa.errors.WbsaError`.
-
-    Parameters
-    ----------
-    people : list of Cluster
-        The persons (at least one).
-    clusters : list of Cluster
-        Every object described (people included).
-    pick : None, str or (int, int)
-    image_label : (h, w) int
-        The object of every pixel (−1: none).
-    limits : (float, float, float)
-        Least and greatest height, greatest width of a person (m), for the refusal's reason.
-    """
-    h, w = image_label.shape
-    if is_pixel(pick) and not (0 <= pick[0] < w and 0 <= pick[1] < h):  # refused with one person in view too
-        raise WbsaError(f"pick pixel ({pick[0]}, {pick[1]}) lies outside the {w} x {h} depth image; "
-                        "give x,y of a pixel on the subject")
-    if is_pixel(pick):
-        return _at_pixel(people, clusters, (int(pick[0]), int(pick[1])), image_label, limits)
-    if len(people) == 1:
-        return people[0]
-    if pick is None:
-        listing = "; ".join(f"{i + 1}: {c.describe()}" for i, c in enumerate(sorted(people, key=lambda c: c.pixel_xy)))
-        raise WbsaError(f"{len(people)} people in the depth image ({listing}); "
-                        "choose one with pick nearest, largest, center or x,y")
-    if pick == "nearest":
-        return min(people, key=lambda c: c.distance_m)
-    if pick == "largest":
-        return max(people, key=lambda c: c.n_pixels)
-    x, y = (w - 1) / 2, (h - 1) / 2
-    # the object under the centre (the operator aims at the subject), else the one whose middle is nearest
-    hit = image_label[int(round(y)), int(round(x))]
-    for c in people:
-        if c.label == hit:
-            return c
-    return min(people, key=lambda c: (c.pixel_xy[0] - x) ** 2 + (c.pixel_xy[1] - y) ** 2)
-
-
-def _at_pixel(people: list[Cluster], clusters: list[Cluster], xy: tuple[int, int], image_label: np.ndarray,
-              limits: tuple[float, float, float]) -> Cluster:
-    """The person a pixel pick ``xy`` chooses (see the module doc)."""
-    x, y = xy
-    by_label = {c.label: c for c in clusters}
-    hit = int(image_label[y, x])
-    person = next((c for c in people if c.label == hit), None)
-    if person is not None:
-        return person
-    under = by_label.get(hit)
-    if under is not None:
-        behind = _seen_past_one(under, clusters)
-        if behind is not None and behind in people:
-            return behind
-        why = why_not_a_person(under, *limits) or "it is seen past a nearer object"
-        raise WbsaError(f"pick pixel ({x}, {y}) lies on an object that is not a person ({under.describe()}: {why}); "
-                        f"{_people_hint(people)}")
-    r = PICK_REACH_PX
-    y0, x0 = max(y - r, 0), max(x - r, 0)
-    window = image_label[y0:y + r + 1, x0:x + r + 1]
-    wy, wx = np.nonzero(window >= 0)
-    d2 = (wx + x0 - x) ** 2 + (wy + y0 - y) ** 2
-    near = [(int(d2[window[wy, wx] == c.label].min()), c.label, c) for c in people if np.any(window == c.label)]
-    if near:
-        return min(near, key=lambda t: t[:2])[2]
-    raise WbsaError(f"no person at pick pixel ({x}, {y}) or within {PICK_REACH_PX} pixels of it; "
-                    f"{_people_hint(people)}")
-
-
-def _people_hint(people: list[Cluster]) -> str:
-    """``people found: 1.72 m tall at pixel (312, 240), 2.9 m away; ...; pick a pixel on one``."""
-    return ("people found: " + "; ".join(c.describe() for c in sorted(people, key=lambda c: c.pixel_xy))
-            + "; pick a pixel on one")
-
-
-def is_pixel(pick: object) -> bool:
-    """Whether ``pick`` is an ``(x, y)`` pixel (two integers)."""
-    return isinstance(pick, tuple) and len(pick) == 2 and all(isinstance(v, (int, np.integer)) for v in pick)

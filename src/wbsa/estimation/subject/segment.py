@@ -36,8 +36,8 @@ from wbsa.estimation.subject.cloud import Plane, ransac_plane
 from wbsa.estimation.subject.clusters import MAX_FOOTPRINT_M, attach_low, merge_occluding
 from wbsa.estimation.subject.feet import grow_feet
 from wbsa.estimation.subject.frame import Frame, image_frame
-from wbsa.estimation.subject.people import (PICKS, Cluster, choose, describe_clusters, is_pixel, seen_past,
-                                            split_touching, why_not_a_person)
+from wbsa.estimation.subject.people import Cluster, describe_clusters, seen_past, split_touching, why_not_a_person
+from wbsa.estimation.subject.pick import PICKS, choose, is_pixel
 
 #: Height over the floor below which returns are not used to link objects (only to extend them).
 LOW_BAND_M = 0.10
@@ -75,7 +75,7 @@ class SegmentSettings:
     pick : {'nearest', 'largest', 'center'} or (int, int) or None
         Which person to take when there are several (None: refuse and list them); an ``(x, y)`` pixel is
         always used: the person under it or within 5 pixels, else refused
-        (:func:`~wbsa.estimation.subject.people.choose`).
+        (:func:`~wbsa.estimation.subject.pick.choose`).
     seed : int
         Seed of the RANSAC plane search (same seed, same mask).
     """
@@ -182,7 +182,7 @@ def _meets_border(points: np.ndarray, intrinsics, frame: Frame) -> bool:
 
 def segment_subject(depth_m: np.ndarray, intrinsics, settings: SegmentSettings = SegmentSettings()) -> Segmentation:
     """Find the subject in a depth image (see the module doc): the people (:func:`find_people`), the one
-    ``settings.pick`` chooses (:func:`~wbsa.estimation.subject.people.choose`), its feet down to the floor.
+    ``settings.pick`` chooses (:func:`~wbsa.estimation.subject.pick.choose`), its feet down to the floor.
 
     Parameters
     ----------

@@ -34,6 +34,7 @@ import numpy as np
 from wbsa.estimation.subject.cloud import Plane, depth_noise_m
 from wbsa.estimation.subject.clusters import MAX_FOOTPRINT_M, footprint_m, split_people
 from wbsa.estimation.subject.frame import Frame, image_frame
+from wbsa.estimation.subject.measure import measured_depth_noise
 
 #: Top of an object (m, along the floor's normal; at most this share of its height) where its head is ...
 HEAD_BAND_M = 0.2
@@ -168,8 +169,6 @@ def describe_clusters(pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarr
 
 def _own_noise_m(rows: np.ndarray, cols: np.ndarray, z: np.ndarray) -> float:
     """Depth noise (m) measured on an object's pixels (rows, cols: (n,) int; z: (n,) float64 their depth)."""
-    from wbsa.estimation.subject.measure import measured_depth_noise
-
     r0, c0 = rows.min(), cols.min()
     depth = np.zeros((rows.max() - r0 + 1, cols.max() - c0 + 1))
     depth[rows - r0, cols - c0] = z

@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 
 from wbsa.errors import WbsaError
-from wbsa.bodies.body_model import LOCAL_CHANGE_COLUMNS, body_parameter_array
+from wbsa.bodies.body_model import ALL_LOCAL_CHANGE_COLUMNS, LOCAL_CHANGE_COLUMNS, body_parameter_array
 from wbsa.bodies.survey_data import (
     ETHNIC_MIX,
     PEOPLE_COLUMNS,
@@ -121,12 +121,12 @@ def _bodies() -> pd.DataFrame:
              p_african=0.0, p_asian=0.0, p_caucasian=1.0, l_stomach_pregnant=0.4, l_hips_circ=-0.3),
         dict(p_gender=1.0, p_age=years_to_param(52), p_muscle=0.6, p_weight=0.35, p_height=0.55,
              p_proportions=0.4, p_cupsize=0.7, p_african=0.75, p_asian=0.0, p_caucasian=0.25,
-             l_waist_circ=0.5, l_buttocks_volume=-0.4),
+             l_waist_circ=0.5, l_buttocks_volume=-0.4, l_upperarm_circ=0.6, l_upperarm_length=-0.3,
+             l_upperleg_height=0.4),
         dict(p_gender=0.0, p_age=years_to_param(9), p_muscle=0.45, p_weight=0.6, p_height=0.5, p_proportions=0.5,
              p_african=0.05, p_asian=0.4, p_caucasian=0.55),
     ]
-    return pd.DataFrame(rows).fillna({"p_cupsize": 0.5, "l_waist_circ": 0.0, "l_hips_circ": 0.0,
-                                      "l_stomach_pregnant": 0.0, "l_buttocks_volume": 0.0})
+    return pd.DataFrame(rows).fillna({"p_cupsize": 0.5, **{c: 0.0 for c in ALL_LOCAL_CHANGE_COLUMNS}})
 
 
 def test_torch_measures_equal_the_anthropometer(tools):
@@ -136,8 +136,11 @@ def test_torch_measures_equal_the_anthropometer(tools):
     params = _bodies()
     exact = meter.measure(model.rest_bodies(params))
     ph = torch.as_tensor(body_parameter_array(params))  # with local changes
-    values = measurer.evaluate(measurer.vertices(measurer.coefficients(ph))).values.numpy()
-    cols = ["stature_m", "mass_kg", "waist_circ_m", "hip_circ_m"]
+    c = measurer.coefficients(ph)
+    values = measurer.evaluate(measurer.vertices(c), coefficients=c).values.numpy()
+    cols = ["stature_m", "mass_kg", "waist_circ_m", "hip_circ_m", "mid_arm_circ_m", "upper_arm_length_m",
+            "upper_leg_length_m"]
+    assert measurer.names == tuple(cols)
     np.testing.assert_allclose(values, exact[cols].to_numpy(), rtol=1e-9, atol=1e-9)
 
 
@@ -147,10 +150,11 @@ def test_torch_measure_gradients_match_finite_differences(tools):
 
     ph = torch.as_tensor(body_parameter_array(_bodies()))
     c = measurer.coefficients(ph).detach()
-    grad = measurer.evaluate(measurer.vertices(c), gradient=True).grad
+    grad = measurer.evaluate(measurer.vertices(c), gradient=True, coefficients=c).grad
+    assert grad.shape[1] == 7
     direction = torch.as_tensor(np.random.default_rng(0).normal(size=c.shape)) * 1e-6
-    plus = measurer.evaluate(measurer.vertices(c + direction)).values
-    minus = measurer.evaluate(measurer.vertices(c - direction)).values
+    plus = measurer.evaluate(measurer.vertices(c + direction), coefficients=c + direction).values
+    minus = measurer.evaluate(measurer.vertices(c - direction), coefficients=c - direction).values
     fd = (plus - minus) / 2
     analytic = (grad * direction[:, None, :]).sum(-1)
     np.testing.assert_allclose(analytic.numpy(), fd.numpy(), rtol=2e-3, atol=1e-9)

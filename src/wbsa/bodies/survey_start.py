@@ -169,7 +169,8 @@ def _measure(measurer: TorchMeasurer, phenotypes: np.ndarray, batch_size: int) -
     for start in range(0, len(phenotypes), batch_size):
         ph = torch.as_tensor(phenotypes[start:start + batch_size], dtype=measurer.dtype)
         with torch.no_grad():
-            out.append(measurer.evaluate(measurer.vertices(measurer.coefficients(ph))).values.numpy())
+            c = measurer.coefficients(ph)
+            out.append(measurer.evaluate(measurer.vertices(c), coefficients=c).values[:, :4].numpy())
     return np.concatenate(out)
 
 

@@ -12,6 +12,7 @@ from wbsa.errors import WbsaError
 from wbsa.bodies.body_model import ALL_LOCAL_CHANGE_COLUMNS, LOCAL_CHANGE_COLUMNS, body_parameter_array
 from wbsa.bodies.survey_data import (
     ETHNIC_MIX,
+    LIMB_SURVEY_COLUMNS,
     PEOPLE_COLUMNS,
     SURVEY_COLUMNS,
     clean_survey,
@@ -24,8 +25,9 @@ from wbsa.bodies.survey_data import (
 
 def _raw(rows: list[dict]) -> pd.DataFrame:
     base = {"SEQN": "1", "RIAGENDR": "1", "RIDAGEYR": "40", "RIDRETH3": "3", "RIDEXPRG": "NA", "BMXWT": "80",
-            "BMXHT": "175", "BMXWAIST": "95", "BMXHIP": "100", "WTMECPRP": "1000"}
-    return pd.DataFrame([{**base, **r} for r in rows], columns=list(SURVEY_COLUMNS))
+            "BMXHT": "175", "BMXWAIST": "95", "BMXHIP": "100", "BMXARMC": "33", "BMXARML": "38", "BMXLEG": "41",
+            "WTMECPRP": "1000"}
+    return pd.DataFrame([{**base, **r} for r in rows], columns=[*SURVEY_COLUMNS, *LIMB_SURVEY_COLUMNS])
 
 
 def test_clean_survey_skips_and_counts_bad_values():
@@ -36,24 +38,40 @@ def test_clean_survey_skips_and_counts_bad_values():
         {"SEQN": "4", "BMXHT": "17.5"},  # stature in the wrong unit: implausible, skipped
         {"SEQN": "5", "RIAGENDR": "9"},  # unknown sex: skipped
         {"SEQN": "6", "RIDEXPRG": "1", "RIAGENDR": "2"},  # pregnant: skipped
-        {"SEQN": "7", "BMXWAIST": "NA", "BMXHIP": "-3"},  # girths dropped, person kept
+        {"SEQN": "7", "BMXWAIST": "NA", "BMXLEG": "NA"},  # measures missing: left out of the match, person kept
         {"SEQN": "8", "RIDRETH3": "NA", "WTMECPRP": "0"},  # unknown race, no weight: kept
         {"SEQN": "1"},  # duplicate id: skipped
+        {"SEQN": "9", "BMXWAIST": "300"},  # a waist of 3 m: skipped, never matched
+        {"SEQN": "10", "BMXARMC": "-33"},  # a negative arm: skipped
+        {"SEQN": "11", "BMXHIP": "-3"},  # a negative hip: skipped
+        {"SEQN": "12", "BMXARML": "380"},  # arm length in mm: skipped
     ])
     data = clean_survey(raw)
     assert list(data.people.columns) == list(PEOPLE_COLUMNS)
     assert data.people["survey_id"].tolist() == [1, 7, 8]
     assert data.skipped == {"sex missing": 1, "pregnant": 1, "stature implausible": 1, "stature missing": 1,
-                            "mass missing": 1, "duplicate id": 1}
-    assert data.dropped == {"waist missing": 1, "hip implausible": 1, "race unknown": 1, "exam weight missing": 1}
+                            "mass missing": 1, "waist implausible": 1, "hip implausible": 1,
+                            "arm circumference implausible": 1, "upper arm length implausible": 1,
+                            "duplicate id": 1}
+    assert data.dropped == {"waist missing": 1, "upper leg length missing": 1, "race unknown": 1,
+                            "exam weight missing": 1}
     assert data.n_rows == len(raw)
     p = data.people.set_index("survey_id")
-    assert np.isnan(p.loc[7, "waist_circ_m"]) and np.isnan(p.loc[7, "hip_circ_m"])
+    assert np.isnan(p.loc[7, "waist_circ_m"]) and np.isnan(p.loc[7, "upper_leg_length_m"])
     assert p.loc[1, "stature_m"] == pytest.approx(1.75) and p.loc[1, "waist_circ_m"] == pytest.approx(0.95)
+    assert p.loc[1, ["mid_arm_circ_m", "upper_arm_length_m", "upper_leg_length_m"]].tolist() == \
+        pytest.approx([0.33, 0.38, 0.41])
     assert p.loc[1, "age_years"] == 40.5 and p.loc[1, "bmi"] == pytest.approx(80 / 1.75**2)
     assert p.loc[8, "survey_race"] == -1 and p.loc[8, ["p_african", "p_asian", "p_caucasian"]].tolist() == \
         pytest.approx([1 / 3] * 3)
     assert np.isnan(p.loc[8, "exam_weight"])
+
+
+def test_a_survey_file_without_the_limb_columns_reads_for_four_measures():
+    raw = _raw([{"SEQN": "1"}, {"SEQN": "2"}]).drop(columns=list(LIMB_SURVEY_COLUMNS))
+    data = clean_survey(raw)
+    assert data.people["survey_id"].tolist() == [1, 2]
+    assert data.people[["mid_arm_circ_m", "upper_arm_length_m", "upper_leg_length_m"]].isna().all(axis=None)
 
 
 def test_ethnic_mix_is_a_mix():
@@ -160,6 +178,10 @@ def test_torch_measure_gradients_match_finite_differences(tools):
     np.testing.assert_allclose(analytic.numpy(), fd.numpy(), rtol=2e-3, atol=1e-9)
 
 
+SEVEN = ("stature_m", "mass_kg", "waist_circ_m", "hip_circ_m", "mid_arm_circ_m", "upper_arm_length_m",
+         "upper_leg_length_m")
+
+
 def _small_settings(**kw):
     from wbsa.bodies.survey_match import MatchSettings
     from wbsa.bodies.survey_start import StartGrid
@@ -176,7 +198,7 @@ def test_known_bodies_are_matched_back_within_tolerance(tools):
     params = _bodies()
     own = meter.measure(model.rest_bodies(params))
     targets = params[["p_gender", "p_age", "p_african", "p_asian", "p_caucasian"]].copy()
-    for name in ("stature_m", "mass_kg", "waist_circ_m", "hip_circ_m"):
+    for name in SEVEN:
         targets[f"target_{name}"] = own[name].to_numpy()
     targets.loc[2, "target_hip_circ_m"] = np.nan  # a child without a hip measure
     fit = match_bodies(targets, measurer, _small_settings(max_iterations=25), show_progress=False)
@@ -190,6 +212,9 @@ def test_known_bodies_are_matched_back_within_tolerance(tools):
     assert np.all(np.abs(back["mass_kg"] - own["mass_kg"]) <= 1.0)
     assert np.all(np.abs(back["waist_circ_m"] - own["waist_circ_m"]) <= 0.03)
     assert np.all(np.abs(back["hip_circ_m"] - own["hip_circ_m"])[:2] <= 0.03)
+    assert np.all(np.abs(back["mid_arm_circ_m"] - own["mid_arm_circ_m"]) <= 0.02)
+    assert np.all(np.abs(back["upper_arm_length_m"] - own["upper_arm_length_m"]) <= 0.015)
+    assert np.all(np.abs(back["upper_leg_length_m"] - own["upper_leg_length_m"]) <= 0.015)
     assert fit["fit_converged"].all()
 
 
@@ -202,7 +227,7 @@ def test_known_bodies_are_matched_back_at_their_own_density(tools):
     own = meter.measure(model.rest_bodies(params))
     density = np.array([1065.0, 1010.0])
     targets = params[["p_gender", "p_age", "p_african", "p_asian", "p_caucasian"]].copy()
-    for name in ("stature_m", "waist_circ_m", "hip_circ_m"):
+    for name in SEVEN:
         targets[f"target_{name}"] = own[name].to_numpy()
     targets["target_mass_kg"] = own["volume_m3"].to_numpy() * density
     targets[DENSITY_COLUMN] = density
@@ -223,11 +248,11 @@ def test_phenotype_only_match_keeps_local_changes_at_zero(tools):
     params = _bodies().iloc[:1].assign(l_stomach_pregnant=0.0, l_hips_circ=0.0)
     own = meter.measure(model.rest_bodies(params))
     targets = params[["p_gender", "p_age", "p_african", "p_asian", "p_caucasian"]].copy()
-    for name in ("stature_m", "mass_kg", "waist_circ_m", "hip_circ_m"):
+    for name in SEVEN:
         targets[f"target_{name}"] = own[name].to_numpy()
     fit = match_bodies(targets, measurer, _small_settings(max_iterations=25, free_local_changes=False),
                        show_progress=False)
-    assert (fit[list(LOCAL_CHANGE_COLUMNS)] == 0.0).all(axis=None)
+    assert (fit[list(ALL_LOCAL_CHANGE_COLUMNS)] == 0.0).all(axis=None)
     back = meter.measure(model.rest_bodies(fit))
     assert abs(back["stature_m"].iloc[0] - own["stature_m"].iloc[0]) <= 0.01
     assert abs(back["mass_kg"].iloc[0] - own["mass_kg"].iloc[0]) <= 1.0
@@ -238,8 +263,8 @@ def test_match_rejects_targets_without_stature(tools):
 
     _, _, measurer = tools
     bad = pd.DataFrame([dict(p_gender=0.0, p_age=0.8, p_african=0.0, p_asian=0.0, p_caucasian=1.0,
-                             target_stature_m=np.nan, target_mass_kg=70.0, target_waist_circ_m=np.nan,
-                             target_hip_circ_m=np.nan)])
+                             target_stature_m=np.nan, target_mass_kg=70.0,
+                             **{f"target_{name}": np.nan for name in SEVEN[2:]})])
     with pytest.raises(WbsaError, match="stature and mass"):
         match_bodies(bad, measurer, _small_settings(max_iterations=1), show_progress=False)
 
@@ -317,5 +342,11 @@ def test_rescue_weights_are_checked():
     from wbsa.bodies.survey_match import MatchSettings
 
     with pytest.raises(WbsaError, match="rescue_weights"):
-        MatchSettings(rescue_weights=(3.0, 0.0, 0.1, 0.1))
-    assert MatchSettings(rescue_weights=(3.0, 0.1, 0.1, 0.1)).rescue_weights == (3.0, 0.1, 0.1, 0.1)
+        MatchSettings(rescue_weights=(3.0, 0.0, 0.1, 0.1, 0.1, 0.1, 0.1))
+    with pytest.raises(WbsaError, match="seven positive numbers"):
+        MatchSettings(rescue_weights=(3.0, 0.1, 0.1, 0.1))
+    w = (3.0, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1)
+    assert MatchSettings(rescue_weights=w).rescue_weights == w
+    with pytest.raises(WbsaError, match="measures 'five'"):
+        MatchSettings(measures="five")
+    assert MatchSettings(measures="four").names == ("stature_m", "mass_kg", "waist_circ_m", "hip_circ_m")

@@ -305,7 +305,10 @@ def test_survey_population_end_to_end(tmp_path):
         err = base["stature_m"] - base["survey_stature_m"]
         assert base["match_stature_err_m"] == pytest.approx(err)
         ok = (abs(err) <= 0.01 and abs(base["match_mass_err_kg"]) <= 1.0
-              and not abs(base["match_waist_err_m"]) > 0.03 and not abs(base["match_hip_err_m"]) > 0.03)
+              and not abs(base["match_waist_err_m"]) > 0.03 and not abs(base["match_hip_err_m"]) > 0.03
+              and not abs(base["match_mid_arm_circ_err_m"]) > 0.02
+              and not abs(base["match_upper_arm_length_err_m"]) > 0.015
+              and not abs(base["match_upper_leg_length_err_m"]) > 0.015)
         assert (person["matched"] == ok).all()
     pd.testing.assert_frame_equal(table, again)
     assert table[list(LOCAL_CHANGE_COLUMNS)].abs().max(axis=None) <= 1.0
@@ -330,6 +333,43 @@ def test_survey_population_end_to_end(tmp_path):
     first = dense[dense["variation"] == 0]
     assert (first["match_mass_err_kg"].abs() <= 1.0).sum() >= (table[table["variation"] == 0]["match_mass_err_kg"]
                                                                .abs() <= 1.0).sum() - 1
+
+
+def test_tables_written_before_the_limb_measures_still_read(tmp_path, body_model):
+    """A four-measure survey table of the earlier layout (no limb measures, no limb changes) reads back:
+    the same bodies, its four match rates, its unmatched people."""
+    from wbsa.bodies.anthropometry import NHANES_LIMB_COLUMNS
+    from wbsa.bodies.body_model import LIMB_CHANGE_COLUMNS
+    from wbsa.bodies.subject import subject_mesh
+    from wbsa.bodies.survey import match_rates, unmatched_people
+    from wbsa.bodies.table import measure_population, read_population
+
+    params = _bodies().drop(columns=list(LIMB_CHANGE_COLUMNS))
+    params.insert(0, "subject_id", np.arange(3))
+    params.insert(1, "sex", np.where(params["p_gender"] >= 0.5, "female", "male"))
+    params.insert(2, "age_years", [35.5, 52.5, 9.5])
+    table = measure_population(params, model=body_model)
+    old = table.drop(columns=[*NHANES_LIMB_COLUMNS, *LIMB_CHANGE_COLUMNS])
+    old["survey_id"], old["variation"], old["survey_age_years"] = [11, 12, 13], 0, [35, 52, 9]
+    old["survey_bmi"] = old["bmi"]
+    offsets = {"stature_m": 0.0, "mass_kg": 0.5, "waist_circ_m": 0.01, "hip_circ_m": -0.05}  # hip 5 cm off
+    for name, off in offsets.items():
+        old[f"survey_{name}"] = old[name] - off
+        old[f"match_{name.removesuffix('_m').removesuffix('_kg').removesuffix('_circ')}_err_"
+            f"{'kg' if name == 'mass_kg' else 'm'}"] = off
+    old["matched"] = False
+    old["matched_stature_mass"] = True
+    path = tmp_path / "old.parquet"
+    old.to_parquet(path)
+    back = read_population(path)
+    assert (back[list(LIMB_CHANGE_COLUMNS)] == 0.0).all(axis=None)
+    assert not set(NHANES_LIMB_COLUMNS) & set(back.columns)
+    for sid in range(3):
+        assert subject_mesh(back, sid).area_m2 == pytest.approx(table.loc[sid, "wbsa_m2"], rel=1e-12)
+    rates = match_rates(back)["all"]
+    assert rates["hip_within"] == 0.0 and rates["waist_within"] == 1.0 and rates["mass_within"] == 1.0
+    assert "mid_arm_circ_within" not in rates
+    assert unmatched_people(back)["failing"].tolist() == ["hip"] * 3
 
 
 def _packaged():

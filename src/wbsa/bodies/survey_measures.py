@@ -119,13 +119,16 @@ class TorchMeasurer:
         return flat.reshape(3, self.n_vertices, -1)
 
     # -- measures -----------------------------------------------------------------------
-    def evaluate(self, x, gradient: bool = False, density_kg_m3=None, coefficients=None) -> Evaluation:
+    def evaluate(self, x, gradient: bool = False, density_kg_m3=None, coefficients=None,
+                 trunk_only: bool = False) -> Evaluation:
         """Measures of bodies ``x`` (3, n, b) and, if asked, their coefficient gradients.
 
         ``density_kg_m3`` : (b,) float64 tensor, optional
             Each body's density for its mass (default: the measurer's one density).
         ``coefficients`` : (b, k) float64 tensor
             The bodies' blendshape coefficients; needed for the limb measures (their joints).
+        ``trunk_only`` : bool
+            Only the four :data:`TRUNK_MEASURES` (the start table needs no more).
         """
         torch = self.torch
         density = self.density_kg_m3 if density_kg_m3 is None else density_kg_m3
@@ -143,7 +146,7 @@ class TorchMeasurer:
             sparse.append(entries)
         values = torch.stack([stature, mass, *girths], dim=1)
         limb_grad = None
-        if self.limbs is not None:
+        if self.limbs is not None and not trunk_only:
             if coefficients is None:
                 raise ValueError("the limb measures need the bodies' blendshape coefficients")
             limb_values, limb_grad = self.limbs.evaluate(x, coefficients, gradient)
@@ -152,7 +155,7 @@ class TorchMeasurer:
             return Evaluation(values, None)
 
         k = self.basis_t.shape[1]
-        grad = torch.zeros((b, len(self.names), k), dtype=self.dtype)
+        grad = torch.zeros((b, values.shape[1], k), dtype=self.dtype)
         # stature: +z of the top vertex, -z of the lowest
         grad[:, 0] = self.basis_t[2 * n + top] - self.basis_t[2 * n + bottom]
         # mass: dense volume gradient, one product with the basis

@@ -390,3 +390,15 @@ def test_rescue_weights_are_checked():
     with pytest.raises(WbsaError, match="measures 'five'"):
         MatchSettings(measures="five")
     assert MatchSettings(measures="four").names == ("stature_m", "mass_kg", "waist_circ_m", "hip_circ_m")
+
+
+def test_survey_measures_is_a_checked_choice_of_the_population_and_the_cli():
+    from helpers.cli import assert_one_line_error, run_cli
+
+    from wbsa.bodies.settings import PopulationSettings
+
+    assert PopulationSettings(kind="survey", n=5).survey_measures == "seven"
+    with pytest.raises(WbsaError, match="survey_measures"):
+        PopulationSettings(kind="survey", n=5, survey_measures="five")
+    code, _, err = run_cli("population", "--kind", "survey", "--n", "5", "--survey-measures", "five", "--out", "x.csv")
+    assert_one_line_error(code, err, "--survey-measures", "seven", "four")

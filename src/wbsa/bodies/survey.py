@@ -36,28 +36,12 @@ from wbsa.bodies.survey_match import MatchSettings, torch_threads
 
 #: Columns a survey population has beyond the random population's.
 SURVEY_COLUMNS = (
-    "survey_id",
-    "variation",
-    "survey_age_years",
-    "survey_race",
-    "survey_exam_weight",
-    "survey_stature_m",
-    "survey_mass_kg",
-    "survey_bmi",
-    "survey_waist_circ_m",
-    "survey_hip_circ_m",
-    "survey_mid_arm_circ_m",
-    "survey_upper_arm_length_m",
-    "survey_upper_leg_length_m",
-    "match_stature_err_m",
-    "match_mass_err_kg",
-    "match_waist_err_m",
-    "match_hip_err_m",
-    "match_mid_arm_circ_err_m",
-    "match_upper_arm_length_err_m",
-    "match_upper_leg_length_err_m",
-    "matched",
-    "matched_stature_mass",
+    "survey_id", "variation", "survey_age_years", "survey_race", "survey_exam_weight",
+    "survey_stature_m", "survey_mass_kg", "survey_bmi", "survey_waist_circ_m", "survey_hip_circ_m",
+    "survey_mid_arm_circ_m", "survey_upper_arm_length_m", "survey_upper_leg_length_m",
+    "match_stature_err_m", "match_mass_err_kg", "match_waist_err_m", "match_hip_err_m", "match_mid_arm_circ_err_m",
+    "match_upper_arm_length_err_m", "match_upper_leg_length_err_m",
+    "matched", "matched_stature_mass",
 )
 
 #: (population column, survey column, error column) of each matched measure.

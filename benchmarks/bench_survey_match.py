@@ -42,10 +42,10 @@ def _within(table):
     """(n,) bool per measure key and all seven, for the matched bodies, NaN-safe (a measure the survey lacks passes)."""
     import numpy as np
 
-    from wbsa.bodies.survey import _MATCHED, error_key
+    from wbsa.bodies.survey import MATCHED_MEASURES, error_key
 
     out = {}
-    for measure, survey, err in _MATCHED:
+    for measure, survey, err in MATCHED_MEASURES:
         key, scale, _ = error_key(err)
         e = (table[measure] - table[survey]).abs() * scale
         out[key] = (table[survey].isna() | (e <= TOLERANCE[key] + 1e-9)).to_numpy()

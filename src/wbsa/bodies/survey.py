@@ -45,7 +45,7 @@ SURVEY_COLUMNS = (
 )
 
 #: (population column, survey column, error column) of each matched measure.
-_MATCHED = (
+MATCHED_MEASURES = (
     ("stature_m", "survey_stature_m", "match_stature_err_m"),
     ("mass_kg", "survey_mass_kg", "match_mass_err_kg"),
     ("waist_circ_m", "survey_waist_circ_m", "match_waist_err_m"),
@@ -54,7 +54,7 @@ _MATCHED = (
     ("upper_arm_length_m", "survey_upper_arm_length_m", "match_upper_arm_length_err_m"),
     ("upper_leg_length_m", "survey_upper_leg_length_m", "match_upper_leg_length_err_m"),
 )
-#: Survey people columns of the matched measures, in :data:`_MATCHED` order.
+#: Survey people columns of the matched measures, in :data:`MATCHED_MEASURES` order.
 _PEOPLE_MEASURES = ("stature_m", "mass_kg", "waist_circ_m", "hip_circ_m", "mid_arm_circ_m", "upper_arm_length_m",
                     "upper_leg_length_m")
 _VARIATION_STREAM = 0x7A21A7
@@ -255,7 +255,7 @@ def _with_variations(people: pd.DataFrame, fit: pd.DataFrame, k: int, seed: int,
     out["survey_age_years"] = people["survey_age_years"].to_numpy()[rep].astype(np.int64)
     out["survey_race"] = people["survey_race"].to_numpy()[rep].astype(np.int64)
     out["survey_exam_weight"] = people["exam_weight"].to_numpy()[rep]
-    for src, col in (("bmi", "survey_bmi"), *zip(_PEOPLE_MEASURES, (m[1] for m in _MATCHED))):
+    for src, col in (("bmi", "survey_bmi"), *zip(_PEOPLE_MEASURES, (m[1] for m in MATCHED_MEASURES))):
         out[col] = people[src].to_numpy()[rep] if src in people.columns else np.nan
     return out
 
@@ -268,7 +268,7 @@ def _add_match_columns(table: pd.DataFrame, m: MatchSettings) -> pd.DataFrame:
     first = out["variation"].to_numpy() == 0
     tol = m.tolerance_of
     within = {}
-    for measure, survey, err in _MATCHED:
+    for measure, survey, err in MATCHED_MEASURES:
         e = out[measure].to_numpy() - out[survey].to_numpy()
         # a measure the survey lacks is not matched and cannot fail; a body whose own girth is
         # undefined (NaN) where the survey has one fails
@@ -312,7 +312,7 @@ def match_rates(table: pd.DataFrame) -> dict[str, object]:
         if len(g):
             row["matched"] = float(g["matched"].mean())
             row["matched_stature_mass"] = float(g["matched_stature_mass"].mean())
-            for measure, _, err in _MATCHED:
+            for measure, _, err in MATCHED_MEASURES:
                 if err not in g.columns:
                     continue
                 key, scale, unit = error_key(err)
@@ -346,11 +346,11 @@ def unmatched_people(table: pd.DataFrame) -> pd.DataFrame:
     tol = MatchSettings().tolerance_of
     failing = []
     for _, row in first.iterrows():
-        missed = [error_key(err)[0] for measure, survey, err in _MATCHED
+        missed = [error_key(err)[0] for measure, survey, err in MATCHED_MEASURES
                   if err in row.index and np.isfinite(row[survey])
                   and not abs(row[measure] - row[survey]) <= tol[measure]]
         failing.append(", ".join(missed))
-    errors = [err for _, _, err in _MATCHED if err in first.columns]
+    errors = [err for _, _, err in MATCHED_MEASURES if err in first.columns]
     out = first[["survey_id", "sex", "survey_age_years", "survey_bmi", *errors]].copy()
     out.insert(4, "failing", failing)
     return out.reset_index(drop=True)

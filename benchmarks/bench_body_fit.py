@@ -4,7 +4,7 @@ The same subjects (random, ages 3–80, and survey-matched NHANES people not use
 cameras, distances, views and sensor effects as ``benchmarks/bench_estimate.py`` with the same ``--seed`` and
 ``--subjects`` (image ``i`` draws from ``SeedSequence([seed, i])`` exactly as
 :func:`wbsa.testing.testset.room_capture_chunk` does); the subject is segmented by
-:func:`wbsa.estimation.segment.segment_subject`, then :func:`wbsa.estimation.bodyfit.fit_body` fits and measures it without
+:func:`wbsa.estimation.subject.segment.segment_subject`, then :func:`wbsa.estimation.methods.body_fit.fit_body` fits and measures it without
 being told the view. Printed: WBSA MAPE and bias (all views, within 30° of front or back), Bland–Altman limits,
 stature error, mass MAPE, azimuth error (mirror-equivalent), time per image, by posture, camera, distance band
 and build, beside Du Bois and Mosteller given the TRUE height and mass.
@@ -18,7 +18,7 @@ and build, beside Du Bois and Mosteller given the TRUE height and mass.
 skin's own area), as fat or muscle that anny's shapes cannot make. The formulae get the undisplaced height and
 mass, so their figures there are not comparable.
 ``--calibrate``: fit these subjects (give a seed other than the benchmark's 1000 and training's 0, 1) and store
-the split-conformal bounds of the WBSA error (:mod:`wbsa.estimation.bodyfit.interval`) in ``src/wbsa/data``.
+the split-conformal bounds of the WBSA error (:mod:`wbsa.estimation.methods.body_fit.interval`) in ``src/wbsa/data``.
 ``--model``: also run the regression route (``wbsa.estimate``) on the same images and print it beside.
 """
 
@@ -50,7 +50,7 @@ def displaced(vertices: np.ndarray, faces: np.ndarray, skin_faces: np.ndarray, m
     muscle sit; their signs are random (a bulge or a hollow). Only ``movable`` vertices move (the trunk and
     legs, not the arms and hands: a 2 cm push along the normals of a finger would triple its skin).
     """
-    from wbsa.estimation.bodyfit.model import vertex_normals
+    from wbsa.estimation.methods.body_fit.model import vertex_normals
 
     n = vertex_normals(vertices[None], faces)[0]
     z = vertices[:, 2] / vertices[:, 2].max()
@@ -73,9 +73,9 @@ def fit_chunk(population: pd.DataFrame, others: pd.DataFrame, first: int, seed: 
     from wbsa.bodies.body_model import BodyModel
     from wbsa.core.mesh import triangle_areas_m2
     from wbsa.errors import WbsaError
-    from wbsa.estimation.bodyfit import BodyFitSettings, fit_body
-    from wbsa.estimation.segment import SegmentSettings, segment_subject
-    from wbsa.estimation.view import azimuth_error_deg
+    from wbsa.estimation.methods.body_fit import BodyFitSettings, fit_body
+    from wbsa.estimation.subject.segment import SegmentSettings, segment_subject
+    from wbsa.estimation.methods.view import azimuth_error_deg
     from wbsa.testing.testset import RoomTestSettings, room_test_captures
 
     settings = RoomTestSettings(seed=seed)
@@ -241,7 +241,7 @@ def main() -> None:
           f"{args.first}–{stop - 1}" + (", displaced skin (outside anny's shapes)" if args.displace else ""))
     report(res, time.perf_counter() - t0, args.displace)
     if args.calibrate:
-        from wbsa.estimation.bodyfit.interval import calibrate, save
+        from wbsa.estimation.methods.body_fit.interval import calibrate, save
 
         ok = res[res["error"] == ""]
         command = (f"python benchmarks/bench_body_fit.py --calibrate --subjects {args.subjects} --seed {args.seed}"

@@ -231,7 +231,7 @@ def main() -> None:
     if args.clothing_unstated and not args.clothing_m:
         ap.error("--clothing-unstated goes with --clothing-m T (a layer to leave unstated)")
 
-    from wbsa.estimation.default_model import default_model, default_model_path
+    from wbsa.estimation.methods.regression.default_model import default_model, default_model_path
     from wbsa.testing.testset import RoomTestSettings, run_room_tests
 
     model_path = args.model

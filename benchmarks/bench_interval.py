@@ -27,11 +27,11 @@ import pandas as pd
 
 def rule_ranks(n: int, m: int, level: float) -> dict[str, int]:
     """1-based rank of the score each rule takes among ``n`` capture scores of ``m`` calibration subjects
-    (:func:`~wbsa.estimation.model.conformal_rank`; past ``n`` where the rule asks for more scores than there
+    (:func:`~wbsa.estimation.methods.regression.model.conformal_rank`; past ``n`` where the rule asks for more scores than there
     are: :func:`quantile_at` takes the largest)."""
     from scipy.stats import binom
 
-    from wbsa.estimation.model import conformal_rank
+    from wbsa.estimation.methods.regression.model import conformal_rank
 
     confident = int(binom.ppf(0.9, m, level)) + 1  # of m + 1, as the subject rank's ⌈(m + 1) L⌉
     return {"subject rank": conformal_rank(n, m, level)[0], "plain": conformal_rank(n, n, level)[0],
@@ -78,7 +78,7 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=0, help="seed of the halves")
     args = ap.parse_args()
 
-    from wbsa.estimation.default_model import default_model, default_model_path
+    from wbsa.estimation.methods.regression.default_model import default_model, default_model_path
     from wbsa.training.pipeline import TrainSettings, calibration_scores, training_renders, usable
 
     model = default_model()

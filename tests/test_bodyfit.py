@@ -1,4 +1,4 @@
-"""The whole-body fit to one depth view (``wbsa.estimation.bodyfit``, issue 28)."""
+"""The whole-body fit to one depth view (``wbsa.estimation.methods.body_fit``, issue 28)."""
 
 from __future__ import annotations
 
@@ -22,7 +22,7 @@ def render(body_model):
     from wbsa.bodies.posture import POSTURES
     from wbsa.camera import MeshScene, View, preset
     from wbsa.camera.extrinsics import pose_from_view
-    from wbsa.estimation.cloud import Plane
+    from wbsa.estimation.subject.cloud import Plane
     from wbsa.training.room import compose_room
     from wbsa.simulate import simulate_view
 
@@ -54,7 +54,7 @@ def test_torch_posing_matches_the_project_posing(body_model):
     from wbsa.bodies.body_model import body_parameter_array
     from wbsa.bodies.posing import pose_vertices
     from wbsa.bodies.posture import draw_angles
-    from wbsa.estimation.bodyfit.model import FitBody
+    from wbsa.estimation.methods.body_fit.model import FitBody
 
     fit_body = FitBody(body_model, 0.05)
     row = reference_adult(0.0)
@@ -69,7 +69,7 @@ def test_torch_posing_matches_the_project_posing(body_model):
 
 
 def test_fit_recovers_a_known_body_from_a_noise_free_render(render, tmp_path):
-    from wbsa.estimation.bodyfit import BodyFitSettings, fit_body
+    from wbsa.estimation.methods.body_fit import BodyFitSettings, fit_body
     from wbsa.core.mesh_io import read_mesh
 
     depth, mask, camera, floor, truth = render
@@ -89,7 +89,7 @@ def test_fit_recovers_a_known_body_from_a_noise_free_render(render, tmp_path):
 
 
 def test_a_fit_past_its_safety_stop_returns_its_best_body_flagged(render):
-    from wbsa.estimation.bodyfit import BodyFitSettings, fit_body
+    from wbsa.estimation.methods.body_fit import BodyFitSettings, fit_body
 
     depth, mask, camera, floor, _ = render
     # a stop that has passed before the first step, whatever the machine's speed: one step runs, its best body returns
@@ -99,7 +99,7 @@ def test_a_fit_past_its_safety_stop_returns_its_best_body_flagged(render):
 
 
 def test_the_budget_is_counted_in_steps_and_a_stop_while_annealing_keeps_a_body(render):
-    from wbsa.estimation.bodyfit import BodyFitSettings, fit_body
+    from wbsa.estimation.methods.body_fit import BodyFitSettings, fit_body
 
     depth, mask, camera, floor, _ = render
     settings = BodyFitSettings(restarts=2, steps=4)  # every step inside the annealing share
@@ -111,7 +111,7 @@ def test_the_budget_is_counted_in_steps_and_a_stop_while_annealing_keeps_a_body(
 
 
 def test_bad_inputs_give_one_line_errors(render):
-    from wbsa.estimation.bodyfit import fit_body
+    from wbsa.estimation.methods.body_fit import fit_body
 
     depth, mask, camera, floor, _ = render
     cases = [
@@ -130,16 +130,16 @@ def test_bad_inputs_give_one_line_errors(render):
 
 
 def test_settings_refuse_bad_values():
-    from wbsa.estimation.bodyfit import BodyFitSettings
+    from wbsa.estimation.methods.body_fit import BodyFitSettings
 
     for bad in (dict(steps=0), dict(restarts=1.5), dict(robust_loss="l2"), dict(time_budget_s=-1.0),
-                dict(density_model="bmi"), dict(vertex_spacing_m=1.0)):
+                dict(composition="constant"), dict(vertex_spacing_m=1.0)):
         with pytest.raises(SettingsError):
             BodyFitSettings(**bad)
 
 
 def test_conformal_bounds_are_the_order_statistics_and_refuse_too_few():
-    from wbsa.estimation.bodyfit.interval import calibrate
+    from wbsa.estimation.methods.body_fit.interval import calibrate
 
     errors = np.linspace(-0.05, 0.03, 39)
     cal = calibrate(errors[::-1], 0.95, "cmd")

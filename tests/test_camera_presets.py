@@ -60,7 +60,7 @@ def test_the_training_sensor_reads_the_record():
 
 def test_a_subject_beyond_the_working_range_is_flagged():
     from wbsa.camera.presets import CAMERAS
-    from wbsa.estimation.checks import working_range_flags
+    from wbsa.estimation.subject.checks import working_range_flags
 
     for record in CAMERAS.values():
         lo, hi = record.working_range_m
@@ -81,7 +81,7 @@ def test_frames_beyond_where_a_camera_tells_the_feet_from_the_floor_are_flagged(
     segmentation by camera and band): its farther frames are flagged, other cameras' are not."""
     from wbsa.camera.intrinsics import Intrinsics
     from wbsa.camera.presets import CAMERAS
-    from wbsa.estimation.checks import feet_flags
+    from wbsa.estimation.subject.checks import feet_flags
 
     lidar = CAMERAS["phone-lidar"].intrinsics
     assert feet_flags(2.9, lidar) == {} and "step closer" in feet_flags(3.4, lidar)["feet_unsure"]

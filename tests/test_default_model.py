@@ -14,8 +14,8 @@ from wbsa.errors import WbsaError
 
 def test_the_shipped_model_matches_its_recipe():
     """Changing the training settings or the revision without ``wbsa train --default`` fails here."""
-    from wbsa.estimation.default_model import default_model, default_model_path, model_card
-    from wbsa.estimation.model import VERSION
+    from wbsa.estimation.methods.regression.default_model import default_model, default_model_path, model_card
+    from wbsa.estimation.methods.regression.model import VERSION
     from wbsa.training.recipe import MODEL_REVISION, settings_hash
     from wbsa.training.settings import TrainSettings
 
@@ -34,7 +34,7 @@ def test_the_shipped_model_matches_its_recipe():
 
 def test_the_card_says_what_the_model_was_trained_on():
     from wbsa.camera.presets import TRAINED_CAMERAS
-    from wbsa.estimation.default_model import model_card
+    from wbsa.estimation.methods.regression.default_model import model_card
 
     world = model_card()["trained_on"]
     assert [c["name"] for c in world["cameras"]] == list(TRAINED_CAMERAS)
@@ -45,7 +45,7 @@ def test_the_card_says_what_the_model_was_trained_on():
 def test_the_run_time_estimator_imports_no_training_code():
     """``wbsa.estimate`` with the shipped model answers without importing wbsa.training or scikit-learn."""
     code = ("import sys, numpy as np, wbsa\n"
-            "from wbsa.estimation.default_model import default_model\n"
+            "from wbsa.estimation.methods.regression.default_model import default_model\n"
             "from wbsa.estimation.methods import predictor_for\n"
             "predictor_for('regression', None)\n"
             "bad = [m for m in sys.modules if m.startswith(('wbsa.training', 'wbsa.testing', 'sklearn'))]\n"
@@ -58,8 +58,8 @@ def test_the_run_time_estimator_imports_no_training_code():
 def test_a_small_rebuild_through_the_same_code_path_is_a_loadable_model_and_resumes(tmp_path):
     """``wbsa.train`` on a few subjects writes a model of the shipped format; a second run in the same folder
     reads the renders it kept (as a run killed after its renders would) and fits the same model."""
-    from wbsa.estimation.default_model import default_model_path
-    from wbsa.estimation.model import EstimatorModel
+    from wbsa.estimation.methods.regression.default_model import default_model_path
+    from wbsa.estimation.methods.regression.model import EstimatorModel
     from wbsa.training.settings import RenderSettings
     from wbsa.training.run import train
     from wbsa.training.settings import TrainSettings

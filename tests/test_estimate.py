@@ -60,7 +60,7 @@ def room_view(bodies):
 
 
 def test_segmentation_keeps_a_wide_armed_tall_body_and_drops_the_room(room_view):
-    from wbsa.estimation.segment import SegmentSettings, segment_subject
+    from wbsa.estimation.subject.segment import SegmentSettings, segment_subject
 
     room, camera, frame = room_view
     truth = room.is_subject(frame.triangle_id)
@@ -111,8 +111,8 @@ def test_an_arm_joins_an_upper_body_clear_of_the_floor_but_a_standing_or_torso_s
     upper body cut off at the waist; their union's "hips" band was the elbows, 1.0 m wide, so the arm was
     refused. The footprint is a standing object's: only an arm-sized part joining an upper body clear of
     the floor is spared it; the same blocks on the floor, or two torsos, are still held to it."""
-    from wbsa.estimation.cloud import Plane
-    from wbsa.estimation.clusters import MAX_FOOTPRINT_M, footprint_m, merge_occluding
+    from wbsa.estimation.subject.cloud import Plane
+    from wbsa.estimation.subject.clusters import MAX_FOOTPRINT_M, footprint_m, merge_occluding
 
     def merged(lift_m, part_x1_m, floor):
         body_pix, body = _block((20, 120), (80, 100), -0.15, 0.15, -0.1 - lift_m, 1.2 - lift_m, 2.0)
@@ -134,8 +134,8 @@ def test_a_far_arm_seen_past_the_near_side_joins_across_a_metre_but_a_seam_a_hea
     metre in front of it, was left out (up to 281 pixels). Only an arm-sized part behind what it touches,
     clear of the floor, below the shoulders, within reach of the body's axis and with an interior may step
     up to 1.2 m."""
-    from wbsa.estimation.cloud import Plane
-    from wbsa.estimation.clusters import FAR_ARM_GAP_M, MERGE_DEPTH_GAP_M, merge_occluding
+    from wbsa.estimation.subject.cloud import Plane
+    from wbsa.estimation.subject.clusters import FAR_ARM_GAP_M, MERGE_DEPTH_GAP_M, merge_occluding
 
     floor = Plane(np.array([0.0, -1.0, 0.0]), -1.2)  # 1.2 m below the camera (y down)
 
@@ -166,8 +166,8 @@ def test_parts_one_dropped_pixel_apart_touch_but_the_wall_seen_through_an_arm_lo
     """A camera that drops the pixels straddling depth edges split side views at the waist (13 of 300 bench
     images lost 30–70 % of the body): the parts never touched. Parts one empty pixel apart now touch; a
     patch more than 0.65 m behind a body and seen through its loop (hands on hips) is the wall, not the body."""
-    from wbsa.estimation.cloud import Plane
-    from wbsa.estimation.clusters import LOOP_GAP_M, MERGE_DEPTH_GAP_M, merge_occluding
+    from wbsa.estimation.subject.cloud import Plane
+    from wbsa.estimation.subject.clusters import LOOP_GAP_M, MERGE_DEPTH_GAP_M, merge_occluding
 
     floor = Plane(np.array([0.0, -1.0, 0.0]), -1.2)  # 1.2 m below the camera (y down)
 
@@ -206,8 +206,8 @@ def test_parts_one_dropped_pixel_apart_touch_but_the_wall_seen_through_an_arm_lo
 
 def test_mixed_pixels_between_body_and_wall_are_put_back_on_a_surface(room_view):
     """Time-of-flight mixed pixels at every depth edge: most of those floating in a gap land on a surface."""
-    from wbsa.estimation.cloud import depth_noise_m
-    from wbsa.estimation.mixed_pixels import mixed_pixels, repair_mixed_pixels
+    from wbsa.estimation.subject.cloud import depth_noise_m
+    from wbsa.estimation.subject.mixed_pixels import mixed_pixels, repair_mixed_pixels
     from wbsa.sensor.depth_edges import edge_pixels
 
     _, camera, frame = room_view
@@ -235,8 +235,8 @@ def test_mixed_pixels_between_body_and_wall_are_put_back_on_a_surface(room_view)
 def test_outline_shares_tell_mixed_and_dropped_edges_from_clean_ones(room_view):
     """The measures see what the camera did at the outline: mixed returns beside it, or gaps; the share of
     its depth edges behind a gap grows with the share a filter dropped, to all of them."""
-    from wbsa.estimation.mixed_pixels import outline_shares, repair_mixed_pixels
-    from wbsa.estimation.segment import SegmentSettings, segment_subject
+    from wbsa.estimation.subject.mixed_pixels import outline_shares, repair_mixed_pixels
+    from wbsa.estimation.subject.segment import SegmentSettings, segment_subject
     from wbsa.sensor.depth_edges import edge_pixels
 
     _, camera, frame = room_view
@@ -260,7 +260,7 @@ def test_side_view_keeps_both_soles_and_no_floor_strip(body_model):
     from wbsa.camera import View, preset
     from wbsa.core.backproject import backproject_depth
     from wbsa.training.room import compose_room
-    from wbsa.estimation.segment import SegmentSettings, segment_subject
+    from wbsa.estimation.subject.segment import SegmentSettings, segment_subject
 
     man = body_model.rest_bodies(reference_adult(0.0))
     room = compose_room(body_model.skin_mesh(_posed(body_model, man, "feet-apart")), 80.0, wall_behind_m=0.8)
@@ -277,10 +277,10 @@ def test_toes_across_the_image_are_found_by_their_raised_neighbourhood(body_mode
     """Side view of a woman in the A-pose (Kinect v1, 3 m): her toes, a few centimetres over the floor,
     are missed without the windowed median (2.8 % of her pixels), kept with it; the phone LiDAR's coarse
     pixels take no window at all."""
-    import wbsa.estimation.feet as feet
+    import wbsa.estimation.subject.feet as feet
     from wbsa.camera import View, preset
     from wbsa.training.room import compose_room
-    from wbsa.estimation.segment import SegmentSettings, segment_subject
+    from wbsa.estimation.subject.segment import SegmentSettings, segment_subject
 
     woman = body_model.rest_bodies(reference_adult(1.0))
     room = compose_room(body_model.skin_mesh(_posed(body_model, woman, "a-pose")), 90.0, wall_behind_m=0.8)
@@ -307,7 +307,7 @@ def test_the_wall_seen_between_the_legs_is_never_the_subject(body_model, monkeyp
     """Aimed between the legs (``pick`` at a pixel of the wall there) and the wall not found as a plane (as
     behind two people in the benchmark's image 49 of seed 2000), the subject is still chosen: the wall piece
     is person-sized but seen past the body (without that rule it was taken, 0 % of the subject kept)."""
-    import wbsa.estimation.segment as segment
+    import wbsa.estimation.subject.segment as segment
     from wbsa.camera import View, preset
     from wbsa.training.room import compose_room
 
@@ -337,7 +337,7 @@ def test_people_touching_are_refused_with_a_message_that_says_so(bodies):
     hips, no person, and an error that names it."""
     from wbsa.camera import View, preset
     from wbsa.training.room import compose_room
-    from wbsa.estimation.segment import SegmentSettings, segment_subject
+    from wbsa.estimation.subject.segment import SegmentSettings, segment_subject
 
     man, woman = bodies
     room = compose_room(man, 0.0, wall_behind_m=0.8, others=((woman, 0.8),))
@@ -348,7 +348,7 @@ def test_people_touching_are_refused_with_a_message_that_says_so(bodies):
 
 
 def test_seen_past_needs_a_larger_nearer_object_around_it():
-    from wbsa.estimation.segment import Cluster, seen_past
+    from wbsa.estimation.subject.segment import Cluster, seen_past
 
     body = Cluster(1, 20_000, (320, 200), 2.5, 1.8, 0.6, 0.4, (280, 40, 360, 400))
     wall_between_legs = Cluster(2, 900, (320, 330), 3.3, 0.8, 0.2, 0.2, (312, 260, 328, 395))
@@ -371,7 +371,7 @@ def test_a_steep_view_keeps_its_floor(bodies):
     and is still the floor (with the former 50° limit: no floor, elevation from the body's axis)."""
     from wbsa.camera import View, preset
     from wbsa.training.room import compose_room
-    from wbsa.estimation.segment import segment_subject
+    from wbsa.estimation.subject.segment import segment_subject
 
     room = compose_room(bodies[1], 0.0, wall_behind_m=0.8)
     camera = preset("kinect-v2")
@@ -386,7 +386,7 @@ def test_a_steep_view_keeps_its_floor(bodies):
 def test_a_body_alone_in_the_image_is_not_taken_for_a_wall(bodies):
     """A background-free frame (a render of a body or a scan, no room): before, its front became a wall."""
     from wbsa.camera import MeshScene, View, preset
-    from wbsa.estimation.segment import segment_subject
+    from wbsa.estimation.subject.segment import segment_subject
     from wbsa.simulate import simulate_view
 
     camera = preset("kinect-v2")
@@ -399,7 +399,7 @@ def test_a_body_alone_in_the_image_is_not_taken_for_a_wall(bodies):
 
 
 def test_several_people_are_listed_or_picked(room_view):
-    from wbsa.estimation.segment import SegmentSettings, segment_subject
+    from wbsa.estimation.subject.segment import SegmentSettings, segment_subject
 
     room, camera, frame = room_view
     with pytest.raises(WbsaError, match=r"2 person-sized objects .*pixel \(\d+, \d+\), 3\.\d m away.*pick") as err:
@@ -416,7 +416,7 @@ def test_several_people_are_listed_or_picked(room_view):
 def test_pick_center_takes_the_object_under_the_image_centre():
     """The operator aims at the subject: the object under the centre pixel wins over one whose middle pixel
     lies nearer the centre (a tall subject's middle is below a short object's behind it; bench image 107)."""
-    from wbsa.estimation.segment import Cluster, _choose
+    from wbsa.estimation.subject.segment import Cluster, _choose
 
     w, h = 101, 101
     pix = np.arange(w * h)
@@ -432,7 +432,7 @@ def test_pick_center_takes_the_object_under_the_image_centre():
 
 
 def test_wrong_depth_scale_is_an_error_not_a_number(room_view):
-    from wbsa.estimation.segment import segment_subject
+    from wbsa.estimation.subject.segment import segment_subject
 
     _, camera, frame = room_view
     with pytest.raises(WbsaError, match="depth scale"):
@@ -441,7 +441,7 @@ def test_wrong_depth_scale_is_an_error_not_a_number(room_view):
 
 def test_a_broken_model_file_is_refused_before_the_image_is_measured(room_view, tmp_path, monkeypatch):
     """A model file is read (and refused if broken) before the image is segmented and measured."""
-    import wbsa.estimation.segment as segment
+    import wbsa.estimation.subject.segment as segment
     from wbsa.estimation import estimate
 
     def no_segmentation(*args, **kwargs):
@@ -456,7 +456,7 @@ def test_a_broken_model_file_is_refused_before_the_image_is_measured(room_view, 
 def test_measures_use_the_reconstruction_the_simulation_reports(bodies):
     """Without a floor the measured VBSA is simulate_view's vbsa_recon_grid_m2, to the last bit."""
     from wbsa.camera import MeshScene, View, preset
-    from wbsa.estimation.measure import measure_subject
+    from wbsa.estimation.subject.measure import measure_subject
     from wbsa.sensor.settings import SensorSettings
     from wbsa.simulate import simulate_view
 
@@ -474,7 +474,7 @@ def test_depth_noise_of_a_body_follows_the_sensor(bodies):
     """On a rendered body, depth_noise_m reads the sensor's σz at the subject's range (Kinect v1's model
     at 2.6 m: 10.4 mm), half of it at noise_scale 0.5, and about nothing on an ideal render."""
     from wbsa.camera import MeshScene, View, preset
-    from wbsa.estimation.measure import measure_subject
+    from wbsa.estimation.subject.measure import measure_subject
     from wbsa.sensor import axial_sigma_m
     from wbsa.sensor.settings import SensorSettings
     from wbsa.simulate import simulate_view
@@ -493,7 +493,7 @@ def test_depth_noise_of_a_body_follows_the_sensor(bodies):
 
 def test_floor_gives_stature_and_elevation(bodies):
     from wbsa.camera import MeshScene, View, pose_from_view, preset
-    from wbsa.estimation.measure import measure_subject
+    from wbsa.estimation.subject.measure import measure_subject
     from wbsa.training.renders import render_floor
     from wbsa.simulate import simulate_view
 
@@ -563,8 +563,8 @@ def test_camera_presets_have_the_documented_fields_of_view():
 
 def test_checks_errors_and_flags():
     from wbsa.camera import preset
-    from wbsa.estimation import checks
-    from wbsa.estimation.view import ViewEstimate
+    from wbsa.estimation.subject import checks
+    from wbsa.estimation.methods.view import ViewEstimate, view_flags
 
     with pytest.raises(WbsaError, match="424.*kinect-v1 is 640x480"):
         checks.check_image_size(np.zeros((424, 512)), preset("kinect-v1"))
@@ -573,9 +573,9 @@ def test_checks_errors_and_flags():
     with pytest.raises(WbsaError, match="non-finite"):
         checks.check_finite_model({"coef": np.array([1.0, np.nan])}, "m.npz")
     est = ViewEstimate(30.0, 5.0, 10.0, 1.0, 0.9)
-    assert checks.view_flags((-30.0, None), est) == {}  # mirror-equivalent
-    assert "view_disagrees" in checks.view_flags((90.0, None), est)
-    assert "view_disagrees" in checks.view_flags((None, 50.0), est)
+    assert view_flags((-30.0, None), est) == {}  # mirror-equivalent
+    assert "view_disagrees" in view_flags((90.0, None), est)
+    assert "view_disagrees" in view_flags((None, 50.0), est)
     assert checks.range_flags({"stature_m": 2.3}, {"stature_m": (1.0, 2.0)})["out_of_training_range"].startswith("stature")
     assert checks.working_range_flags(4.3, preset("kinect-v1"))
 
@@ -583,7 +583,7 @@ def test_checks_errors_and_flags():
 def test_trees_predict_like_scikit_learn():
     from sklearn.ensemble import HistGradientBoostingClassifier, HistGradientBoostingRegressor
 
-    from wbsa.estimation.trees import TreeEnsemble
+    from wbsa.estimation.methods.regression.trees import TreeEnsemble
 
     rng = np.random.default_rng(0)
     X = rng.normal(size=(400, 4))
@@ -605,7 +605,7 @@ def test_interval_quantile_covers_its_level_on_average_over_calibration_draws():
     the same score as the plain conformal rank ⌈(n + 1) L⌉."""
     from scipy.stats import chi2
 
-    from wbsa.estimation.model import EstimatorModel
+    from wbsa.estimation.methods.regression.model import EstimatorModel
 
     rng = np.random.default_rng(0)
     covered = []
@@ -638,7 +638,7 @@ def test_out_of_fold_view_spread_is_the_held_out_one():
     which was about a fifth of it on revision 10's renders and made every run-time view look uncertain."""
     from wbsa.training.renders import Samples
     from wbsa.training.fit import oof_view
-    from wbsa.estimation.view import fold_azimuth
+    from wbsa.estimation.methods.view import fold_azimuth
 
     rng = np.random.default_rng(0)
     n = 900
@@ -656,7 +656,7 @@ def test_out_of_fold_view_spread_is_the_held_out_one():
 
 @pytest.mark.slow
 def test_model_file_round_trip_and_refuses_non_finite_numbers(small_model, tmp_path):
-    from wbsa.estimation.model import EstimatorModel
+    from wbsa.estimation.methods.regression.model import EstimatorModel
 
     m = EstimatorModel.load(small_model)
     feats = {k: np.array([v]) for k, v in dict(vbsa_m2=0.8, stature_m=1.7, silhouette_m2=0.6, width_m=0.7,
@@ -694,7 +694,7 @@ def test_model_file_round_trip_and_refuses_non_finite_numbers(small_model, tmp_p
 def test_a_stated_azimuth_enters_the_model_with_the_held_out_spread(room_view, small_model, monkeypatch):
     """The models were fitted on view spreads no smaller than the held-out one: a stated view takes that."""
     from wbsa.estimation import SegmentSettings, estimate
-    from wbsa.estimation.model import EstimatorModel
+    from wbsa.estimation.methods.regression.model import EstimatorModel
 
     model = EstimatorModel.load(small_model)
     seen = []
@@ -712,9 +712,9 @@ def test_a_stated_azimuth_enters_the_model_with_the_held_out_spread(room_view, s
 def test_a_camera_noisier_than_any_trained_on_is_flagged(room_view, small_model, monkeypatch):
     """The training range of the depth noise per pixel pitch goes from ideal renders to 1.5 × Kinect v1's
     noise; an image beyond it (here its measured noise made three times the trained maximum) is flagged."""
-    import wbsa.estimation.measure as measure
+    import wbsa.estimation.subject.measure as measure
     from wbsa.estimation import SegmentSettings, estimate
-    from wbsa.estimation.model import EstimatorModel
+    from wbsa.estimation.methods.regression.model import EstimatorModel
 
     model = EstimatorModel.load(small_model)
     lo, hi = model.ranges["depth_noise_px"]
@@ -738,7 +738,7 @@ def test_stated_clothes_lower_the_estimate_and_are_checked(room_view, small_mode
     from wbsa.cli import main
     from wbsa.core import write_depth_png
     from wbsa.estimation import SegmentSettings, estimate
-    from wbsa.estimation.model import EstimatorModel
+    from wbsa.estimation.methods.regression.model import EstimatorModel
 
     model = EstimatorModel.load(small_model)
     assert model.ranges["clothing_m"] == (0.0, 0.015)  # the settings' range: a stated 1.5 cm is not flagged
@@ -899,7 +899,7 @@ def test_capture_noise_is_scaled_or_ideal_after_every_other_draw():
 def test_depth_noise_reads_the_noise_of_a_curved_surface():
     """σ of the depth noise from second differences: a smooth body-like curvature reads (nearly) 0, added
     Gaussian noise reads its σ, and the outline's jumps do not count."""
-    from wbsa.estimation.measure import measured_depth_noise as depth_noise
+    from wbsa.estimation.subject.measure import measured_depth_noise as depth_noise
 
     h, w = 200, 160
     yy, xx = np.mgrid[0:h, 0:w]

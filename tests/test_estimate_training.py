@@ -12,7 +12,7 @@ def test_conformal_rank_counts_in_subjects_and_is_exact_at_whole_products():
     captures): the default model's 1,347 captures of 337 subjects give k = 322 and the 1,285th score; the
     rank is taken exactly where (m + 1) L, or the rank through the level k / (m + 1), is a whole number that
     floating point lands just above."""
-    from wbsa.estimation.model import conformal_rank
+    from wbsa.estimation.methods.regression.model import conformal_rank
 
     assert conformal_rank(1347, 337, 0.95) == (1285, False)  # k = ⌈338 × 0.95⌉ = 322; ⌈1348 × 322 / 338⌉
     assert conformal_rank(300, 300, 0.95) == (286, False)  # one score per subject: the plain ⌈(n + 1) L⌉
@@ -39,7 +39,7 @@ def test_the_model_quantile_takes_the_conformal_rank():
     """:meth:`EstimatorModel.quantile` is the :func:`conformal_rank`-th score, and it is unsure with it."""
     import numpy as np
 
-    from wbsa.estimation.model import EstimatorModel, conformal_rank
+    from wbsa.estimation.methods.regression.model import EstimatorModel, conformal_rank
 
     scores = np.sort(np.random.default_rng(0).random(400))
     model = EstimatorModel(None, *(np.zeros(1),) * 3, 0.0, None, np.zeros(10), np.zeros(2), scores,

@@ -265,7 +265,7 @@ def tiny_model(small_estimator_model):
 
 @pytest.mark.slow
 def test_the_estimator_model_prints_short(tiny_model):
-    from wbsa.estimation.model import EstimatorModel
+    from wbsa.estimation.methods.regression.model import EstimatorModel
 
     model = EstimatorModel.load(tiny_model)
     for obj in (model, model.view, model.view.axis, model.residual):

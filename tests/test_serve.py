@@ -121,7 +121,7 @@ def test_the_page_shows_the_answer_of_wbsa_estimate_for_a_rendered_body(server, 
     """A known body in a room: the page's WBSA, interval and flags are wbsa.estimate's on the same file; the
     depth picture, the 3-D view (every triangle of the surface), the view sketch, the formulae and the
     downloads are shown. A screenshot is kept as a test artefact."""
-    from wbsa.estimation.checks import FLAGS
+    from wbsa.estimation.flags import FLAGS
 
     url, app = server
     est = _estimate(frames["one"]["path"], small_estimator_model)
@@ -352,13 +352,14 @@ def test_a_batch_gives_one_row_per_file_and_a_csv(server, frames, small_estimato
     assert rows[1]["wbsa_m2"] == "" and "not a depth file type" in rows[1]["error"]
 
 
-def test_the_advice_names_every_flag_and_the_answer_reads_them_from_flags():
-    from wbsa.estimation.checks import FLAGS
-    from wbsa.server.advice import ADVICE, flag_rows
+def test_the_page_reads_each_flags_meaning_and_advice_from_its_record():
+    from wbsa.estimation.flags import DEFAULT_ADVICE, FLAG_RECORDS
+    from wbsa.server.advice import flag_rows
 
-    assert set(ADVICE) == set(FLAGS)
-    row = flag_rows({"cut_off": "subject pixels on the image border"})[0]
-    assert row["meaning"] == FLAGS["cut_off"] and row["todo"] == ADVICE["cut_off"]
+    row, unknown = flag_rows({"cut_off": "subject pixels on the image border", "new_flag": "detail"})
+    assert row == {"name": "cut_off", "meaning": FLAG_RECORDS["cut_off"].meaning,
+                   "detail": "subject pixels on the image border", "todo": FLAG_RECORDS["cut_off"].advice}
+    assert unknown["meaning"] == "new flag" and unknown["todo"] == DEFAULT_ADVICE
 
 
 def test_upload_names_never_carry_folders_and_messages_never_carry_the_servers_paths():
@@ -403,3 +404,44 @@ def test_the_body_fit_route_shows_and_offers_the_fitted_body(server, frames):
     urls = {d["label"]: d["url"] for d in answer["downloads"]}
     with urllib.request.urlopen(url + urls["Fitted body PLY (at rest)"], timeout=60) as r:
         assert r.read(3) == b"ply"
+
+
+def test_beyond_loopback_every_request_needs_the_token_and_nothing_runs_without_it(small_estimator_model, frames):
+    import http.cookiejar
+
+    from wbsa.errors import WbsaError
+    from wbsa.server.access import choose_token
+    from wbsa.server.app import create_app
+    from wbsa.server.command import start_in_thread
+
+    assert choose_token("127.0.0.1", None) is None and choose_token("::1", "") is None
+    made = choose_token("0.0.0.0", None)
+    assert len(made) >= 40 and made != choose_token("0.0.0.0", None)
+    with pytest.raises(WbsaError, match="at least 16"):
+        choose_token("0.0.0.0", "short")
+    token = "a-token-of-the-users-0123"
+    app = create_app(small_estimator_model, token=token)
+    url, stop = start_in_thread(app)
+    try:
+        good = frames["one"]["path"].read_bytes()
+        for path in ("", "api/info", "static/app.js", "api/batch/x", "api/result/x/estimate.json"):
+            with pytest.raises(urllib.error.HTTPError) as refused:
+                urllib.request.urlopen(url + path, timeout=30)
+            assert refused.value.code == 403 and b"token" in refused.value.read()
+        code, body = _post(url, {"camera": "kinect-v2"}, [("depth", "one.png", good)])
+        assert code == 403 and "token" in body["error"]
+        code, body = _post(url + f"?token=wrong-{token}", {"camera": "kinect-v2"}, [("depth", "one.png", good)])
+        assert code == 403
+        assert app.state.runner.pending == 0 and len(app.state.results) == 0  # nothing was computed or kept
+        # the printed address sets the cookie; the page's later requests carry it
+        jar = http.cookiejar.CookieJar()
+        opener = urllib.request.build_opener(urllib.request.HTTPCookieProcessor(jar))
+        with opener.open(url + f"?token={token}", timeout=30) as r:
+            assert r.status == 200 and "Body surface area" in r.read().decode()
+        with opener.open(url + "api/info", timeout=30) as r:
+            assert r.status == 200
+        req = urllib.request.Request(url + "api/info", headers={"Authorization": f"token {token}"})
+        with urllib.request.urlopen(req, timeout=30) as r:
+            assert r.status == 200
+    finally:
+        stop()

@@ -12,8 +12,9 @@ from typing import Literal, get_args
 #: How a population is made: ``random`` (paper: Virtual Random), ``survey`` (paper: Virtual NHANES),
 #: ``table`` (phenotypes read from a file).
 PopulationKind = Literal["random", "survey", "table"]
-#: Depth noise of the simulated sensor.
-NoiseModel = Literal["none", "nguyen2012"]
+#: Depth noise of the simulated sensor: none, Kinect v1's (Nguyen et al. 2012, the paper's), or the camera's own
+#: technology's (:data:`wbsa.sensor.technology.TECHNOLOGIES`).
+NoiseModel = Literal["none", "nguyen2012", "camera"]
 #: Surface reconstruction methods (each adds a ``vbsa_recon_<method>_m2`` column).
 ReconstructionMethod = Literal["grid", "ball-pivoting", "poisson"]
 #: Depth-image filters applied before reconstruction.
@@ -58,7 +59,9 @@ DepthTechnology = Literal["structured-light", "time-of-flight", "active-stereo",
 Method = Literal["regression", "body-fit", "both"]
 #: A population's ``posture`` setting: a posture name, or ``mixed`` (a random name per subject).
 PostureChoice = Literal[Literal["a-pose", "mixed"], PostureName]
-#: Robust penalty of the body fit's point-to-surface residuals (:mod:`wbsa.estimation.bodyfit.objective`).
+#: How the estimator picks the subject among several people (besides an (x, y) pixel of it).
+PickRule = Literal["nearest", "largest", "center"]
+#: Robust penalty of the body fit's point-to-surface residuals (:mod:`wbsa.estimation.methods.body_fit.objective`).
 RobustLoss = Literal["geman-mcclure", "huber"]
 
 POPULATION_KINDS: tuple[str, ...] = get_args(PopulationKind)
@@ -83,3 +86,4 @@ METHODS: tuple[str, ...] = get_args(Method)
 MESH_UNITS: tuple[str, ...] = get_args(MeshUnits)
 MESH_UPS: tuple[str, ...] = get_args(MeshUp)
 ROBUST_LOSSES: tuple[str, ...] = get_args(RobustLoss)
+PICK_RULES: tuple[str, ...] = get_args(PickRule)

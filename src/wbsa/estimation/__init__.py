@@ -1,15 +1,12 @@
 """estimation stage: WBSA of a person from one depth image, with the view found and the input checked.
 
-``mixed_pixels`` returns between two surfaces at a depth edge, snapped to one (:func:`repair_mixed_pixels`)
-``segment``      the subject in a room: floor, walls behind, 3-D clusters (:func:`segment_subject`)
-``measure``      VBSA, stature, size and view cues of the subject's pixels (:func:`measure_subject`)
-``view``         azimuth (mirror-equivalent) and elevation from the image (:class:`ViewModel`)
-``trees``        boosted trees as plain arrays (no pickle, no scikit-learn at run time)
-``model``        the estimator model file: WBSA continuous in view and distance, calibrated interval
-``default_model`` the model shipped with wbsa (package data) and its card; resolves a ``model`` argument
-``methods``      the method slot: one :class:`Predictor` per route (``regression``), one dispatch point
-``checks``       one-line errors and named flags; ``fhir``: the FHIR R4 Observation
+``subject``      image → measured subject: mixed pixels, segmentation, measures, the input checks
+                 (:func:`segment_subject`, :func:`measure_subject`)
+``methods``      the method slot: :class:`Predictor` (``methods.base``), one dispatch point (:func:`predictor_for`),
+                 the methods ``regression`` (the estimator model, the shipped default model) and ``body_fit``
 ``single_view``  :func:`estimate`, the entry point (``wbsa.estimate`` calls it)
+``flags``        every flag: its meaning, the page's advice, the routes that raise it
+``fhir``         the FHIR R4 Observation
 ``command``      ``wbsa estimate``
 
 This is the run-time path (image → :class:`Estimate`): it imports nothing from :mod:`wbsa.training`, where
@@ -23,22 +20,23 @@ from wbsa.lazy import lazy_exports
 _EXPORTS = {
     "Estimate": "wbsa.estimation.single_view",
     "estimate": "wbsa.estimation.single_view",
-    "repair_mixed_pixels": "wbsa.estimation.mixed_pixels",
-    "SegmentSettings": "wbsa.estimation.segment",
-    "Segmentation": "wbsa.estimation.segment",
-    "segment_subject": "wbsa.estimation.segment",
-    "SubjectMeasures": "wbsa.estimation.measure",
-    "measure_subject": "wbsa.estimation.measure",
-    "ViewEstimate": "wbsa.estimation.view",
-    "ViewModel": "wbsa.estimation.view",
-    "EstimatorModel": "wbsa.estimation.model",
-    "Predictor": "wbsa.estimation.methods",
-    "predictor_for": "wbsa.estimation.methods",
-    "default_model": "wbsa.estimation.default_model",
-    "default_model_path": "wbsa.estimation.default_model",
-    "model_card": "wbsa.estimation.default_model",
+    "repair_mixed_pixels": "wbsa.estimation.subject.mixed_pixels",
+    "SegmentSettings": "wbsa.estimation.subject.settings",
+    "Segmentation": "wbsa.estimation.subject.segment",
+    "segment_subject": "wbsa.estimation.subject.segment",
+    "SubjectMeasures": "wbsa.estimation.subject.measure",
+    "measure_subject": "wbsa.estimation.subject.measure",
+    "ViewEstimate": "wbsa.estimation.methods.view",
+    "ViewModel": "wbsa.estimation.methods.regression.view_model",
+    "EstimatorModel": "wbsa.estimation.methods.regression.model",
+    "Predictor": "wbsa.estimation.methods.base",
+    "predictor_for": "wbsa.estimation.methods.dispatch",
+    "BodyFitSettings": "wbsa.estimation.methods.body_fit.settings",
+    "default_model": "wbsa.estimation.methods.regression.default_model",
+    "default_model_path": "wbsa.estimation.methods.regression.default_model",
+    "model_card": "wbsa.estimation.methods.regression.default_model",
     "fhir_observation": "wbsa.estimation.fhir",
-    "FLAGS": "wbsa.estimation.checks",
+    "FLAGS": "wbsa.estimation.flags",
 }
 __all__ = sorted(_EXPORTS)
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -47,7 +47,7 @@ def downloads(est, folder: Path, name: str) -> dict[str, tuple[bytes, str, str]]
     (atomic, verified) into ``folder`` and read back.
     """
     from wbsa.core.mesh_io import write_mesh
-    from wbsa.estimation.command import write_mask
+    from wbsa.core.depth_image import write_mask
     from wbsa.estimation.fhir import fhir_observation
     from wbsa.strict_json import json_text
 

@@ -76,7 +76,7 @@ def _number(fields: dict, name: str, low: float, high: float, what: str) -> floa
 
 def options_from_form(form, presets, methods) -> "Options":
     """The page's choices as :class:`~wbsa.server.jobs.Options`, every field checked."""
-    from wbsa.estimation.command import _pick
+    from wbsa.cli_types import pick as parse_pick
     from wbsa.server.jobs import Options, camera_from_upload
 
     check_fields(form, FIELDS, FILES)
@@ -97,7 +97,7 @@ def options_from_form(form, presets, methods) -> "Options":
     pick = None
     if f.get("pick", "").strip():
         try:
-            pick = _pick(f["pick"].strip())
+            pick = parse_pick(f["pick"].strip())
         except argparse.ArgumentTypeError as exc:
             raise UploadError(f"pick: {exc}") from None
     clothing_cm = _number(f, "clothing_cm", 0, 5, "a thickness of clothes in cm")
@@ -110,7 +110,7 @@ def options_from_form(form, presets, methods) -> "Options":
 
 
 def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_upload_bytes: int = MAX_UPLOAD_BYTES,
-               temp_dir: str | None = None, keep_results: int = 64):
+               temp_dir: str | None = None, keep_results: int = 64, token: str | None = None):
     """The ``wbsa serve`` application (Starlette, ASGI).
 
     Parameters
@@ -128,6 +128,9 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
         Where the server's temporary folder is made (default: the system's); it is removed at shutdown.
     keep_results : int
         Answers kept in memory for downloads and picks.
+    token : str, optional
+        A token every request must carry (:class:`wbsa.server.access.TokenGate`; 403 without it). None: no
+        token (loopback only: ``wbsa serve`` makes one for any other address).
 
     Returns
     -------
@@ -140,22 +143,23 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
     from starlette.routing import Mount, Route
     from starlette.staticfiles import StaticFiles
 
-    from wbsa.camera.presets import PRESETS
+    from wbsa.camera.presets import CAMERAS
     from wbsa.strict_json import finite_or_none
     from wbsa.typing import METHODS
-    from wbsa.server.batch import Batch, BatchStore, run_batch
-    from wbsa.server.jobs import ResultStore, Runner, internal_error, measure, new_id
+    from wbsa.server.batch import Batch, run_batch
+    from wbsa.server.jobs import BoundedStore, Runner, internal_error, measure, new_id
 
     if model is not None and not hasattr(model, "predict"):
-        from wbsa.estimation.default_model import load_model
+        from wbsa.estimation.methods.regression.default_model import load_model
 
         model = load_model(model)
-    presets = [k for k in PRESETS if k != "tum"] + ["tum"]
+    presets = sorted(CAMERAS, key=lambda name: not CAMERAS[name].by_image_size)  # those auto may pick first
     methods = list(METHODS)
     root = Path(tempfile.mkdtemp(prefix="wbsa-serve-", dir=temp_dir))
     runner = Runner(workers=workers, max_pending=max_pending)
-    results = ResultStore(keep_results)
-    batches = BatchStore()
+    results = BoundedStore(keep_results, "this result is no longer kept (the server keeps the last "
+                                         f"{keep_results}); upload the depth file again")
+    batches = BoundedStore(16, "this batch is no longer kept; upload its files again")
 
     def error(exc: UploadError) -> JSONResponse:
         return JSONResponse({"error": str(exc)}, status_code=exc.status)
@@ -165,7 +169,7 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
 
     async def info(request: Request) -> Response:
         return JSONResponse({
-            "presets": [{"name": k, "width": PRESETS[k].width, "height": PRESETS[k].height} for k in presets],
+            "presets": [{"name": k, "width": CAMERAS[k].intrinsics.width, "height": CAMERAS[k].intrinsics.height} for k in presets],
             "methods": methods, "max_upload_bytes": max_upload_bytes, "max_clothing_cm": 5,
             "model": "default" if model is None else str(getattr(model, "meta", {}).get("name", "given"))})
 
@@ -205,14 +209,14 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
     async def pick(request: Request) -> Response:
         import dataclasses
 
-        from wbsa.estimation.command import _pick
+        from wbsa.cli_types import pick as parse_pick
 
         async def work():
             before = results.get(request.path_params["rid"])
             if before.depth_m is None:
                 raise UploadError("this upload holds no depth image to pick from; upload a depth file")
             try:
-                at = _pick(request.query_params.get("pick", ""))
+                at = parse_pick(request.query_params.get("pick", ""))
             except argparse.ArgumentTypeError as exc:
                 raise UploadError(f"pick: {exc}") from None
             options = dataclasses.replace(before.options, pick=at)
@@ -282,6 +286,8 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
 
     from starlette.middleware import Middleware
 
+    from wbsa.server.access import TokenGate
+
     app = Starlette(routes=[
         Route("/", page),
         Route("/api/info", info),
@@ -292,7 +298,8 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
         Route("/api/batch/{bid}.csv", batch_csv),
         Route("/api/batch/{bid}", batch_progress),
         Mount("/static", StaticFiles(directory=STATIC), name="static"),
-    ], lifespan=lifespan, middleware=[Middleware(SecurityHeaders)])
+    ], lifespan=lifespan, middleware=[Middleware(SecurityHeaders)]
+        + ([Middleware(TokenGate, token=token)] if token is not None else []))
     app.state.root, app.state.runner, app.state.results, app.state.batches = root, runner, results, batches
     app.state.model = model
     return app

@@ -18,8 +18,11 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "depth picture, the view, a 3-D view and downloads; several files give a table "
                                    "with a CSV. Prints the address to open; Ctrl-C stops it (docs/serve.md).")
     p.add_argument("--host", default="127.0.0.1",
-                   help="address to listen on (default 127.0.0.1: this machine only; 0.0.0.0 opens it to the "
-                        "network, without any login)")
+                   help="address to listen on (default 127.0.0.1: this machine only; any other address, e.g. "
+                        "0.0.0.0 for the network, requires a token, printed in the address to open)")
+    p.add_argument("--token", default=None,
+                   help="the token the page requires (default: a random one beyond 127.0.0.1, none on it; also "
+                        "from WBSA_SERVE_TOKEN); at least 16 characters of A-Z a-z 0-9 - _ .")
     p.add_argument("--port", type=int, default=0, help="port (default 0: a free one, printed)")
     p.add_argument("--model", default=None, help="estimator model (.npz) or wbsa fit model (.json); default: the "
                                                  "default model")
@@ -80,17 +83,21 @@ def start_in_thread(app, host: str = "127.0.0.1", port: int = 0):
 
 def run_serve(args: argparse.Namespace) -> int:
     """Handler of ``wbsa serve``."""
+    import os
+
     import uvicorn
 
+    from wbsa.server.access import TOKEN_NAME, choose_token, needs_token
     from wbsa.server.app import create_app
 
-    app = create_app(args.model, workers=int(args.workers))
+    token = choose_token(args.host, args.token or os.environ.get("WBSA_SERVE_TOKEN"))
+    app = create_app(args.model, workers=int(args.workers), token=token)
     sock = bind(args.host, args.port)
-    url = url_of(sock)
+    url = url_of(sock) + (f"?{TOKEN_NAME}={token}" if token else "")
     print(f"wbsa serve: open {url} in a browser (Ctrl-C stops)", flush=True)
-    if args.host not in ("127.0.0.1", "localhost", "::1"):
-        sys.stderr.write(f"warning: listening on {args.host}: anyone who reaches this machine can use the page "
-                         "(there is no login)\n")
+    if needs_token(args.host):
+        sys.stderr.write(f"note: listening on {args.host}: every request needs the token in the address above; "
+                         "the traffic is not encrypted: put TLS in front beyond a trusted network (docs/serve.md)\n")
     server = uvicorn.Server(uvicorn.Config(app, log_level="warning", lifespan="on"))
     server.run(sockets=[sock])
     return 0

@@ -16,7 +16,7 @@ import numpy as np
 import pandas as pd
 
 from wbsa.training.capture import CaptureSettings, sample_capture
-from wbsa.estimation.checks import MAX_CLOTHING_M
+from wbsa.estimation.subject.checks import MAX_CLOTHING_M
 from wbsa.errors import WbsaError
 from wbsa.typing import EDGE_PIXELS, TEST_SCENES, EdgePixels, TestScene
 
@@ -29,7 +29,7 @@ class RoomTestSettings:
     ----------
     capture : CaptureSettings
         Its ``edge_pixels`` draw is not used: ``edge_pixels`` below applies to every image. The default is
-        the issue's benchmark: noise at Kinect v1's level (``noise_scale`` 1), no ideal captures. Both are
+        the benchmark's default: noise at Kinect v1's level (``noise_scale`` 1), no ideal captures. Both are
         drawn last, so ``noise_scale=(f, f)`` or ``ideal_share=1`` give the same captures at another noise
         level or with no sensor effects.
     wall_behind_m : (float, float)
@@ -42,7 +42,7 @@ class RoomTestSettings:
         How the estimator chooses among several people (the operator aims the camera at the subject).
     edge_pixels : {'kept', 'mixed', 'dropped'}
         What the camera returns for a pixel straddling a depth edge (:func:`wbsa.sensor.depth_edges.edge_pixels`):
-        the render's depth (the issue's benchmark), a time-of-flight mix of the two surfaces, or nothing.
+        the render's depth (the benchmark's default), a time-of-flight mix of the two surfaces, or nothing.
     edge_share : float
         Share of the depth edges so affected.
     scene : {'room', 'alone'}
@@ -92,16 +92,16 @@ CONTACT_REACH_PX = 3
 def contact_strip(truth: np.ndarray, surface_height_m: np.ndarray) -> np.ndarray:
     """(h, w) bool: the feet's contact strip, pixels no depth image tells between the subject and the floor.
 
-    The pixels that see a surface lower than :data:`~wbsa.estimation.cloud.FLOOR_CUT_M` over the floor (the
+    The pixels that see a surface lower than :data:`~wbsa.estimation.subject.cloud.FLOOR_CUT_M` over the floor (the
     subject's soles and toes, the floor) within :data:`CONTACT_REACH_PX` of such a pixel of the subject.
     The measures cut the subject's share of it only when a floor is found (by the segmentation, at run
-    time and in the training renders in rooms): :func:`~wbsa.estimation.measure.measure_subject` then
+    time and in the training renders in rooms): :func:`~wbsa.estimation.subject.measure.measure_subject` then
     drops the subject's returns within the floor's noise envelope (at least ``FLOOR_CUT_M`` over it,
-    :func:`~wbsa.estimation.cloud.above_floor`) and sparse low pixels beside them, reading heights from the
+    :func:`~wbsa.estimation.subject.cloud.above_floor`) and sparse low pixels beside them, reading heights from the
     measured depth over the found floor, not from the true surface, so the cut matches this strip only up
     to the depth noise and the floor's error. With no floor found (flag ``no_floor``; a body alone)
     nothing is cut and the soles are measured with the body. Segmentation benchmarks leave such a band out
-    as "void" (the object boundaries of PASCAL VOC); the issue's figures count it, and both are reported.
+    as "void" (the object boundaries of PASCAL VOC); the benchmark's figures count it, and both are reported.
 
     Parameters
     ----------
@@ -117,7 +117,7 @@ def contact_strip(truth: np.ndarray, surface_height_m: np.ndarray) -> np.ndarray
     """
     from scipy import ndimage
 
-    from wbsa.estimation.cloud import FLOOR_CUT_M
+    from wbsa.estimation.subject.cloud import FLOOR_CUT_M
 
     low = np.nan_to_num(surface_height_m, nan=np.inf) < FLOOR_CUT_M
     return low & ndimage.binary_dilation(truth & low, iterations=CONTACT_REACH_PX)
@@ -214,10 +214,10 @@ def room_capture_chunk(population: pd.DataFrame, others: pd.DataFrame, first: in
     wall time.
     """
     from wbsa.bodies.body_model import BodyModel
-    from wbsa.estimation.default_model import load_model
-    from wbsa.estimation.segment import SegmentSettings
+    from wbsa.estimation.methods.regression.default_model import load_model
+    from wbsa.estimation.subject.segment import SegmentSettings
     from wbsa.estimation.single_view import estimate
-    from wbsa.estimation.view import fold_azimuth
+    from wbsa.estimation.methods.view import fold_azimuth
     from wbsa.parallel import keep_large_allocations, single_threaded_math
 
     keep_large_allocations()

@@ -9,11 +9,12 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from wbsa.estimation.measure import SCALAR_MEASURES
-from wbsa.estimation.design import SPREAD_TERMS, design, spread_design, tree_features, with_clothing
-from wbsa.estimation.model import EstimatorModel
-from wbsa.estimation.trees import TreeEnsemble
-from wbsa.estimation.view import ViewModel, azimuth_sd_deg, fold_azimuth
+from wbsa.estimation.subject.measure import SCALAR_MEASURES
+from wbsa.estimation.methods.regression.design import SPREAD_TERMS, design, spread_design, tree_features, with_clothing
+from wbsa.estimation.methods.regression.model import EstimatorModel
+from wbsa.estimation.methods.regression.trees import TreeEnsemble
+from wbsa.estimation.methods.regression.view_model import ViewModel, azimuth_sd_deg
+from wbsa.estimation.methods.view import fold_azimuth
 from wbsa.training.renders import Samples
 from wbsa.training.settings import TrainSettings
 
@@ -27,13 +28,13 @@ BAG_SUBJECT_SHARE = 0.9
 
 def fit_view_model(descriptors: np.ndarray, azimuth_deg: np.ndarray, *, seed: int = 0, max_iter: int = 150,
                    axis_sd_deg: float | None = None, elevation_sd_deg: dict | None = None) -> ViewModel:
-    """A :class:`~wbsa.estimation.view.ViewModel` fitted on renders' view descriptors (n, d) and true azimuths (n,).
+    """A :class:`~wbsa.estimation.methods.regression.view_model.ViewModel` fitted on renders' view descriptors (n, d) and true azimuths (n,).
 
     ``axis_sd_deg`` should come from held-out renders; None takes the (optimistic) training spread.
     """
     from sklearn.ensemble import HistGradientBoostingClassifier, HistGradientBoostingRegressor
 
-    from wbsa.estimation.view import ELEVATION_SD_DEG
+    from wbsa.estimation.methods.regression.view_model import ELEVATION_SD_DEG
 
     psi = fold_azimuth(azimuth_deg)
     axis_deg = np.minimum(psi, 180.0 - psi)

@@ -17,9 +17,9 @@ import numpy as np
 import pandas as pd
 
 from wbsa.errors import WbsaError
-from wbsa.estimation.design import range_values
-from wbsa.estimation.model import EstimatorModel
-from wbsa.estimation.view import fold_azimuth
+from wbsa.estimation.methods.regression.design import range_values
+from wbsa.estimation.methods.regression.model import EstimatorModel
+from wbsa.estimation.methods.view import fold_azimuth
 from wbsa.training.fit import (VIEW_DIMS, calibration_scores, fit_spread, fit_view_model, fit_wbsa, oof_view, rms,
                                sample_columns)
 from wbsa.training.renders import Samples, render_samples

@@ -1,6 +1,6 @@
 """The recipe of the shipped default model: its revision, its training settings' hash, its rebuild and its card.
 
-The model that ships in ``wbsa/data`` (:mod:`wbsa.estimation.default_model`) is what ``TrainSettings()``
+The model that ships in ``wbsa/data`` (:mod:`wbsa.estimation.methods.regression.default_model`) is what ``TrainSettings()``
 trains at :data:`MODEL_REVISION`. ``wbsa train --default`` rebuilds it (:func:`wbsa.training.run.rebuild_default_model`) (about 45 minutes on 2 cores) and writes
 its model card; a test fails when the settings or the revision change without that rebuild
 (``tests/test_default_model.py``).
@@ -13,7 +13,7 @@ import json
 from dataclasses import asdict
 from pathlib import Path
 
-from wbsa.estimation.model import EstimatorModel
+from wbsa.estimation.methods.regression.model import EstimatorModel
 from wbsa.training.settings import TrainSettings
 
 #: Bumped whenever the measures, the renders or the model change what a trained model means.
@@ -69,7 +69,7 @@ def model_card(model: EstimatorModel, settings: TrainSettings, benchmark: dict |
 
 
 def _format_version() -> int:
-    from wbsa.estimation.model import VERSION
+    from wbsa.estimation.methods.regression.model import VERSION
 
     return VERSION
 
@@ -77,7 +77,7 @@ def _format_version() -> int:
 def write_default_model(model: EstimatorModel, settings: TrainSettings, folder: Path,
                         benchmark: dict | None = None) -> tuple[Path, Path]:
     """Write ``model`` and its card as the shipped default (``folder``: ``src/wbsa/data`` of a checkout)."""
-    from wbsa.estimation.default_model import DEFAULT_CARD_FILE, DEFAULT_MODEL_FILE
+    from wbsa.estimation.methods.regression.default_model import DEFAULT_CARD_FILE, DEFAULT_MODEL_FILE
     from wbsa.io import write_text
 
     model.meta["name"] = "default"

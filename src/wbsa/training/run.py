@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from wbsa.errors import WbsaError
-from wbsa.estimation.model import EstimatorModel
+from wbsa.estimation.methods.regression.model import EstimatorModel
 from wbsa.training.settings import TrainSettings
 
 #: The install command of what training needs beyond the run-time estimator.

@@ -1,0 +1,174 @@
+"""Fit a whole anny body to one segmented depth view and measure it: :func:`fit_body`.
+
+Steps: the subject's returns become points in a floor-aligned view frame (:mod:`.observation`); a small
+render-and-compare grid over sex, arms and azimuth gives the starts (:mod:`.init`); a batched Adam fit moves
+phenotypes, local changes, the ten posture angles and the body's placement so that the posed body explains
+the points, stays inside the silhouette and hides no seen surface (:mod:`.objective`, :mod:`.optimize`); the
+best body is rebuilt on anny's whole mesh and measured at rest as the population is (:mod:`.measures`).
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import time
+
+import numpy as np
+
+from wbsa.estimation.methods.body_fit.result import BodyFit
+from wbsa.estimation.methods.body_fit.settings import ANGLE_LIMITS_DEG, BodyFitSettings
+from wbsa.errors import WbsaError
+
+#: Phenotypes whose value at 0 or 1 flags ``outside_model_range`` (the others are not measured by the view).
+_RANGE_CHECKED = ("p_age", "p_muscle", "p_weight", "p_height", "p_proportions")
+#: Residual (m) and inlier share beyond which ``poor_fit`` is flagged.
+POOR_RESIDUAL_M = 0.015
+POOR_INLIER_SHARE = 0.85
+
+
+@functools.lru_cache(maxsize=2)
+def _models(spacing_m: float):
+    """(BodyModel, FitBody, Anthropometer), built once per process and vertex spacing."""
+    import torch
+
+    from wbsa.bodies.anthropometry import Anthropometer
+    from wbsa.bodies.body_model import BodyModel
+    from wbsa.estimation.methods.body_fit.model import FitBody
+
+    body_model = BodyModel()
+    return body_model, FitBody(body_model, spacing_m), Anthropometer(body_model)
+
+
+def fit_body(depth_m: np.ndarray, mask: np.ndarray, camera, floor, *, clothing_m: float = 0.0,
+             azimuth_deg: float | None = None, settings: BodyFitSettings = BodyFitSettings(),
+             seed: int = 0) -> BodyFit:
+    """Fit anny to one depth view of a standing person and measure the fitted body.
+
+    Parameters
+    ----------
+    depth_m : (h, w) float64
+        z-depth in metres, 0 = no return.
+    mask : (h, w) bool
+        The subject's pixels (:func:`wbsa.estimation.subject.segment.segment_subject`).
+    camera : wbsa.camera.Intrinsics
+    floor : wbsa.estimation.subject.cloud.Plane or None
+        The floor in the camera frame (returns within its noise are not fitted; the body stands on it).
+    clothing_m : float
+        A stated layer of clothes (m). Only 0 is fitted today: a layer raises.
+    azimuth_deg : float, optional
+        A stated view: the starts keep to within 45° of it.
+    settings : BodyFitSettings
+    seed : int
+        Seeds the subsample of the observed points.
+
+    Returns
+    -------
+    BodyFit
+
+    Raises
+    ------
+    WbsaError
+        A depth image that is not (h, w) finite metres of the camera's size, an empty mask, fewer than 200
+        returns above the floor, a stated layer of clothes.
+    """
+    import torch
+
+    from wbsa.estimation.methods.body_fit.observation import check_inputs
+
+    if not (isinstance(clothing_m, (int, float)) and math.isfinite(clothing_m) and clothing_m >= 0):
+        raise WbsaError(f"clothing_m must be a layer of 0 m or more, got {clothing_m!r}")
+    if clothing_m > 0:
+        raise WbsaError("the body fit does not yet allow for clothes (clothing_m > 0); use method 'regression'")
+    if azimuth_deg is not None and not math.isfinite(azimuth_deg):
+        raise WbsaError(f"azimuth_deg must be a finite number of degrees, got {azimuth_deg!r}")
+    depth, mask = check_inputs(depth_m, mask, camera)
+    body_model, fit_model, meter = _models(settings.vertex_spacing_m)  # once per process, not timed
+    threads = torch.get_num_threads()
+    torch.set_num_threads(settings.threads)
+    try:
+        return _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fit_model, meter)
+    finally:
+        torch.set_num_threads(threads)
+
+
+def _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fit_model, meter) -> BodyFit:
+    """:func:`fit_body` on checked inputs, with anny loaded."""
+    import torch
+
+    from wbsa.bodies.posing import pose_vertices
+    from wbsa.bodies.posture import ANGLE_COLUMNS
+    from wbsa.estimation.methods.body_fit.init import first_guesses
+    from wbsa.estimation.methods.body_fit.measures import measure_body
+    from wbsa.estimation.methods.body_fit.objective import Objective
+    from wbsa.estimation.methods.body_fit.observation import observe
+    from wbsa.estimation.methods.body_fit.optimize import optimise
+
+    t0 = time.perf_counter()
+    deadline = t0 + settings.time_budget_s
+    rng = np.random.default_rng(np.random.SeedSequence([int(seed), 0xB0D7]))
+    obs = observe(depth, mask, camera, floor, settings.n_points, rng)
+    objective = Objective(obs, settings.robust_loss, settings.robust_scale_m, settings.silhouette_tolerance_px)
+    with torch.no_grad():
+        starts = first_guesses(fit_model, objective, settings.restarts, azimuth_deg, settings.child_starts)
+    opt = optimise(fit_model, objective, starts, settings, deadline)
+
+    body = measure_body(meter, opt.params, settings.composition)
+    rest = body["rest"]
+    angles_deg = np.degrees(opt.angles_rad)
+    posed = pose_vertices(rest.vertices[0], rest.bone_heads[0], angles_deg, body_model.rig)
+    c, s = math.cos(opt.yaw_rad), math.sin(opt.yaw_rad)
+    rz = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    posed_f = posed @ rz.T + opt.shift_m
+    centre = 0.5 * (posed_f.min(0) + posed_f.max(0))
+    to_camera = obs.camera_position - centre
+    d_body = rz.T @ to_camera
+    azimuth = float(np.degrees(np.arctan2(d_body[0], -d_body[1])) % 360.0)
+    distance = float(np.linalg.norm(to_camera))
+    elevation = obs.elevation_deg(centre)
+    res = np.abs(opt.residuals_m)
+    kept = np.sort(res)[: max(1, int(0.9 * len(res)))]
+    residual = float(np.sqrt(np.mean(kept**2)))
+    inliers = float(np.mean(res < 0.03))
+
+    flags: dict[str, str] = {}
+    if opt.timed_out:
+        flags["time_budget"] = (f"stopped after {opt.steps} of {settings.steps} steps at the "
+                                f"{settings.time_budget_s:g} s safety stop")
+    elif not opt.converged:
+        flags["not_converged"] = f"{opt.steps} steps without settling"
+    lows = np.array([lo for lo, _ in ANGLE_LIMITS_DEG] * 2)
+    highs = np.array([hi for _, hi in ANGLE_LIMITS_DEG] * 2)
+    edge = [ANGLE_COLUMNS[i] for i in np.flatnonzero((angles_deg <= lows + 1.0) | (angles_deg >= highs - 1.0))]
+    if edge:
+        flags["posture_at_limit"] = ", ".join(edge)
+    table = body["table"].iloc[0]
+    at_edge = [f"{k} = {table[k]:.2f}" for k in _RANGE_CHECKED if min(table[k], 1.0 - table[k]) < 0.01]
+    at_edge += [f"{k} = {table[k]:+.2f}" for k in table.index if k.startswith("l_") and abs(table[k]) > 0.99]
+    if at_edge:
+        flags["outside_model_range"] = ", ".join(at_edge)
+    if residual > POOR_RESIDUAL_M or inliers < POOR_INLIER_SHARE:
+        flags["poor_fit"] = f"residual {1000 * residual:.1f} mm, {100 * inliers:.0f} % of points within 3 cm"
+    if mask[0].any() or mask[-1].any() or mask[:, 0].any() or mask[:, -1].any():
+        flags["cut_off"] = "subject pixels on the image border; part of the body may be missing"
+    if floor is None:
+        flags["no_floor"] = "no floor given: the body's height and uprightness come from its points alone"
+    if abs(elevation) > 45.0:
+        flags["steep_view"] = f"elevation {elevation:.0f}°"
+
+    m = body["measures"]
+    from wbsa.estimation.methods.body_fit.interval import load
+
+    cal = load()
+    lo, hi = cal.interval(float(m["wbsa_m2"])) if cal is not None else (math.nan, math.nan)
+    tapes = {k: float(v) for k, v in m.items() if k.endswith("_circ_m") or k.endswith("_width_m")}
+    return BodyFit(
+        wbsa_m2=float(m["wbsa_m2"]), wbsa_lo_m2=lo, wbsa_hi_m2=hi, level=cal.level if cal is not None else math.nan,
+        stature_m=float(m["stature_m"]), volume_m3=float(m["volume_m3"]),
+        mass_kg=float(m["mass_kg"]), bmi=float(m["bmi"]), tapes=tapes, sex="male" if body["male"] else "female",
+        age_years=body["age_years"], parameters={k: float(v) for k, v in table.items()},
+        posture_deg=dict(zip(ANGLE_COLUMNS, angles_deg.tolist())), azimuth_deg=azimuth, elevation_deg=elevation,
+        distance_m=distance, residual_m=residual, inlier_share=inliers, loss=opt.loss, converged=opt.converged,
+        flags=flags, seconds=time.perf_counter() - t0, steps=opt.steps, restarts=len(starts.label),
+        rest_vertices=rest.vertices[0], posed_vertices=obs.to_camera(posed_f), faces=body_model.skin_faces)
+
+

@@ -1,6 +1,7 @@
 """Population realism: how varied the virtual bodies are, and what building them costs.
 
-Usage: ``python benchmarks/bench_population_realism.py [--n 300] [--survey-n 200] [--seed 0] [--posture mixed]``
+Usage: ``python benchmarks/bench_population_realism.py [--n 300] [--survey-n 200] [--seed 0] [--posture mixed]
+[--survey-only] [--survey-measures seven|four|both]``
 
 Builds, with the same seed, four populations and prints for each (:mod:`wbsa.analysis.realism`):
 
@@ -11,7 +12,9 @@ Builds, with the same seed, four populations and prints for each (:mod:`wbsa.ana
   (``--posture``, default ``mixed``: a random named posture with joint jitter; ``a-pose`` for none) —
   the "after";
 * ``survey constant`` / ``survey deurenberg-siri``: NHANES people matched at 980 kg/m³ and at their own
-  density (``--survey-n`` people; ``--survey-n 0`` skips them);
+  density, on the seven NHANES measures (``--survey-n`` people; ``--survey-n 0`` skips them;
+  ``--survey-measures four`` or ``both`` also the four-measure match; ``--survey-only`` skips the random
+  populations and the throughput);
 
 the R² and residual SD of the law log WBSA = a + b·log H + c·log W (the scatter of area at fixed
 stature and mass), the women–men area difference at the same H and W beside Schlich's scan-fitted
@@ -20,8 +23,8 @@ on measured areas, subjects per group (all, adults, children, obese, underweight
 men), the posture mix and the posed − rest skin area per posture (from the ``posture`` and
 ``wbsa_posed_m2`` columns, when the table has them), adult BMI range, density and fat fraction by sex
 and BMI class beside Deurenberg + Siri at the same subjects, and mesh / Du Bois by sex and BMI class
-beside the formulae fitted on measured areas. The published figures come from
-:mod:`wbsa.analysis.calibration_refs`.
+beside the formulae fitted on measured areas, and the bias of Du Bois, Mosteller and Schlich against the
+mesh area by sex and BMI class. The published figures come from :mod:`wbsa.analysis.calibration_refs`.
 
 Throughput: bodies per second of the varied population (anny forward pass, every measure, the
 composition fixed point) against the bare anny forward pass of the same bodies in the same run (the
@@ -44,8 +47,8 @@ def _print_population(name: str, table) -> None:
     import pandas as pd
 
     from wbsa.analysis.calibration_refs import cite, schlich_female_effect_percent
-    from wbsa.analysis.realism import (composition_table, dubois_bmi_slopes, dubois_table, group_counts, hw_law,
-                                       posed_area_change, posture_mix)
+    from wbsa.analysis.realism import (composition_table, dubois_bmi_slopes, dubois_table, formula_bias_table,
+                                       group_counts, hw_law, posed_area_change, posture_mix)
 
     law = hw_law(table)
     adults = table[(table["age_years"] > 15) & ((table["variation"] == 0) if "variation" in table else True)]
@@ -89,6 +92,15 @@ def _print_population(name: str, table) -> None:
               f"{r['mesh_over_dubois_mean']:7.3f}{sd(r['mesh_over_dubois_sd'], '.3f'):>7} "
               f"{r['schlich_over_dubois_mean']:11.3f} {r['yu_over_dubois_mean']:7.3f} "
               f"{r['livingston_lee_over_dubois_mean']:7.3f}")
+    bias = formula_bias_table(table)
+    print("formula bias against the mesh area, 100·(formula / mesh − 1), mean ± SD "
+          f"(published: Du Bois under in obese patients {cite('dubois_obese_underestimate_max_percent')}; "
+          f"Du Bois − scan by sex and BMI class: {cite('dubois_bias_by_class')})")
+    print(f"{'sex':<7} {'BMI class':<9} {'n':>4} {'Du Bois %':>13} {'Mosteller %':>13} {'Schlich %':>13}")
+    for _, r in bias.iterrows():
+        print(f"{r['sex']:<7} {r['bmi_class']:<9} {r['n']:4d} "
+              + " ".join(f"{r[f'{k}_bias_percent_mean']:+6.2f}{sd(r[f'{k}_bias_percent_sd'], '.2f'):>7}"
+                         for k in ("dubois", "mosteller", "schlich")))
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -101,6 +113,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--workers", type=int, default=2, help="worker processes of the identity check (default 2)")
     parser.add_argument("--posture", choices=POSTURE_CHOICES, default="mixed",
                         help="posture of the varied random population (default mixed; a-pose: none)")
+    parser.add_argument("--survey-only", action="store_true",
+                        help="only the survey populations (no random population, no throughput)")
+    parser.add_argument("--survey-measures", choices=("seven", "four", "both"), default="seven",
+                        help="measures the survey people are matched on (default seven; both: each)")
+    parser.add_argument("--density-models", default="constant,deurenberg-siri",
+                        help="survey density models, comma-separated (default constant,deurenberg-siri)")
     args = parser.parse_args(argv)
 
     from wbsa.bodies import table as table_module
@@ -113,28 +131,34 @@ def main(argv: list[str] | None = None) -> int:
 
     print(f"population realism benchmark: n={args.n} survey n={args.survey_n} seed={args.seed} "
           f"posture={args.posture} cpus={os.cpu_count()} load average {os.getloadavg()[0]:.1f}")
-    populations = {
-        "random paper (default study: uniform, no local change, 980 kg/m³)":
-            build_population("random", n=args.n, seed=args.seed, show_progress=False),
-            f"random varied (local changes, obese half, deurenberg-siri, posture {args.posture})":
-            build_population("random", n=args.n, seed=args.seed, sampling="varied",
-                             density_model="deurenberg-siri", posture=args.posture, show_progress=False),
-    }
+    populations = {}
+    if not args.survey_only:
+        populations = {
+            "random paper (default study: uniform, no local change, 980 kg/m³)":
+                build_population("random", n=args.n, seed=args.seed, show_progress=False),
+                f"random varied (local changes, obese half, deurenberg-siri, posture {args.posture})":
+                build_population("random", n=args.n, seed=args.seed, sampling="varied",
+                                 density_model="deurenberg-siri", posture=args.posture, show_progress=False),
+        }
+    measures = ("seven", "four") if args.survey_measures == "both" else (args.survey_measures,)
     if args.survey_n:
-        for model in ("constant", "deurenberg-siri"):
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", SurveyMatchWarning)
-                t = build_population("survey", n=args.survey_n, seed=args.seed, density_model=model,
-                                     show_progress=False)
-            populations[f"survey {model}"] = t
-            rates = t.attrs["survey"]
-            for group in ("adults_bmi_le_40", "adults_bmi_40_50"):
-                g = rates[group]
-                if g["people"]:
-                    print(f"survey {model}: {group}: {g['people']} people, all four matched {g['matched']:.1%}, "
-                          f"stature & mass {g['matched_stature_mass']:.1%}")
+        for model in args.density_models.split(","):
+            for m in measures:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore", SurveyMatchWarning)
+                    t = build_population("survey", n=args.survey_n, seed=args.seed, density_model=model,
+                                         survey_measures=m, show_progress=False)
+                populations[f"survey {model}, {m} measures"] = t
+                rates = t.attrs["survey"]
+                for group in ("adults_bmi_le_40", "adults_bmi_40_50"):
+                    g = rates[group]
+                    if g["people"]:
+                        print(f"survey {model}, {m} measures: {group}: {g['people']} people, all {m} matched "
+                              f"{g['matched']:.1%}, stature & mass {g['matched_stature_mass']:.1%}")
     for name, table in populations.items():
         _print_population(name, table)
+    if args.survey_only:
+        return 0
 
     # -- throughput: the varied population against the bare anny forward pass, same bodies, same run
     model = BodyModel()

@@ -89,7 +89,7 @@ def test_settings_are_checked():
 def test_constant_density_tables_are_the_old_tables(body_model):
     """``constant`` gives exactly the table of mass = volume × 980 with no extra column (same bytes)."""
     from wbsa.bodies.anthropometry import Anthropometer
-    from wbsa.bodies.body_model import LOCAL_CHANGE_COLUMNS
+    from wbsa.bodies.body_model import ALL_LOCAL_CHANGE_COLUMNS
     from wbsa.bodies.build import build_population
     from wbsa.bodies.random_population import RandomPopulationSettings, sample_random_parameters
     from wbsa.bodies.table import TABLE_COLUMNS
@@ -97,7 +97,7 @@ def test_constant_density_tables_are_the_old_tables(body_model):
     new = build_population("random", n=6, seed=3, density_model="constant", show_progress=False)
     params = sample_random_parameters(RandomPopulationSettings(n=6, seed=3))
     old = pd.concat([params, Anthropometer(body_model, 980.0).measure(body_model.rest_bodies(params))], axis=1)
-    for name in LOCAL_CHANGE_COLUMNS:
+    for name in ALL_LOCAL_CHANGE_COLUMNS:
         old[name] = 0.0
     assert list(new.columns) == list(TABLE_COLUMNS)
     assert new.to_csv(index=False) == old.to_csv(index=False)

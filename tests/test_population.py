@@ -356,7 +356,7 @@ def test_body_model_and_bodies_print_their_sizes(body_model, anthropometer):
     n_vertices = body_model.anny.template_vertices.shape[-2]
     text = repr(body_model)
     assert text.startswith(f"BodyModel(anny: {n_vertices:,} vertices, {len(body_model.faces):,} faces "
-                           f"({len(body_model.skin_faces):,} skin), 11 phenotypes, 4 local changes")
+                           f"({len(body_model.skin_faces):,} skin), 11 phenotypes, 7 local changes")
     assert repr(anthropometer) == f"Anthropometer(density 980 kg/m³, {text})"
     bodies = body_model.rest_bodies(pd.concat([reference_adult(0.0), reference_adult(1.0)]))
     assert repr(bodies) == (f"RestBodies(2 bodies × {n_vertices:,} vertices, "

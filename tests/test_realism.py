@@ -6,8 +6,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from wbsa.analysis.realism import (composition_table, dubois_table, group_counts, hw_law, posture_mix,
-                                   realism_summary)
+from wbsa.analysis.realism import (composition_table, dubois_table, formula_bias_table, group_counts, hw_law,
+                                   posture_mix, realism_summary)
 from wbsa.errors import WbsaError
 
 
@@ -51,6 +51,25 @@ def test_dubois_table_gives_the_ratio_of_the_mesh_and_of_the_measured_formulae()
     # a survey table counts its matched bodies (variation 0) only
     survey = pd.concat([t.assign(variation=0), t.assign(variation=1)], ignore_index=True)
     assert dubois_table(survey)["n"].sum() == len(t)
+
+
+def test_formula_bias_table_is_the_formulae_against_the_mesh():
+    from wbsa.formulae import bsa
+
+    t = _table(n=600)
+    h, w = 100 * t["stature_m"], t["mass_kg"]
+    t["wbsa_m2"] = bsa("mosteller", h, w) * 1.04  # bodies 4 % larger than Mosteller says
+    b = formula_bias_table(t)
+    assert b["n"].sum() == len(t)
+    np.testing.assert_allclose(b["mosteller_bias_percent_mean"], 100 * (1 / 1.04 - 1))
+    np.testing.assert_allclose(b["mosteller_bias_percent_sd"], 0.0, atol=1e-9)
+    # each cell is the mean over its own subjects (Schlich: the sex-specific formula of each)
+    cell = t[(t["sex"] == "female") & (t["age_years"] > 15) & (t["bmi"] >= 25) & (t["bmi"] < 30)]
+    expected = 100 * (bsa("schlich", 100 * cell["stature_m"], cell["mass_kg"], cell["sex"]) / cell["wbsa_m2"] - 1)
+    row = b[(b["sex"] == "female") & (b["bmi_class"] == "25-30")].iloc[0]
+    assert row["schlich_bias_percent_mean"] == pytest.approx(float(np.mean(expected)), rel=1e-12)
+    summary = realism_summary(t)
+    assert len(summary["formula_bias"]) == len(b)
 
 
 def test_composition_table_reads_density_from_mass_and_volume():

@@ -23,7 +23,8 @@ from wbsa.surface.settings import ReconstructionSettings
 
 #: One non-default instance of every settings class (optional fields both set and unset across the list).
 EXAMPLES = [
-    PopulationSettings(kind="survey", n=40, seed=7, density_kg_m3=1010.0, variations=2, survey_weights=True),
+    PopulationSettings(kind="survey", n=40, seed=7, density_kg_m3=1010.0, variations=2, survey_weights=True,
+                       survey_measures="four"),
     PopulationSettings(kind="table", params_path="phenotypes.csv"),
     ScanSettings(camera="tum", views="sphere:12", distances_m=(3.0, 4.3), seed=9),
     ScanSettings(azimuths_deg=(0.0, 45.0), elevations_deg=(-30.0,)),

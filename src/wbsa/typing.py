@@ -32,6 +32,9 @@ GroupName = Literal["all", "males", "females", "kids", "adults", "small", "norma
 DensityModel = Literal["constant", "deurenberg-siri", "deurenberg-brozek"]
 #: How a random population's body parameters are drawn: the paper's, or varied shapes (docs/population.md).
 Sampling = Literal["paper", "varied"]
+#: Which NHANES measures the survey matcher fits: all seven (stature, mass, waist, hip, arm circumference,
+#: upper arm and upper leg length) or the first four.
+SurveyMeasures = Literal["seven", "four"]
 #: Ray-casting back ends (:mod:`wbsa.camera.backends`); ``auto`` picks Warp on CUDA when there is a GPU.
 RaycastBackend = Literal["auto", "open3d", "warp"]
 #: A named standing posture (:data:`wbsa.bodies.posture.POSTURES` has one entry per name, in this order).
@@ -74,6 +77,7 @@ MODEL_KINDS: tuple[str, ...] = get_args(ModelKind)
 GROUP_NAMES: tuple[str, ...] = get_args(GroupName)
 DENSITY_MODELS: tuple[str, ...] = get_args(DensityModel)
 SAMPLINGS: tuple[str, ...] = get_args(Sampling)
+SURVEY_MEASURES: tuple[str, ...] = get_args(SurveyMeasures)
 RAYCAST_BACKENDS: tuple[str, ...] = get_args(RaycastBackend)
 POSTURE_NAMES: tuple[str, ...] = get_args(PostureName)
 POSTURE_CHOICES: tuple[str, ...] = get_args(PostureChoice)

@@ -9,6 +9,8 @@ Pure functions of a population table (``wbsa population``), for the realism benc
   real scans (Schlich 2010, Yu 2010) and on obese patients (Livingston & Lee 2001) give for the same
   statures and masses;
 * :func:`dubois_bmi_slopes`: how fast mesh / Du Bois and those formulae / Du Bois rise with BMI;
+* :func:`formula_bias_table`: the bias of Du Bois, Mosteller and Schlich against the mesh area by sex and
+  BMI class (what a clinician using the formula would get wrong on these bodies);
 * :func:`composition_table`: body density and fat fraction by sex and BMI class, beside what
   Deurenberg's equation and Siri's density give for the same subjects;
 * :func:`group_counts`: subjects per group (all, adults, children, obese, underweight, small, tall,
@@ -195,6 +197,29 @@ def dubois_table(table: pd.DataFrame, spec: GroupSpec = GroupSpec()) -> pd.DataF
     return _by_sex_and_class(t, values, spec)
 
 
+#: Formulae whose bias against the mesh :func:`formula_bias_table` gives (keys of :data:`wbsa.formulae.FORMULAE`).
+BIAS_FORMULAE = ("dubois", "mosteller", "schlich")
+
+
+def formula_bias_table(table: pd.DataFrame, spec: GroupSpec = GroupSpec()) -> pd.DataFrame:
+    """Bias of each :data:`BIAS_FORMULAE` formula against the mesh area, per sex and BMI class.
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``sex, bmi_class, n``, then mean and SD of ``<formula>_bias_percent`` = 100·(formula / mesh − 1)
+        at each subject's stature and mass (negative: the formula under-estimates the body's area).
+    """
+    from wbsa.formulae import bsa
+
+    _check(table)
+    t = one_row_per_body(table)
+    h, w, mesh = 100 * t["stature_m"].to_numpy(), t["mass_kg"].to_numpy(), t["wbsa_m2"].to_numpy()
+    values = {f"{key}_bias_percent": 100 * (np.asarray(bsa(key, h, w, t["sex"].to_numpy(), check=False)) / mesh - 1)
+              for key in BIAS_FORMULAE}
+    return _by_sex_and_class(t, values, spec)
+
+
 def composition_table(table: pd.DataFrame, spec: GroupSpec = GroupSpec()) -> pd.DataFrame:
     """Body density (kg/m³, mass / volume) and fat fraction per sex and BMI class, beside Deurenberg's.
 
@@ -272,7 +297,7 @@ def realism_summary(table: pd.DataFrame, spec: GroupSpec = GroupSpec()) -> dict[
     (Schlich's women / men at the adults' stature and mass, :mod:`wbsa.analysis.calibration_refs`),
     ``groups``, ``posture``, ``posed_area`` (list of row dicts, empty without postures),
     ``bmi_range_adults``, ``composition_columns`` (whether the table has its own fat fractions),
-    ``dubois`` and ``composition`` (lists of row dicts).
+    ``dubois``, ``formula_bias`` and ``composition`` (lists of row dicts).
     """
     from wbsa.analysis.calibration_refs import schlich_female_effect_percent
 
@@ -290,5 +315,6 @@ def realism_summary(table: pd.DataFrame, spec: GroupSpec = GroupSpec()) -> dict[
         "bmi_range_adults": [float(adults["bmi"].min()), float(adults["bmi"].max())] if len(adults) else [],
         "composition_columns": "fat_fraction" in t.columns,
         "dubois": dubois_table(t, spec).to_dict("records"),
+        "formula_bias": formula_bias_table(t, spec).to_dict("records"),
         "composition": composition_table(t, spec).to_dict("records"),
     }

@@ -16,7 +16,27 @@ measure                    plane (landmarks are template vertices or joints, so 
 ``thigh_circ_m``          left leg, perpendicular to the thigh at mid hip–knee
 ``front_chest_width_m``   left–right extent of the front half of the trunk section half-way between
                           the bust and shoulder joint heights
+``mid_arm_circ_m``        NHANES arm circumference (BMXARMC): right upper arm, perpendicular to the
+                          acromion–olecranon line at its midpoint
+``upper_arm_length_m``    NHANES upper arm length (BMXARML): acromion to olecranon, right arm
+``upper_leg_length_m``    NHANES upper leg length (BMXLEG): inguinal crease to the proximal border of
+                          the patella, right leg
 ========================  ==========================================================================
+
+The last three follow the NHANES Anthropometry Procedures Manual (CDC/NCHS, 2017, sections on upper
+leg length, upper arm length and arm circumference). Their landmarks are template vertices picked once
+on the reference adult male (:class:`Landmarks`): the *acromion* is the highest skin vertex within
+3 cm (horizontally) of the right shoulder joint; the *olecranon* the most backward arm vertex within
+1.5 cm of the plane through the elbow joint perpendicular to the upper arm; the *inguinal crease* the
+most forward skin vertex within 1.5 cm of the hip joint's left–right position and height (the mid-
+inguinal point lies in front of the femoral head); the *patella* the most forward leg vertex within
+1 cm of the plane through the knee joint perpendicular to the thigh and 4 cm of the knee's left–right
+position. NHANES measures the arm length with the elbow bent at 90°: the olecranon tip, which lies behind
+the elbow joint in the straight rest arm, then points down the arm's axis. :func:`nhanes_arm` places it
+there (at the same distance from the elbow joint, along the shoulder → elbow joint line); the length is
+the straight distance from the acromion to it, and the arm circumference is taken in the plane
+perpendicular to that line through the midpoint of the two marks. The leg length (NHANES: seated, knee at
+90°) is the straight distance between the inguinal and patella vertices of the standing body.
 
 Trunk sections exclude arm and hand triangles (by each vertex's dominant skinning bone), so
 the A-pose arms never enter a waist or hip tape. Limb tapes are perpendicular to the limb,
@@ -51,9 +71,20 @@ MEASURE_COLUMNS = (
     "upper_arm_circ_m",
     "thigh_circ_m",
     "front_chest_width_m",
+    "mid_arm_circ_m",
+    "upper_arm_length_m",
+    "upper_leg_length_m",
 )
+#: The NHANES limb measures (BMXARMC, BMXARML, BMXLEG) among :data:`MEASURE_COLUMNS`; tables written
+#: before they existed lack them (:data:`REQUIRED_MEASURE_COLUMNS` are the others).
+NHANES_LIMB_COLUMNS = ("mid_arm_circ_m", "upper_arm_length_m", "upper_leg_length_m")
+#: The measures every population table has.
+REQUIRED_MEASURE_COLUMNS = tuple(c for c in MEASURE_COLUMNS if c not in NHANES_LIMB_COLUMNS)
 
 _UP = np.array([0.0, 0.0, 1.0])
+#: The mid-arm section keeps the crossings within this fraction of the upper arm length of its centre
+#: (so no trunk edge enters the tape).
+ARM_SECTION_RADIUS = 0.6
 
 
 def reference_adult(gender: float) -> pd.DataFrame:
@@ -77,6 +108,12 @@ class Landmarks:
         Unique skin edges of each body part.
     neck_base, head, shoulder, elbow, hip_joint, knee : int
         Bone indices whose heads (joints) place the neck and limb planes.
+    acromion, olecranon, inguinal, patella : int
+        Vertex indices of the NHANES landmarks (right side, see the module docstring).
+    right_shoulder, right_elbow : int
+        Bone indices of the right upper arm's joints (the NHANES arm axis).
+    right_upper_arm_edges : PartEdges
+        Unique skin edges of the right upper arm (the NHANES arm circumference).
     """
 
     waist_ring: np.ndarray
@@ -92,6 +129,13 @@ class Landmarks:
     elbow: int
     hip_joint: int
     knee: int
+    acromion: int
+    olecranon: int
+    inguinal: int
+    patella: int
+    right_shoulder: int
+    right_elbow: int
+    right_upper_arm_edges: "PartEdges"
 
     @classmethod
     def from_model(cls, model: BodyModel) -> "Landmarks":
@@ -119,6 +163,7 @@ class Landmarks:
         hip = int(np.flatnonzero(seat)[np.argmax(male[seat, 1])])
 
         faces = model.skin_faces
+        nhanes = _nhanes_landmarks(model, male)
         return cls(
             waist_ring=waist_ring,
             bust=bust,
@@ -133,7 +178,35 @@ class Landmarks:
             elbow=model.bone_index("lowerarm01.L"),
             hip_joint=model.bone_index("upperleg01.L"),
             knee=model.bone_index("lowerleg01.L"),
+            **nhanes,
+            right_shoulder=model.bone_index("upperarm01.R"),
+            right_elbow=model.bone_index("lowerarm01.R"),
+            right_upper_arm_edges=_part_edges(faces, model.vertices_of_bones(("upperarm01.R", "upperarm02.R"))),
         )
+
+
+def _nhanes_landmarks(model: BodyModel, male: np.ndarray) -> dict[str, int]:
+    """Vertex indices of the NHANES landmarks, picked on the reference male's ``(n, 3)`` vertices."""
+    joints = model.rest_bodies(reference_adult(0.0)).bone_heads[0]
+    skin = np.zeros(len(male), dtype=bool)
+    skin[np.unique(model.skin_faces)] = True
+    v = male
+    shoulder, elbow = joints[model.bone_index("upperarm01.R")], joints[model.bone_index("lowerarm01.R")]
+    hip, knee = joints[model.bone_index("upperleg01.R")], joints[model.bone_index("lowerleg01.R")]
+
+    def pick(mask: np.ndarray, score: np.ndarray) -> int:
+        return int(np.flatnonzero(mask)[np.argmax(score[mask])])
+
+    top = skin & (np.hypot(v[:, 0] - shoulder[0], v[:, 1] - shoulder[1]) < 0.03) & (v[:, 2] > shoulder[2])
+    arm_axis = (elbow - shoulder) / np.linalg.norm(elbow - shoulder)
+    arm = skin & model.vertices_of_bones(("upperarm", "lowerarm")) & (np.abs((v - elbow) @ arm_axis) < 0.015)
+    groin = skin & (np.abs(v[:, 0] - hip[0]) < 0.015) & (np.abs(v[:, 2] - hip[2]) < 0.015)
+    leg_axis = (knee - hip) / np.linalg.norm(knee - hip)
+    front_knee = (skin & model.vertices_of_bones(("upperleg", "lowerleg")) & (np.abs((v - knee) @ leg_axis) < 0.01)
+                  & (np.abs(v[:, 0] - knee[0]) < 0.04))
+    # +y is backwards (anny faces −y)
+    return {"acromion": pick(top, v[:, 2]), "olecranon": pick(arm, v[:, 1]),
+            "inguinal": pick(groin, -v[:, 1]), "patella": pick(front_knee, -v[:, 1])}
 
 
 @dataclass(frozen=True)
@@ -150,6 +223,29 @@ class PartEdges:
 
     vertex_ids: np.ndarray
     edges: np.ndarray
+
+
+def nhanes_arm(olecranon, shoulder, elbow):
+    """The olecranon tip of the elbow bent at 90° and the upper arm's unit axis (numpy or torch).
+
+    Parameters
+    ----------
+    olecranon : (..., 3) float64
+        The olecranon vertex of the straight rest arm.
+    shoulder, elbow : (..., 3) float64
+        The right shoulder and elbow joints.
+
+    Returns
+    -------
+    tip : (..., 3) float64
+        The elbow joint moved down the arm's axis by its distance to the olecranon vertex.
+    axis : (..., 3) float64
+        Unit vector from shoulder to elbow joint.
+    """
+    arm = elbow - shoulder
+    axis = arm / ((arm**2).sum(axis=-1, keepdims=True)) ** 0.5
+    r = (((olecranon - elbow) ** 2).sum(axis=-1, keepdims=True)) ** 0.5
+    return elbow + r * axis, axis
 
 
 def _part_edges(faces: np.ndarray, vertex_mask: np.ndarray) -> PartEdges:
@@ -234,6 +330,13 @@ class Anthropometer:
             pts = pts[np.linalg.norm(pts - middle, axis=1) < radius]
             return tape_perimeter_m(pts, direction)
 
+        acromion = v[lm.acromion]
+        olecranon, arm_axis = nhanes_arm(v[lm.olecranon], joints[lm.right_shoulder], joints[lm.right_elbow])
+        arm_length = float(np.linalg.norm(olecranon - acromion))
+        mid = 0.5 * (acromion + olecranon)
+        arm_pts = edge_plane_crossings(v[lm.right_upper_arm_edges.vertex_ids], lm.right_upper_arm_edges.edges, mid,
+                                       arm_axis)
+        arm_pts = arm_pts[np.linalg.norm(arm_pts - mid, axis=1) < ARM_SECTION_RADIUS * arm_length]
         z_chest = 0.5 * (v[lm.bust, 2] + joints[lm.shoulder, 2])
         chest = horizontal(z_chest)
         front = chest[chest[:, 1] < chest[:, 1].mean()] if len(chest) else chest
@@ -251,4 +354,7 @@ class Anthropometer:
             "upper_arm_circ_m": limb(lm.upper_arm_edges, lm.shoulder, lm.elbow),
             "thigh_circ_m": limb(lm.thigh_edges, lm.hip_joint, lm.knee),
             "front_chest_width_m": width_along_m(front, np.array([1.0, 0.0, 0.0])),
+            "mid_arm_circ_m": tape_perimeter_m(arm_pts, arm_axis),
+            "upper_arm_length_m": arm_length,
+            "upper_leg_length_m": float(np.linalg.norm(v[lm.inguinal] - v[lm.patella])),
         }

@@ -12,14 +12,14 @@ WBSA is the *skin* area, so :class:`BodyModel` exposes two face masks:
 * ``closed_face_mask``: skin plus cavities, a closed surface whose enclosed volume
   gives the body volume (and mass).
 
-Besides the phenotypes, a body has four anny *local changes* (MakeHuman's measure and
-shape modifiers, :data:`LOCAL_CHANGES`), stored in tables as the ``l_*`` columns
-(:data:`LOCAL_CHANGE_COLUMNS`), each in [−1, 1] with 0 = no change (anny applies the
-modifier's ``incr`` target for positive values and its ``decr`` target for negative ones).
-The phenotypes alone cannot give real people's waist and hip at their stature and mass (the
-survey matcher matched 31 % of adults with BMI <= 40 within all four tolerances); with these
-four extra unknowns it matches 94.9 % (see ``docs/survey.md``). With every local change 0 a body is
-exactly the phenotype-only body.
+Besides the phenotypes, a body has seven anny *local changes* (MakeHuman's measure and
+shape modifiers): four of the trunk (:data:`LOCAL_CHANGES`: waist, hips, belly, buttocks) and three
+of the limbs (:data:`LIMB_CHANGES`: upper-arm girth and length, upper-leg length), stored in tables
+as the ``l_*`` columns (:data:`ALL_LOCAL_CHANGE_COLUMNS`), each in [−1, 1] with 0 = no change (anny
+applies the modifier's ``incr`` target for positive values and its ``decr`` target for negative
+ones). The phenotypes alone cannot give real people's waist, hip and limbs at their stature and
+mass; the survey matcher fits the local changes too (``docs/survey.md``). With every local change 0
+a body is the phenotype-only body.
 
 A body stands in anny's rest A-pose unless its table row has posture columns
 (``wbsa population --posture``): then :meth:`BodyModel.skin_meshes` poses it by skinning
@@ -62,19 +62,27 @@ LOCAL_CHANGES = ("measure-waist-circ-incr", "measure-hips-circ-incr", "stomach-p
                  "buttocks-volume-incr")
 #: Table columns of :data:`LOCAL_CHANGES`, same order; optional, in [-1, 1], default 0 (no change).
 LOCAL_CHANGE_COLUMNS = ("l_waist_circ", "l_hips_circ", "l_stomach_pregnant", "l_buttocks_volume")
+#: anny local changes of the limbs (symmetric MakeHuman measure modifiers): upper-arm girth and length,
+#: upper-leg length. The survey matcher fits them to NHANES's arm and leg measures; 0 elsewhere.
+LIMB_CHANGES = ("measure-upperarm-circ-incr", "measure-upperarm-length-incr", "measure-upperleg-height-incr")
+#: Table columns of :data:`LIMB_CHANGES`, same order; optional, in [-1, 1], default 0 (no change).
+LIMB_CHANGE_COLUMNS = ("l_upperarm_circ", "l_upperarm_length", "l_upperleg_height")
+#: Every local-change column: the trunk's (:data:`LOCAL_CHANGE_COLUMNS`) then the limbs'.
+ALL_LOCAL_CHANGE_COLUMNS = (*LOCAL_CHANGE_COLUMNS, *LIMB_CHANGE_COLUMNS)
+_ALL_LOCAL_CHANGES = (*LOCAL_CHANGES, *LIMB_CHANGES)
 #: Every body parameter: phenotypes then local changes (the columns of :func:`body_parameter_array`).
-BODY_PARAMETER_COLUMNS = (*PHENOTYPE_COLUMNS, *LOCAL_CHANGE_COLUMNS)
+BODY_PARAMETER_COLUMNS = (*PHENOTYPE_COLUMNS, *ALL_LOCAL_CHANGE_COLUMNS)
 _EYES_AND_TONGUE = ("eye_front.L", "eye_front.R", "eye_back.L", "eye_back.R", "tongue")
 _ARM_BONE_PREFIXES = ("shoulder01", "upperarm", "lowerarm", "wrist", "finger", "metacarpal")
 
 
 @functools.lru_cache(maxsize=1)
 def load_anny():
-    """The anny full-body model with all phenotypes and :data:`LOCAL_CHANGES`, built once per process.
+    """The anny full-body model with all phenotypes, :data:`LOCAL_CHANGES` and :data:`LIMB_CHANGES`, built once.
 
-    The local changes let a body's waist, hip, belly and buttocks differ from what the
-    phenotypes give (the survey matcher needs them to reach real waist–hip combinations);
-    they add 8 blendshapes and cost nothing when 0.
+    The local changes let a body's waist, hip, belly, buttocks, upper arms and thighs differ from
+    what the phenotypes give (the survey matcher needs them to reach real people's measures);
+    they add 14 blendshapes and cost nothing when 0.
 
     Returns
     -------
@@ -87,7 +95,7 @@ def load_anny():
         import anny
 
         # plain LBS: wbsa uses only rest shapes, and this keeps NVIDIA Warp (and its banner) out
-        return anny.Anny(phenotypes="all", skinning_method="lbs", local_changes=list(LOCAL_CHANGES))
+        return anny.Anny(phenotypes="all", skinning_method="lbs", local_changes=list(_ALL_LOCAL_CHANGES))
 
 
 def phenotype_array(params: pd.DataFrame | dict) -> np.ndarray:
@@ -115,7 +123,7 @@ def phenotype_array(params: pd.DataFrame | dict) -> np.ndarray:
 
 
 def local_change_array(params: pd.DataFrame | dict) -> np.ndarray:
-    """Local changes as a ``(b, 4)`` float64 array in :data:`LOCAL_CHANGE_COLUMNS` order.
+    """Local changes as a ``(b, 7)`` float64 array in :data:`ALL_LOCAL_CHANGE_COLUMNS` order.
 
     Missing columns take 0 (no change), so tables written before the local changes existed
     still give the same bodies.
@@ -127,8 +135,8 @@ def local_change_array(params: pd.DataFrame | dict) -> np.ndarray:
     """
     df = pd.DataFrame(params) if not isinstance(params, pd.DataFrame) else params
     cols = [df[name].to_numpy(dtype=np.float64) if name in df.columns else np.zeros(len(df))
-            for name in LOCAL_CHANGE_COLUMNS]
-    return _checked_range(np.stack(cols, axis=1), LOCAL_CHANGE_COLUMNS, -1.0, "local change",
+            for name in ALL_LOCAL_CHANGE_COLUMNS]
+    return _checked_range(np.stack(cols, axis=1), ALL_LOCAL_CHANGE_COLUMNS, -1.0, "local change",
                           "local changes are -1 (decrease) to 1 (increase), 0 = no change")
 
 
@@ -143,7 +151,7 @@ def _checked_range(arr: np.ndarray, names: tuple[str, ...], low: float, what: st
 
 
 def body_parameter_array(params: pd.DataFrame | dict) -> np.ndarray:
-    """Phenotypes and local changes, ``(b, 15)`` float64 in :data:`BODY_PARAMETER_COLUMNS` order.
+    """Phenotypes and local changes, ``(b, 18)`` float64 in :data:`BODY_PARAMETER_COLUMNS` order.
 
     See :func:`phenotype_array` and :func:`local_change_array` (defaults and validation).
     """
@@ -195,10 +203,10 @@ class BodyModel:
         if self.phenotype_labels != expected:
             raise WbsaError(f"unsupported anny phenotypes {self.phenotype_labels}; install anny==0.6.2")
         labels = tuple(self.anny.local_change_labels)
-        if sorted(labels) != sorted(LOCAL_CHANGES):
+        if sorted(labels) != sorted(_ALL_LOCAL_CHANGES):
             raise WbsaError(f"unsupported anny local changes {labels}; install anny==0.6.2")
-        #: anny's local-change order as indices into :data:`LOCAL_CHANGE_COLUMNS`
-        self._local_order = [LOCAL_CHANGES.index(label) for label in labels]
+        #: anny's local-change order as indices into :data:`ALL_LOCAL_CHANGE_COLUMNS`
+        self._local_order = [_ALL_LOCAL_CHANGES.index(label) for label in labels]
         self.bone_labels = tuple(self.anny.bone_labels)
         self.skin_face_mask, self.closed_face_mask = _face_masks(self.anny, self.faces)
         self.skin_faces = self.faces[self.skin_face_mask]
@@ -222,17 +230,23 @@ class BodyModel:
 
         Parameters
         ----------
-        params : (b, 11) or (b, 15) torch tensor
-            Phenotypes in :data:`PHENOTYPE_COLUMNS` order, optionally followed by the local
-            changes in :data:`LOCAL_CHANGE_COLUMNS` order (absent: 0).
+        params : (b, 11), (b, 15) or (b, 18) torch tensor
+            Phenotypes in :data:`PHENOTYPE_COLUMNS` order, optionally followed by the trunk's local
+            changes (:data:`LOCAL_CHANGE_COLUMNS`) and the limbs' (:data:`LIMB_CHANGE_COLUMNS`);
+            absent ones are 0.
         """
         torch = self._torch
         model = self.anny
-        ph = params[:, :len(PHENOTYPE_COLUMNS)]
-        if params.shape[1] > len(PHENOTYPE_COLUMNS):
-            local = params[:, len(PHENOTYPE_COLUMNS):][:, self._local_order]
-        else:
-            local = torch.zeros((params.shape[0], len(LOCAL_CHANGES)), dtype=params.dtype)
+        n_ph = len(PHENOTYPE_COLUMNS)
+        ph = params[:, :n_ph]
+        local = params[:, n_ph:]
+        missing = len(_ALL_LOCAL_CHANGES) - local.shape[1]
+        if missing not in (0, len(LIMB_CHANGES), len(_ALL_LOCAL_CHANGES)):
+            raise WbsaError(f"body parameters have {params.shape[1]} columns; expected {n_ph}, "
+                            f"{n_ph + len(LOCAL_CHANGES)} or {n_ph + len(_ALL_LOCAL_CHANGES)}")
+        if missing:
+            local = torch.cat([local, torch.zeros((params.shape[0], missing), dtype=params.dtype)], dim=1)
+        local = local[:, self._local_order]
         empty = torch.empty((params.shape[0], 0), dtype=params.dtype)
         return model._get_phenotype_blendshape_coefficients(ph, local, empty)
 
@@ -244,7 +258,7 @@ class BodyModel:
         ----------
         params
             Table with the ``p_*`` phenotype columns and optionally the ``l_*`` local
-            changes (:data:`LOCAL_CHANGE_COLUMNS`, default 0), one row per body.
+            changes (:data:`ALL_LOCAL_CHANGE_COLUMNS`, default 0), one row per body.
         """
         arr = body_parameter_array(params)
         torch = self._torch

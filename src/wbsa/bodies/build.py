@@ -8,13 +8,14 @@ from wbsa.errors import WbsaError
 from wbsa.bodies.anthropometry import DEFAULT_DENSITY_KG_M3
 from wbsa.bodies.composition import CompositionSettings
 from wbsa.bodies.settings import PopulationSettings
-from wbsa.typing import DensityModel, PopulationKind, PostureChoice, Sampling
+from wbsa.typing import DensityModel, PopulationKind, PostureChoice, Sampling, SurveyMeasures
 
 
 def build_population(kind: PopulationKind, n: int | None = None, seed: int = 0, *,
                      density_kg_m3: float = DEFAULT_DENSITY_KG_M3, density_model: DensityModel = "constant",
                      sampling: Sampling = "paper", params_path: str | None = None,
-                     variations: int = 0, survey_weights: bool = False, posture: PostureChoice = "a-pose",
+                     variations: int = 0, survey_weights: bool = False, survey_measures: SurveyMeasures = "seven",
+                     posture: PostureChoice = "a-pose",
                      show_progress: bool | None = None, workers: int = 1,
                      scheduler: str | None = None) -> pd.DataFrame:
     """Build a population table.
@@ -38,6 +39,8 @@ def build_population(kind: PopulationKind, n: int | None = None, seed: int = 0, 
         (random) ``paper``: the paper's uniform macro parameters, no local change; ``varied``:
         local changes, anny's whole range and a high-adiposity half
         (:meth:`~wbsa.bodies.random_population.RandomPopulationSettings.varied`).
+    survey_measures
+        (survey) ``seven`` NHANES measures matched (default) or the first ``four``.
     posture
         ``a-pose`` (every body at rest, no posture columns: the paper), ``mixed`` (a random named
         posture per subject) or one name of :data:`wbsa.bodies.posture.POSTURES`; drawn with ``seed``
@@ -59,19 +62,21 @@ def build_population(kind: PopulationKind, n: int | None = None, seed: int = 0, 
 
     PopulationSettings(kind=kind, n=n, seed=seed, density_kg_m3=density_kg_m3, density_model=density_model,
                        sampling=sampling, variations=variations, survey_weights=survey_weights,
-                       params_path=params_path, posture=posture)  # checks every argument first
+                       survey_measures=survey_measures, params_path=params_path,
+                       posture=posture)  # checks every argument first
     workers = resolve_workers(workers)
     postures = PostureSettings(posture, seed)
     table = _build_table(kind, n, seed, density_kg_m3=density_kg_m3, density_model=density_model,
                          sampling=sampling, params_path=params_path, variations=variations,
-                         survey_weights=survey_weights, posture=posture, show_progress=show_progress,
-                         workers=workers, scheduler=scheduler)
+                         survey_weights=survey_weights, survey_measures=survey_measures, posture=posture,
+                         show_progress=show_progress, workers=workers, scheduler=scheduler)
     return add_postures(table, postures, show_progress=show_progress, workers=workers, scheduler=scheduler)
 
 
 def _build_table(kind: PopulationKind, n: int | None, seed: int, *, density_kg_m3: float,
                  density_model: DensityModel, sampling: Sampling, params_path: str | None, variations: int,
-                 survey_weights: bool, posture: PostureChoice, show_progress: bool | None, workers: int,
+                 survey_weights: bool, survey_measures: SurveyMeasures, posture: PostureChoice,
+                 show_progress: bool | None, workers: int,
                  scheduler: str | None) -> pd.DataFrame:
     """The population table of ``kind`` in the rest pose (see :func:`build_population`)."""
     from wbsa.bodies.table import measure_population
@@ -89,11 +94,13 @@ def _build_table(kind: PopulationKind, n: int | None, seed: int, *, density_kg_m
                                   show_progress=show_progress, workers=workers, scheduler=scheduler)
     if kind == "survey":
         try:
-            from wbsa.bodies.survey import build_survey_population
+            from wbsa.bodies.survey import SurveyPopulationSettings, build_survey_population
+            from wbsa.bodies.survey_match import MatchSettings
         except ModuleNotFoundError:
             raise WbsaError("the survey population is not available in this build") from None
+        settings = SurveyPopulationSettings(match=MatchSettings(measures=survey_measures))
         return build_survey_population(n=n, variations=variations, seed=seed, composition=composition,
-                                       survey_weights=survey_weights, show_progress=show_progress)
+                                       survey_weights=survey_weights, show_progress=show_progress, settings=settings)
     raise AssertionError(kind)  # pragma: no cover - PopulationSettings accepts only the kinds above
 
 

@@ -15,7 +15,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     from wbsa.bodies.settings import PopulationSettings
     from wbsa.settings_io import field_defaults
-    from wbsa.typing import DENSITY_MODELS, POPULATION_KINDS, SAMPLINGS
+    from wbsa.typing import DENSITY_MODELS, POPULATION_KINDS, SAMPLINGS, SURVEY_MEASURES
 
     d = SimpleNamespace(**field_defaults(PopulationSettings))
     p = sub.add_parser("population", help="build a virtual population and its anthropometric table",
@@ -46,6 +46,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "subject) or one of arms-down, arms-wide, hands-on-hips, elbows-bent, feet-together, "
                         "feet-apart; each with random joint jitter, recorded as posture columns")
     p.add_argument("--survey-weights", action="store_true", help="(--kind survey) select people by exam weights")
+    p.add_argument("--survey-measures", choices=SURVEY_MEASURES, default=d.survey_measures,
+                   help="(--kind survey) seven (default): match stature, mass, waist, hip, arm circumference, upper "
+                        "arm and upper leg length (NHANES); four: the first four only")
     p.add_argument("--workers", type=int, default=0,
                    help="worker processes (default 0: all cores; 1 = in this process)")
     p.add_argument("--scheduler", default=None,
@@ -68,7 +71,8 @@ def settings_from_args(args: argparse.Namespace):
     from wbsa.bodies.settings import PopulationSettings
 
     return PopulationSettings(kind=args.kind, n=args.n, seed=args.seed, density_kg_m3=args.density,
-                              variations=args.variations, survey_weights=args.survey_weights, params_path=args.params,
+                              variations=args.variations, survey_weights=args.survey_weights,
+                              survey_measures=args.survey_measures, params_path=args.params,
                               posture=args.posture, density_model=args.density_model, sampling=args.sampling)
 
 

@@ -6,7 +6,7 @@ import math
 from dataclasses import dataclass
 
 from wbsa.errors import check_field
-from wbsa.typing import DensityModel, PopulationKind, PostureChoice, Sampling
+from wbsa.typing import DensityModel, PopulationKind, PostureChoice, Sampling, SurveyMeasures
 from wbsa.settings_io import check_types
 
 #: Default body density (kg/m³), as anny's own ``Anthropometry``.
@@ -42,6 +42,9 @@ class PopulationSettings:
         (survey) weight/muscle variations per person, >= 0.
     survey_weights : bool
         (survey) select people by their exam weights.
+    survey_measures : {'seven', 'four'}
+        (survey) match all seven NHANES measures (stature, mass, waist, hip, arm circumference, upper
+        arm and upper leg length) or the first four.
     params_path : str or None
         (table) Parquet/CSV file with ``p_gender, p_age, ...`` columns in [0, 1].
     posture : {'a-pose', 'mixed', 'arms-down', 'arms-wide', 'hands-on-hips', 'elbows-bent', 'feet-together', 'feet-apart'}
@@ -57,6 +60,7 @@ class PopulationSettings:
     sampling: Sampling = "paper"
     variations: int = 0
     survey_weights: bool = False
+    survey_measures: SurveyMeasures = "seven"
     params_path: str | None = None
     posture: PostureChoice = "a-pose"
 

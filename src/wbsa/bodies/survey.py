@@ -1,15 +1,16 @@
 """The paper's "Virtual NHANES" population: virtual bodies matched to real survey people.
 
 ``build_survey_population`` draws ``n`` people from the NHANES 2017–March 2020 body measures
-(:mod:`~wbsa.bodies.survey_data`), fits each one's anny phenotypes to its stature, mass,
-waist and hip (:mod:`~wbsa.bodies.survey_match`), and adds ``variations`` bodies per person
+(:mod:`~wbsa.bodies.survey_data`), fits each one's anny phenotypes and local changes to its
+stature, mass, waist, hip, arm circumference, upper arm length and upper leg length (or the first
+four, ``MatchSettings.measures``; :mod:`~wbsa.bodies.survey_match`), and adds ``variations`` bodies per person
 that differ from the match in weight and muscle only (the paper's 500 × 25). Every body is then
 measured exactly as the random population is (:func:`~wbsa.bodies.table.measure_population`),
 and the match is checked on those final measures:
 
-* ``matched`` is True when stature is within 1 cm, mass within 1 kg, and waist and hip (where
-  the survey has them) within 3 cm of the survey's; ``matched_stature_mass`` checks stature and
-  mass only. People who miss are kept, flagged, and announced with a
+* ``matched`` is True when every matched measure the survey has is within its tolerance (stature
+  1 cm, mass 1 kg, waist and hip 3 cm, arm circumference 2 cm, arm and leg length 1.5 cm);
+  ``matched_stature_mass`` checks stature and mass only. People who miss are kept, flagged, and announced with a
   :class:`SurveyMatchWarning`, never dropped silently.
 * ``match_*_err_*`` = table measure − survey measure, on the matched body's row (variation 0);
   NaN on variations.
@@ -35,36 +36,32 @@ from wbsa.bodies.survey_match import MatchSettings, torch_threads
 
 #: Columns a survey population has beyond the random population's.
 SURVEY_COLUMNS = (
-    "survey_id",
-    "variation",
-    "survey_age_years",
-    "survey_race",
-    "survey_exam_weight",
-    "survey_stature_m",
-    "survey_mass_kg",
-    "survey_bmi",
-    "survey_waist_circ_m",
-    "survey_hip_circ_m",
-    "match_stature_err_m",
-    "match_mass_err_kg",
-    "match_waist_err_m",
-    "match_hip_err_m",
-    "matched",
-    "matched_stature_mass",
+    "survey_id", "variation", "survey_age_years", "survey_race", "survey_exam_weight",
+    "survey_stature_m", "survey_mass_kg", "survey_bmi", "survey_waist_circ_m", "survey_hip_circ_m",
+    "survey_mid_arm_circ_m", "survey_upper_arm_length_m", "survey_upper_leg_length_m",
+    "match_stature_err_m", "match_mass_err_kg", "match_waist_err_m", "match_hip_err_m", "match_mid_arm_circ_err_m",
+    "match_upper_arm_length_err_m", "match_upper_leg_length_err_m",
+    "matched", "matched_stature_mass",
 )
 
 #: (population column, survey column, error column) of each matched measure.
-_MATCHED = (
+MATCHED_MEASURES = (
     ("stature_m", "survey_stature_m", "match_stature_err_m"),
     ("mass_kg", "survey_mass_kg", "match_mass_err_kg"),
     ("waist_circ_m", "survey_waist_circ_m", "match_waist_err_m"),
     ("hip_circ_m", "survey_hip_circ_m", "match_hip_err_m"),
+    ("mid_arm_circ_m", "survey_mid_arm_circ_m", "match_mid_arm_circ_err_m"),
+    ("upper_arm_length_m", "survey_upper_arm_length_m", "match_upper_arm_length_err_m"),
+    ("upper_leg_length_m", "survey_upper_leg_length_m", "match_upper_leg_length_err_m"),
 )
+#: Survey people columns of the matched measures, in :data:`MATCHED_MEASURES` order.
+_PEOPLE_MEASURES = ("stature_m", "mass_kg", "waist_circ_m", "hip_circ_m", "mid_arm_circ_m", "upper_arm_length_m",
+                    "upper_leg_length_m")
 _VARIATION_STREAM = 0x7A21A7
 
 
 #: Residual weights of the girth-rescue fit: the mass weighs no more than a girth.
-RESCUE_WEIGHTS = (3.0, 0.1, 0.1, 0.1)
+RESCUE_WEIGHTS = (3.0, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1)
 
 
 class SurveyMatchWarning(UserWarning):
@@ -160,7 +157,7 @@ def build_survey_population(n: int, variations: int = 0, seed: int = 0, *,
 
     model = BodyModel()
     meter = Anthropometer(model, density_kg_m3)
-    measurer = TorchMeasurer(model, meter)
+    measurer = TorchMeasurer(model, meter, s.match.measures)
     clock.lap("model")
     with torch_threads(s.match.threads):
         table = StartTable.build(measurer, s.match.start)
@@ -186,6 +183,7 @@ def build_survey_population(n: int, variations: int = 0, seed: int = 0, *,
         "dropped": dict(data.dropped),
         "fit_iterations_p50": float(np.median(fit["fit_iterations"])),
         "fit_iterations_max": int(fit["fit_iterations"].max()),
+        "measures": s.match.measures,
         **match_rates(table),
     }
     table.attrs["survey"] = summary
@@ -205,8 +203,8 @@ def survey_targets(people: pd.DataFrame) -> pd.DataFrame:
         "p_caucasian": people["p_caucasian"].to_numpy(),
         "target_stature_m": people["stature_m"].to_numpy(),
         "target_mass_kg": people["mass_kg"].to_numpy(),
-        "target_waist_circ_m": people["waist_circ_m"].to_numpy(),
-        "target_hip_circ_m": people["hip_circ_m"].to_numpy(),
+        **{f"target_{name}": people[name].to_numpy() if name in people.columns else np.full(len(people), np.nan)
+           for name in _PEOPLE_MEASURES[2:]},
     })
 
 
@@ -257,9 +255,8 @@ def _with_variations(people: pd.DataFrame, fit: pd.DataFrame, k: int, seed: int,
     out["survey_age_years"] = people["survey_age_years"].to_numpy()[rep].astype(np.int64)
     out["survey_race"] = people["survey_race"].to_numpy()[rep].astype(np.int64)
     out["survey_exam_weight"] = people["exam_weight"].to_numpy()[rep]
-    for src, col in (("stature_m", "survey_stature_m"), ("mass_kg", "survey_mass_kg"), ("bmi", "survey_bmi"),
-                     ("waist_circ_m", "survey_waist_circ_m"), ("hip_circ_m", "survey_hip_circ_m")):
-        out[col] = people[src].to_numpy()[rep]
+    for src, col in (("bmi", "survey_bmi"), *zip(_PEOPLE_MEASURES, (m[1] for m in MATCHED_MEASURES))):
+        out[col] = people[src].to_numpy()[rep] if src in people.columns else np.nan
     return out
 
 
@@ -269,16 +266,16 @@ def _add_match_columns(table: pd.DataFrame, m: MatchSettings) -> pd.DataFrame:
 
     out = table.copy()
     first = out["variation"].to_numpy() == 0
-    tol = dict(zip(("stature_m", "mass_kg", "waist_circ_m", "hip_circ_m"), m.tolerances))
+    tol = m.tolerance_of
     within = {}
-    for measure, survey, err in _MATCHED:
+    for measure, survey, err in MATCHED_MEASURES:
         e = out[measure].to_numpy() - out[survey].to_numpy()
-        # a girth the survey lacks is not matched and cannot fail; a body whose own girth is
+        # a measure the survey lacks is not matched and cannot fail; a body whose own girth is
         # undefined (NaN) where the survey has one fails
         within[measure] = np.isnan(out[survey].to_numpy()) | (np.abs(e) <= tol[measure])
         out[err] = np.where(first, e, np.nan)
     stature_mass = within["stature_m"] & within["mass_kg"]
-    everything = stature_mass & within["waist_circ_m"] & within["hip_circ_m"]
+    everything = np.logical_and.reduce([within[name] for name in m.names])
     person = out["survey_id"].to_numpy()
     for column, ok in (("matched", everything), ("matched_stature_mass", stature_mass)):
         # the matched body's flag, on all of its person's rows
@@ -290,13 +287,16 @@ def match_rates(table: pd.DataFrame) -> dict[str, object]:
     """Match rates and error quantiles of a survey population's matched bodies.
 
     Groups: all people, adults (18+) with survey BMI ≤ 40 (the target group), and adults with
-    survey BMI in (40, 50] (beyond anny's reach for many women).
+    survey BMI in (40, 50] (beyond anny's reach for many women). Tables written before the limb
+    measures (four measures only) give the four measures' figures.
 
     Returns
     -------
     dict
-        ``{group: {"people", "matched", "matched_stature_mass", "waist_within", "hip_within",
-        "<error>_abs_p50" / "_p95" / "_max"}}`` with rates as fractions and errors in cm / kg.
+        ``{group: {"people", "matched", "matched_stature_mass", "<measure>_within",
+        "<measure>_<unit>_p50" / "_p95" / "_max" / "_mean_signed"}}`` with rates as fractions and
+        errors in cm / kg; ``<measure>`` is ``stature``, ``mass``, ``waist``, ``hip``, ``mid_arm_circ``,
+        ``upper_arm_length``, ``upper_leg_length`` (those the table has).
     """
     first = table[table["variation"] == 0]
     groups = {
@@ -305,18 +305,20 @@ def match_rates(table: pd.DataFrame) -> dict[str, object]:
         "adults_bmi_40_50": first[(first["survey_age_years"] >= 18) & (first["survey_bmi"] > 40)
                                   & (first["survey_bmi"] <= 50)],
     }
+    tol = MatchSettings().tolerance_of
     out: dict[str, object] = {}
     for name, g in groups.items():
         row: dict[str, float] = {"people": int(len(g))}
         if len(g):
             row["matched"] = float(g["matched"].mean())
             row["matched_stature_mass"] = float(g["matched_stature_mass"].mean())
-            for err, scale, unit, tol in (("match_stature_err_m", 100, "cm", 1.0), ("match_mass_err_kg", 1, "kg", 1.0),
-                                          ("match_waist_err_m", 100, "cm", 3.0), ("match_hip_err_m", 100, "cm", 3.0)):
+            for measure, _, err in MATCHED_MEASURES:
+                if err not in g.columns:
+                    continue
+                key, scale, unit = error_key(err)
                 e = (g[err].abs() * scale).dropna()
-                key = err.removeprefix("match_").removesuffix("_m").removesuffix("_kg")
                 if len(e):
-                    row[f"{key}_within"] = float((e <= tol).mean())
+                    row[f"{key}_within"] = float((e <= tol[measure] * scale + 1e-9).mean())
                     row[f"{key}_{unit}_p50"] = float(e.quantile(0.5))
                     row[f"{key}_{unit}_p95"] = float(e.quantile(0.95))
                     row[f"{key}_{unit}_max"] = float(e.max())
@@ -325,15 +327,47 @@ def match_rates(table: pd.DataFrame) -> dict[str, object]:
     return out
 
 
+def error_key(err: str) -> tuple[str, float, str]:
+    """``(key, scale, unit)`` of an error column: ``match_waist_err_m`` → ``("waist", 100, "cm")``."""
+    key = err.removeprefix("match_").removesuffix("_m").removesuffix("_kg").removesuffix("_err")
+    return (key, 1.0, "kg") if err.endswith("_kg") else (key, 100.0, "cm")
+
+
+def unmatched_people(table: pd.DataFrame) -> pd.DataFrame:
+    """The people whose matched body misses a tolerance, with the measures it misses.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per unmatched person: ``survey_id, sex, survey_age_years, survey_bmi, failing``
+        (the missed measures, comma-separated, e.g. ``"mass, hip"``), and every error column.
+    """
+    first = table[(table["variation"] == 0) & ~table["matched"]]
+    tol = MatchSettings().tolerance_of
+    failing = []
+    for _, row in first.iterrows():
+        missed = [error_key(err)[0] for measure, survey, err in MATCHED_MEASURES
+                  if err in row.index and np.isfinite(row[survey])
+                  and not abs(row[measure] - row[survey]) <= tol[measure]]
+        failing.append(", ".join(missed))
+    errors = [err for _, _, err in MATCHED_MEASURES if err in first.columns]
+    out = first[["survey_id", "sex", "survey_age_years", "survey_bmi", *errors]].copy()
+    out.insert(4, "failing", failing)
+    return out.reset_index(drop=True)
+
+
 def _warn_unmatched(table: pd.DataFrame, summary: dict) -> None:
     first = table[table["variation"] == 0]
     bad = int((~first["matched"]).sum())
     skipped = sum(summary["skipped"].values())
     if bad:
-        bad_sm = int((~first["matched_stature_mass"]).sum())
+        missed: dict[str, int] = {}
+        for failing in unmatched_people(table)["failing"]:
+            for name in failing.split(", "):
+                missed[name] = missed.get(name, 0) + 1
         warnings.warn(
-            f"{bad} of {len(first)} survey people are not matched within 1 cm / 1 kg / 3 cm "
-            f"({bad_sm} miss stature or mass, the rest waist or hip); they are kept with matched=False. "
+            f"{bad} of {len(first)} survey people are not matched within tolerance (anny cannot reach them; "
+            f"missed measures: {_counts(missed)}); they are kept with matched=False. "
             f"{skipped} of {summary['rows']} survey rows were skipped ({_counts(summary['skipped'])})",
             SurveyMatchWarning, stacklevel=3)
 

@@ -5,10 +5,10 @@ The package ships a trimmed copy of the survey file (``wbsa/data/nhanes_bmx_demo
 population needs nothing outside the package. Any file with the same columns (for example the
 full ``nhanes-2017-2020-bmx-demo.csv``) can be given instead.
 
-Cleaning never stops a run: a value that is missing, not a number or outside a plausible range
-is dropped and counted. A person without a usable sex, age, stature or mass, or pregnant at the
-exam, is skipped (and counted); a missing or implausible waist or hip only leaves that measure
-out of the match.
+Cleaning never stops a run, and never matches a bad row silently: a person without a usable sex,
+age, stature or mass, pregnant at the exam, or with any body measure outside its plausible range (a
+waist of 3 m, a negative arm: an error in the row) is skipped and counted by reason; a *missing*
+waist, hip, arm or leg measure only leaves that measure out of the match (and is counted).
 """
 
 from __future__ import annotations
@@ -24,6 +24,14 @@ from wbsa.errors import WbsaError
 #: Survey columns read (NHANES variable names).
 SURVEY_COLUMNS = ("SEQN", "RIAGENDR", "RIDAGEYR", "RIDRETH3", "RIDEXPRG", "BMXWT", "BMXHT", "BMXWAIST",
                   "BMXHIP", "WTMECPRP")
+#: The NHANES limb measures, read when the file has them (a file without them gives NaN: four-measure
+#: matching only): arm circumference, upper arm length, upper leg length (cm).
+LIMB_SURVEY_COLUMNS = ("BMXARMC", "BMXARML", "BMXLEG")
+#: (NHANES column, people column, reason word) of the optional measures, in match order.
+_OPTIONAL_MEASURES = (("BMXWAIST", "waist_circ_m", "waist"), ("BMXHIP", "hip_circ_m", "hip"),
+                      ("BMXARMC", "mid_arm_circ_m", "arm circumference"),
+                      ("BMXARML", "upper_arm_length_m", "upper arm length"),
+                      ("BMXLEG", "upper_leg_length_m", "upper leg length"))
 #: The packaged copy, inside the ``wbsa`` package.
 PACKAGED_FILE = "data/nhanes_bmx_demo.csv"
 
@@ -49,12 +57,16 @@ PLAUSIBLE = {
     "mass_kg": (2.0, 350.0),
     "waist_circ_m": (0.3, 2.5),
     "hip_circ_m": (0.4, 2.5),
+    "mid_arm_circ_m": (0.08, 0.9),
+    "upper_arm_length_m": (0.08, 0.6),
+    "upper_leg_length_m": (0.15, 0.8),
     "bmi": (8.0, 90.0),
 }
 
 #: Columns of :attr:`SurveyData.people`.
 PEOPLE_COLUMNS = ("survey_id", "sex", "age_years", "survey_age_years", "survey_race", "p_african", "p_asian",
-                  "p_caucasian", "stature_m", "mass_kg", "bmi", "waist_circ_m", "hip_circ_m", "exam_weight")
+                  "p_caucasian", "stature_m", "mass_kg", "bmi", "waist_circ_m", "hip_circ_m", "mid_arm_circ_m",
+                  "upper_arm_length_m", "upper_leg_length_m", "exam_weight")
 
 
 @dataclass(frozen=True)
@@ -67,11 +79,12 @@ class SurveyData:
         One row per usable person, columns :data:`PEOPLE_COLUMNS` (SI units; ``age_years`` is
         the middle of the completed year of age, ``survey_age_years`` the survey's integer,
         ``survey_race`` the RIDRETH3 code (−1 if missing);
-        waist and hip NaN where not usable; ``exam_weight`` NaN where missing).
+        waist, hip and the limb measures NaN where not measured; ``exam_weight`` NaN where missing).
     skipped : dict[str, int]
         People skipped, by reason.
     dropped : dict[str, int]
-        Single values dropped (the person kept), by reason, e.g. ``"waist missing"``.
+        Measures missing (the person kept, the measure left out of the match), by reason, e.g.
+        ``"waist missing"``; also ``"race unknown"`` and ``"exam weight missing"``.
     source : str
         Where the data came from.
     """
@@ -132,6 +145,8 @@ def clean_survey(raw: pd.DataFrame, source: str = "") -> SurveyData:
     dropped: dict[str, int] = {}
 
     def number(col: str) -> pd.Series:
+        if col not in raw.columns:
+            return pd.Series(np.nan, index=raw.index)
         return pd.to_numeric(raw[col].replace({"NA": np.nan, "": np.nan, ".": np.nan}), errors="coerce")
 
     def plausible(values: pd.Series, name: str) -> tuple[pd.Series, pd.Series]:
@@ -147,8 +162,7 @@ def clean_survey(raw: pd.DataFrame, source: str = "") -> SurveyData:
     pregnant = number("RIDEXPRG") == 1
     stature, bad_stature = plausible(number("BMXHT") / 100.0, "stature_m")
     mass, bad_mass = plausible(number("BMXWT"), "mass_kg")
-    waist, bad_waist = plausible(number("BMXWAIST") / 100.0, "waist_circ_m")
-    hip, bad_hip = plausible(number("BMXHIP") / 100.0, "hip_circ_m")
+    optional = {name: plausible(number(col) / 100.0, name) for col, name, _ in _OPTIONAL_MEASURES}
     weight = number("WTMECPRP")
     age, bad_age = plausible(age_int + 0.5, "age_years")
     bmi, bad_bmi = plausible(mass / stature**2, "bmi")
@@ -163,6 +177,7 @@ def clean_survey(raw: pd.DataFrame, source: str = "") -> SurveyData:
         ("mass implausible", bad_mass),
         ("mass missing", mass.isna() & ~bad_mass),
         ("bmi implausible", bad_bmi),
+        *[(f"{word} implausible", optional[name][1]) for _, name, word in _OPTIONAL_MEASURES],
     ]
     keep = pd.Series(True, index=raw.index)
     for reason, mask in reasons:
@@ -176,10 +191,7 @@ def clean_survey(raw: pd.DataFrame, source: str = "") -> SurveyData:
         keep &= ~duplicated
 
     for reason, mask in [
-        ("waist missing", waist.isna() & ~bad_waist),
-        ("waist implausible", bad_waist),
-        ("hip missing", hip.isna() & ~bad_hip),
-        ("hip implausible", bad_hip),
+        *[(f"{word} missing", optional[name][0].isna()) for _, name, word in _OPTIONAL_MEASURES],
         ("race unknown", ~race.isin(list(ETHNIC_MIX))),
         ("exam weight missing", ~(weight > 0)),
     ]:
@@ -200,8 +212,7 @@ def clean_survey(raw: pd.DataFrame, source: str = "") -> SurveyData:
         "stature_m": stature,
         "mass_kg": mass,
         "bmi": bmi,
-        "waist_circ_m": waist,
-        "hip_circ_m": hip,
+        **{name: optional[name][0] for _, name, _ in _OPTIONAL_MEASURES},
         "exam_weight": weight.where(weight > 0),
     })[keep].reset_index(drop=True)
     for col in ("survey_id", "survey_age_years", "survey_race"):

@@ -1,14 +1,15 @@
-"""Fit anny phenotypes to body measures: stature, mass, waist and hip of real people.
+"""Fit anny phenotypes to body measures: stature, mass, waist, hip, arm and leg of real people.
 
 (About 500 lines, above the project's ~400: the batched Levenberg–Marquardt solver, its bounds, step
 control and the girth rescue share one set of per-person state arrays; splitting them would pass that
 state across modules for no gain in clarity.)
 
 Each person keeps the fixed parameters it is given (gender, age, ethnic mix) and the free
-ones (muscle, weight, height, proportions, the four local changes of the body model —
-waist, hips, belly, buttocks — and cup size for women) are fitted so that the
-body's stature, mass, waist and hip (as :class:`~wbsa.bodies.anthropometry.Anthropometer`
-defines them) equal the person's. The fit is a damped Gauss–Newton (Levenberg–Marquardt)
+ones (muscle, weight, height, proportions, the trunk's four local changes — waist, hips, belly,
+buttocks —, with seven measures the limbs' three — upper-arm girth and length, upper-leg length —
+and cup size for women) are fitted so that the body's stature, mass, waist and hip, and with
+``measures = "seven"`` its NHANES arm circumference, upper arm length and upper leg length (as
+:class:`~wbsa.bodies.anthropometry.Anthropometer` defines them), equal the person's. The fit is a damped Gauss–Newton (Levenberg–Marquardt)
 least-squares problem per person, solved for a whole batch at once:
 
 * unknowns: the free phenotypes themselves, and each local change ``l`` as ``(l + 1) / 2``
@@ -42,25 +43,30 @@ import numpy as np
 import pandas as pd
 
 from wbsa.errors import WbsaError
-from wbsa.bodies.body_model import BODY_PARAMETER_COLUMNS, LOCAL_CHANGE_COLUMNS
-from wbsa.bodies.survey_measures import FIT_MEASURES, TorchMeasurer
+from wbsa.bodies.body_model import ALL_LOCAL_CHANGE_COLUMNS, BODY_PARAMETER_COLUMNS, LIMB_CHANGE_COLUMNS
+from wbsa.bodies.survey_measures import TorchMeasurer, fit_measures
+from wbsa.typing import SurveyMeasures
 from wbsa.bodies.survey_start import StartGrid, StartTable
 from wbsa.progress import progress
 
-#: Target columns :func:`match_bodies` reads (NaN waist/hip = not measured).
-TARGET_COLUMNS = ("target_stature_m", "target_mass_kg", "target_waist_circ_m", "target_hip_circ_m")
+#: Target columns :func:`match_bodies` reads (NaN waist, hip or limb measure = not measured), in the order
+#: of :data:`~wbsa.bodies.survey_measures.FIT_MEASURES`; the last three only with seven measures.
+TARGET_COLUMNS = ("target_stature_m", "target_mass_kg", "target_waist_circ_m", "target_hip_circ_m",
+                  "target_mid_arm_circ_m", "target_upper_arm_length_m", "target_upper_leg_length_m")
 #: Optional target column: each person's body density (kg/m³) for mass = volume × density
 #: (absent: the measurer's one density).
 DENSITY_COLUMN = "target_density_kg_m3"
 #: Fixed phenotype columns :func:`match_bodies` reads.
 FIXED_COLUMNS = ("p_gender", "p_age", "p_african", "p_asian", "p_caucasian")
 #: Free body parameters, in fit order (``p_cupsize`` only for women, the ``l_*`` local changes
-#: unless switched off, see :class:`MatchSettings`). The first four come from the start table.
-FREE_PHENOTYPES = ("p_muscle", "p_weight", "p_height", "p_proportions", *LOCAL_CHANGE_COLUMNS, "p_cupsize")
+#: unless switched off, the limbs' only with seven measures, see :class:`MatchSettings`). The first
+#: four come from the start table.
+FREE_PHENOTYPES = ("p_muscle", "p_weight", "p_height", "p_proportions", *ALL_LOCAL_CHANGE_COLUMNS, "p_cupsize")
 
 _INDEX = {name: i for i, name in enumerate(BODY_PARAMETER_COLUMNS)}
 #: positions in FREE_PHENOTYPES of the local changes (their unknown is (l + 1) / 2)
-_LOCAL = [FREE_PHENOTYPES.index(c) for c in LOCAL_CHANGE_COLUMNS]
+_LOCAL = [FREE_PHENOTYPES.index(c) for c in ALL_LOCAL_CHANGE_COLUMNS]
+_LIMB = [FREE_PHENOTYPES.index(c) for c in LIMB_CHANGE_COLUMNS]
 _STALL = 5
 _DAMPING_FLOOR = 1e-3
 _KINK_HOP = 1e-5
@@ -72,9 +78,14 @@ class MatchSettings:
 
     Attributes
     ----------
-    stature_tol_m, mass_tol_kg, girth_tol_m
-        Match tolerances (1 cm, 1 kg, 3 cm): a body matches when every measured quantity is
-        within them; residuals are scaled by them, so they also weigh the least squares.
+    measures
+        ``seven`` (default): stature, mass, waist, hip and the NHANES arm circumference, upper arm
+        length and upper leg length, with the limbs' local changes free; ``four``: the first four,
+        the limbs' local changes kept at 0 (the matcher's bodies before the limb measures).
+    stature_tol_m, mass_tol_kg, girth_tol_m, arm_circ_tol_m, limb_length_tol_m
+        Match tolerances (1 cm, 1 kg, 3 cm for waist and hip, 2 cm for the arm circumference, 1.5 cm
+        for the arm and leg lengths): a body matches when every measured quantity is within them;
+        residuals are scaled by them, so they also weigh the least squares.
     bounds
         ``(low, high)`` range of every free phenotype.
     free_cupsize
@@ -83,8 +94,8 @@ class MatchSettings:
         Fit the body model's local changes (waist, hips, belly, buttocks; otherwise they stay
         0). With phenotypes alone anny cannot reach most real waist–hip combinations.
     weights
-        Weights of the stature, mass, waist and hip residuals (each in units of its
-        tolerance). Stature and mass are met first and the girths fitted as well as the body
+        Weights of the stature, mass, waist, hip, arm circumference, arm length and leg length
+        residuals (each in units of its tolerance; with four measures the first four are used). Stature and mass are met first and the girths fitted as well as the body
         model allows with them held (anny cannot reach every real waist–hip combination at a
         given stature and mass); where even the mass is out of reach (BMI beyond anny's range)
         stature weighs more, so the body keeps the person's stature and falls short in mass
@@ -114,15 +125,18 @@ class MatchSettings:
         makes the results bitwise independent of the machine's core count.
     """
 
+    measures: SurveyMeasures = "seven"
     stature_tol_m: float = 0.01
     mass_tol_kg: float = 1.0
     girth_tol_m: float = 0.03
+    arm_circ_tol_m: float = 0.02
+    limb_length_tol_m: float = 0.015
     bounds: tuple[float, float] = (0.0, 1.0)
     free_cupsize: bool = True
     free_local_changes: bool = True
-    weights: tuple[float, float, float, float] = (3.0, 1.0, 0.1, 0.1)
+    weights: tuple[float, ...] = (3.0, 1.0, 0.1, 0.1, 0.1, 0.1, 0.1)
     prior_weight: float = 0.05
-    rescue_weights: tuple[float, float, float, float] | None = None
+    rescue_weights: tuple[float, ...] | None = None
     max_iterations: int = 40
     converge_fraction: float = 0.25
     batch_size: int = 256
@@ -130,25 +144,44 @@ class MatchSettings:
     threads: int | None = 1
 
     def __post_init__(self) -> None:
+        from wbsa.typing import SURVEY_MEASURES
+
+        if self.measures not in SURVEY_MEASURES:
+            raise WbsaError(f"match measures {self.measures!r} must be one of {', '.join(SURVEY_MEASURES)}")
         lo, hi = self.bounds
         if not 0.0 <= lo < hi <= 1.0:
             raise WbsaError(f"match bounds {self.bounds} must satisfy 0 <= low < high <= 1")
-        for name in ("stature_tol_m", "mass_tol_kg", "girth_tol_m"):
+        for name in ("stature_tol_m", "mass_tol_kg", "girth_tol_m", "arm_circ_tol_m", "limb_length_tol_m"):
             if not getattr(self, name) > 0:
                 raise WbsaError(f"match tolerance {name} = {getattr(self, name)} must be positive")
         for name in ("weights", "rescue_weights"):
             w = getattr(self, name)
-            if w is not None and (len(w) != 4 or not all(x > 0 for x in w)):
-                raise WbsaError(f"match {name} {w} must be four positive numbers (stature, mass, waist, hip)")
+            if w is not None and (len(w) != 7 or not all(x > 0 for x in w)):
+                raise WbsaError(f"match {name} {w} must be seven positive numbers (stature, mass, waist, hip, "
+                                "arm circumference, arm length, leg length)")
         if self.threads is not None and self.threads < 1:
             raise WbsaError(f"match threads = {self.threads} must be >= 1 (or None for torch's default)")
         if self.max_iterations < 0 or self.batch_size < 1:
             raise WbsaError("match max_iterations must be >= 0 and batch_size >= 1")
 
     @property
+    def names(self) -> tuple[str, ...]:
+        """The matched measures (:func:`~wbsa.bodies.survey_measures.fit_measures`)."""
+        return fit_measures(self.measures)
+
+    @property
     def tolerances(self) -> np.ndarray:
-        """(4,) tolerances in the order of :data:`~wbsa.bodies.survey_measures.FIT_MEASURES`."""
-        return np.array([self.stature_tol_m, self.mass_tol_kg, self.girth_tol_m, self.girth_tol_m])
+        """(m,) tolerances of :attr:`names`, m = 4 or 7."""
+        tol = np.array([self.stature_tol_m, self.mass_tol_kg, self.girth_tol_m, self.girth_tol_m, self.arm_circ_tol_m,
+                        self.limb_length_tol_m, self.limb_length_tol_m])
+        return tol[:len(self.names)]
+
+    @property
+    def tolerance_of(self) -> dict[str, float]:
+        """Tolerance of every measure (all seven, SI units), by measure name."""
+        names = fit_measures("seven")
+        tol = replace(self, measures="seven").tolerances
+        return dict(zip(names, tol.tolist()))
 
 
 def match_bodies(targets: pd.DataFrame, measurer: TorchMeasurer, settings: MatchSettings = MatchSettings(), *,
@@ -158,11 +191,12 @@ def match_bodies(targets: pd.DataFrame, measurer: TorchMeasurer, settings: Match
     Parameters
     ----------
     targets
-        :data:`FIXED_COLUMNS` (in [0, 1]) and :data:`TARGET_COLUMNS` (SI units; waist and hip
-        may be NaN, stature and mass must be finite and positive), optionally
-        :data:`DENSITY_COLUMN`, the density each person's mass is computed with.
+        :data:`FIXED_COLUMNS` (in [0, 1]) and :data:`TARGET_COLUMNS` (SI units; the first four, or
+        all seven with ``settings.measures = "seven"``; every one but stature and mass may be NaN,
+        stature and mass must be finite and positive), optionally :data:`DENSITY_COLUMN`, the
+        density each person's mass is computed with.
     measurer
-        Differentiable measures of the body model.
+        Differentiable measures of the body model, of the same measures as ``settings``.
     settings
         Tolerances, bounds and iteration limits.
     table
@@ -177,11 +211,15 @@ def match_bodies(targets: pd.DataFrame, measurer: TorchMeasurer, settings: Match
         fitted body's measures as the fit saw them, SI), ``fit_iterations`` and
         ``fit_converged`` (every measured quantity within ``converge_fraction`` of its tolerance).
     """
-    missing = [c for c in (*FIXED_COLUMNS, *TARGET_COLUMNS) if c not in targets.columns]
+    m = len(settings.names)
+    if measurer.names != settings.names:
+        raise WbsaError(f"the measurer measures {len(measurer.names)} quantities, the match settings {m}; "
+                        f"build TorchMeasurer(..., measures={settings.measures!r})")
+    missing = [c for c in (*FIXED_COLUMNS, *TARGET_COLUMNS[:m]) if c not in targets.columns]
     if missing:
         raise WbsaError(f"match targets lack columns {missing}")
     fixed = targets[list(FIXED_COLUMNS)].to_numpy(dtype=np.float64)
-    goal = targets[list(TARGET_COLUMNS)].to_numpy(dtype=np.float64)
+    goal = targets[list(TARGET_COLUMNS[:m])].to_numpy(dtype=np.float64)
     if not (np.isfinite(goal[:, :2]).all() and (goal[:, :2] > 0).all()):
         raise WbsaError("every match target needs a finite, positive stature and mass")
     n = len(targets)
@@ -192,7 +230,7 @@ def match_bodies(targets: pd.DataFrame, measurer: TorchMeasurer, settings: Match
     else:
         density = np.full(n, measurer.density_kg_m3)
     phen = np.zeros((n, len(BODY_PARAMETER_COLUMNS)))
-    fit = np.full((n, 4), np.nan)
+    fit = np.full((n, m), np.nan)
     iters = np.zeros(n, dtype=np.int64)
     done = np.zeros(n, dtype=bool)
     with torch_threads(settings.threads):
@@ -204,7 +242,7 @@ def match_bodies(targets: pd.DataFrame, measurer: TorchMeasurer, settings: Match
                                                                       settings, table)
                 bar.update(len(fixed[sl]))
     out = pd.DataFrame(phen, columns=list(BODY_PARAMETER_COLUMNS), index=targets.index)
-    for j, name in enumerate(FIT_MEASURES):
+    for j, name in enumerate(settings.names):
         out[f"fit_{name}"] = fit[:, j]
     out["fit_iterations"] = iters
     out["fit_converged"] = done
@@ -245,6 +283,8 @@ class _Problem:
         # (b, d) mask of the unknowns each person really has (cup size: women only)
         mask = np.ones((b, len(FREE_PHENOTYPES)), dtype=bool)
         mask[:, _LOCAL] = settings.free_local_changes
+        if settings.measures == "four":
+            mask[:, _LIMB] = False
         if not settings.free_cupsize:
             mask[:, -1] = False
         else:
@@ -266,7 +306,8 @@ class _Problem:
         self.tol = torch.as_tensor(settings.tolerances, dtype=measurer.dtype)
         weight = np.asarray(settings.weights, dtype=np.float64)
         #: residual unit of each measure: its tolerance over its weight
-        self.unit = self.tol / torch.as_tensor(weight, dtype=measurer.dtype)
+        self.unit = self.tol / torch.as_tensor(weight[:len(settings.tolerances)], dtype=measurer.dtype)
+        self.n_measures = len(settings.tolerances)
 
     def phenotypes(self, u):
         """(b, 15) body parameters and (b, d) free values for unknowns ``u`` (b, d) (differentiable)."""
@@ -310,14 +351,15 @@ class _Problem:
         return pinned
 
     def residuals(self, u, rows, jacobian: bool):
-        """Residuals ``(b, 4 + d)``, measures ``(b, 4)``, Jacobian ``(b, 4 + d, d)`` at free values ``u`` of ``rows``."""
+        """Residuals ``(b, m + d)``, measures ``(b, m)``, Jacobian ``(b, m + d, d)`` at free values ``u`` of ``rows``."""
         torch = self.torch
         sub = _SubProblem(self, rows)
         uu = u.detach().clone().requires_grad_(jacobian)
         with torch.set_grad_enabled(jacobian):
             ph, free = sub.phenotypes(uu)
             coeffs = self.m.coefficients(ph)
-        ev = self.m.evaluate(self.m.vertices(coeffs), gradient=jacobian, density_kg_m3=sub.density)
+        ev = self.m.evaluate(self.m.vertices(coeffs), gradient=jacobian, density_kg_m3=sub.density,
+                             coefficients=coeffs.detach())
         values = ev.values
         has = sub.has & torch.isfinite(values)
         err = torch.where(has, (values - sub.goal) / self.unit, torch.zeros_like(values))
@@ -325,13 +367,13 @@ class _Problem:
         r = torch.cat([err, prior], dim=1)
         if not jacobian:
             return r, values, None
-        d = u.shape[1]
-        jac = torch.zeros((len(rows), 4 + d, d), dtype=u.dtype)
-        for k in range(4):
+        d, m = u.shape[1], self.n_measures
+        jac = torch.zeros((len(rows), m + d, d), dtype=u.dtype)
+        for k in range(m):
             weight = torch.where(has[:, k:k + 1], ev.grad[:, k] / self.unit[k], torch.zeros_like(ev.grad[:, k]))
             (g,) = torch.autograd.grad(coeffs, uu, grad_outputs=weight, retain_graph=True)
             jac[:, k] = g
-        jac[:, 4:] = torch.diag_embed(self.s.prior_weight * sub.free_mask.to(u.dtype))
+        jac[:, m:] = torch.diag_embed(self.s.prior_weight * sub.free_mask.to(u.dtype))
         jac = jac * sub.free_mask[:, None, :]
         return r, values, jac
 
@@ -367,7 +409,7 @@ def _start(problem: _Problem, table: StartTable, fixed: np.ndarray, goal: np.nda
     free = np.full((len(fixed), len(FREE_PHENOTYPES)), 0.5)
     goal = goal.copy()
     goal[:, 1] *= problem.m.density_kg_m3 / density
-    free[:, :4] = table.start(fixed, goal, problem.s.tolerances, muscle_side)
+    free[:, :4] = table.start(fixed, goal[:, :4], problem.s.tolerances[:4], muscle_side)
     return np.clip(free, *problem.s.bounds)
 
 
@@ -406,7 +448,7 @@ def _box_step(r, jac, u, mu, free, bounds):
 
 def _match_batch(fixed: np.ndarray, goal: np.ndarray, density: np.ndarray, measurer: TorchMeasurer,
                  s: MatchSettings, table: StartTable):
-    """Fit one batch; returns body parameters (b, 15), fit measures (b, 4), iterations (b,), converged (b,).
+    """Fit one batch; returns body parameters (b, 18), fit measures (b, m), iterations (b,), converged (b,).
 
     People whose stature or mass is still off after the first fit are fitted again from the
     best start on the other side of muscle 0.5 (anny's mass has a separate basin on each

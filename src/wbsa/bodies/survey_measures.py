@@ -1,7 +1,8 @@
-"""Stature, mass, waist and hip of anny bodies in torch, batched, with exact derivatives.
+"""Stature, mass, waist, hip (and the NHANES limb measures) of anny bodies in torch, batched, with exact derivatives.
 
 The survey matcher fits phenotype parameters by Gauss–Newton steps, which need these four
-measures *and* their derivatives for hundreds of bodies at once. The definitions are the
+measures *and* their derivatives for hundreds of bodies at once (seven with the NHANES limb
+measures of :mod:`~wbsa.bodies.survey_limb_measures`). The definitions are the
 same as :class:`~wbsa.bodies.anthropometry.Anthropometer`'s, so a fitted body measures
 back to the same numbers in the population table:
 
@@ -31,9 +32,18 @@ from scipy.spatial import ConvexHull, QhullError
 
 from wbsa.bodies.anthropometry import Anthropometer
 from wbsa.bodies.body_model import BodyModel
+from wbsa.bodies.survey_limb_measures import LIMB_MEASURES
+from wbsa.typing import SurveyMeasures
 
-#: The measures this module computes, in column order of :meth:`TorchMeasurer.evaluate`.
-FIT_MEASURES = ("stature_m", "mass_kg", "waist_circ_m", "hip_circ_m")
+#: The trunk measures this module computes, in column order of :meth:`TorchMeasurer.evaluate`.
+TRUNK_MEASURES = ("stature_m", "mass_kg", "waist_circ_m", "hip_circ_m")
+#: Every fit measure, in column order: the trunk's, then the NHANES limb measures.
+FIT_MEASURES = (*TRUNK_MEASURES, *LIMB_MEASURES)
+
+
+def fit_measures(measures: SurveyMeasures) -> tuple[str, ...]:
+    """The fit measures of a choice: ``four`` (:data:`TRUNK_MEASURES`) or ``seven`` (:data:`FIT_MEASURES`)."""
+    return TRUNK_MEASURES if measures == "four" else FIT_MEASURES
 
 _FACE_CHUNK = 4096
 
@@ -44,9 +54,10 @@ class Evaluation:
 
     Attributes
     ----------
-    values : (b, 4) float64 tensor
-        :data:`FIT_MEASURES` of every body; a girth is NaN where its section is degenerate.
-    grad : (b, 4, k) float64 tensor or None
+    values : (b, m) float64 tensor
+        The measurer's measures (:func:`fit_measures`, m = 4 or 7) of every body; a girth is NaN where
+        its section is degenerate.
+    grad : (b, m, k) float64 tensor or None
         d(measure)/d(blendshape coefficient); zero rows where the value is NaN.
     """
 
@@ -63,10 +74,14 @@ class TorchMeasurer:
         The body model (its torch anny model is used directly).
     meter
         The exact measurer whose landmarks and density are reproduced.
+    measures
+        ``seven`` (default: the trunk measures and the NHANES limb measures) or ``four`` (the trunk's).
     """
 
-    def __init__(self, model: BodyModel, meter: Anthropometer):
+    def __init__(self, model: BodyModel, meter: Anthropometer, measures: SurveyMeasures = "seven"):
         import torch
+
+        from wbsa.bodies.survey_limb_measures import TorchLimbMeasurer
 
         self.torch = torch
         self.model = model
@@ -85,6 +100,9 @@ class TorchMeasurer:
         self.edge_b = torch.as_tensor(ids[lm.trunk_edges.edges[:, 1]], dtype=torch.long)
         self.waist_ring = torch.as_tensor(np.asarray(lm.waist_ring), dtype=torch.long)
         self.hip_ring = torch.as_tensor([int(lm.hip)], dtype=torch.long)
+        #: the measures :meth:`evaluate` returns, in column order
+        self.names = fit_measures(measures)
+        self.limbs = TorchLimbMeasurer(model, meter) if measures == "seven" else None
 
     # -- body model ---------------------------------------------------------------------
     def coefficients(self, params):
@@ -101,11 +119,16 @@ class TorchMeasurer:
         return flat.reshape(3, self.n_vertices, -1)
 
     # -- measures -----------------------------------------------------------------------
-    def evaluate(self, x, gradient: bool = False, density_kg_m3=None) -> Evaluation:
+    def evaluate(self, x, gradient: bool = False, density_kg_m3=None, coefficients=None,
+                 trunk_only: bool = False) -> Evaluation:
         """Measures of bodies ``x`` (3, n, b) and, if asked, their coefficient gradients.
 
         ``density_kg_m3`` : (b,) float64 tensor, optional
             Each body's density for its mass (default: the measurer's one density).
+        ``coefficients`` : (b, k) float64 tensor
+            The bodies' blendshape coefficients; needed for the limb measures (their joints).
+        ``trunk_only`` : bool
+            Only the four :data:`TRUNK_MEASURES` (the start table needs no more).
         """
         torch = self.torch
         density = self.density_kg_m3 if density_kg_m3 is None else density_kg_m3
@@ -122,11 +145,17 @@ class TorchMeasurer:
             girths.append(value)
             sparse.append(entries)
         values = torch.stack([stature, mass, *girths], dim=1)
+        limb_grad = None
+        if self.limbs is not None and not trunk_only:
+            if coefficients is None:
+                raise ValueError("the limb measures need the bodies' blendshape coefficients")
+            limb_values, limb_grad = self.limbs.evaluate(x, coefficients, gradient)
+            values = torch.cat([values, limb_values], dim=1)
         if not gradient:
             return Evaluation(values, None)
 
         k = self.basis_t.shape[1]
-        grad = torch.zeros((b, 4, k), dtype=self.dtype)
+        grad = torch.zeros((b, values.shape[1], k), dtype=self.dtype)
         # stature: +z of the top vertex, -z of the lowest
         grad[:, 0] = self.basis_t[2 * n + top] - self.basis_t[2 * n + bottom]
         # mass: dense volume gradient, one product with the basis
@@ -141,6 +170,8 @@ class TorchMeasurer:
         g = torch.sparse.mm(s, self.basis_t).reshape(4, b, k)
         grad[:, 2] = g[2]
         grad[:, 3] = g[3]
+        if limb_grad is not None:
+            grad[:, 4:] = limb_grad
         grad = torch.where(torch.isfinite(values)[..., None], grad, torch.zeros_like(grad))
         return Evaluation(values, grad)
 

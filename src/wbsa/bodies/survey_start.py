@@ -169,7 +169,7 @@ def _measure(measurer: TorchMeasurer, phenotypes: np.ndarray, batch_size: int) -
     for start in range(0, len(phenotypes), batch_size):
         ph = torch.as_tensor(phenotypes[start:start + batch_size], dtype=measurer.dtype)
         with torch.no_grad():
-            out.append(measurer.evaluate(measurer.vertices(measurer.coefficients(ph))).values.numpy())
+            out.append(measurer.evaluate(measurer.vertices(measurer.coefficients(ph)), trunk_only=True).values.numpy())
     return np.concatenate(out)
 
 

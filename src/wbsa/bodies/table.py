@@ -10,9 +10,9 @@ import pandas as pd
 
 from wbsa.io import read_table
 from wbsa.parallel import keep_large_allocations, single_threaded_math
-from wbsa.bodies.anthropometry import DEFAULT_DENSITY_KG_M3, MEASURE_COLUMNS, Anthropometer
-from wbsa.bodies.body_model import (LOCAL_CHANGE_COLUMNS, PHENOTYPE_COLUMNS, BodyModel,
-                                        body_parameter_array)
+from wbsa.bodies.anthropometry import (DEFAULT_DENSITY_KG_M3, MEASURE_COLUMNS, NHANES_LIMB_COLUMNS,
+                                      REQUIRED_MEASURE_COLUMNS, Anthropometer)
+from wbsa.bodies.body_model import ALL_LOCAL_CHANGE_COLUMNS, PHENOTYPE_COLUMNS, BodyModel, body_parameter_array
 from wbsa.bodies.composition import COMPOSITION_COLUMNS, CompositionSettings
 from wbsa.progress import progress
 
@@ -20,11 +20,12 @@ from wbsa.progress import progress
 PARALLEL_MIN_BODIES = 2000
 
 #: Columns every population table has (:func:`read_population` requires them).
-POPULATION_COLUMNS = ("subject_id", "sex", "age_years", *PHENOTYPE_COLUMNS, *MEASURE_COLUMNS)
-#: Columns a population table is written with: :data:`POPULATION_COLUMNS`, then the local changes
-#: (0 unless fitted, see :data:`~wbsa.bodies.body_model.LOCAL_CHANGE_COLUMNS`). A density model other
-#: than ``constant`` adds :data:`~wbsa.bodies.composition.COMPOSITION_COLUMNS` after them.
-TABLE_COLUMNS = (*POPULATION_COLUMNS, *LOCAL_CHANGE_COLUMNS)
+POPULATION_COLUMNS = ("subject_id", "sex", "age_years", *PHENOTYPE_COLUMNS, *REQUIRED_MEASURE_COLUMNS)
+#: Columns a population table is written with: :data:`POPULATION_COLUMNS`, the NHANES limb measures
+#: (:data:`~wbsa.bodies.anthropometry.NHANES_LIMB_COLUMNS`), then the local changes (0 unless fitted,
+#: see :data:`~wbsa.bodies.body_model.ALL_LOCAL_CHANGE_COLUMNS`). A density model other than
+#: ``constant`` adds :data:`~wbsa.bodies.composition.COMPOSITION_COLUMNS` after them.
+TABLE_COLUMNS = (*POPULATION_COLUMNS, *NHANES_LIMB_COLUMNS, *ALL_LOCAL_CHANGE_COLUMNS)
 
 
 def measure_population(params: pd.DataFrame, *, density_kg_m3: float = DEFAULT_DENSITY_KG_M3,
@@ -87,7 +88,7 @@ def measure_population(params: pd.DataFrame, *, density_kg_m3: float = DEFAULT_D
         if name not in out.columns:
             out[name] = 0.5
     local = pd.DataFrame({name: out.pop(name) if name in out.columns else np.zeros(len(out))
-                          for name in LOCAL_CHANGE_COLUMNS})
+                          for name in ALL_LOCAL_CHANGE_COLUMNS})
     table = pd.concat([out, measures, local], axis=1)
     return table if composition is None else with_composition(table, composition)
 
@@ -114,7 +115,8 @@ def with_composition(table: pd.DataFrame, settings: CompositionSettings) -> pd.D
     out = table.drop(columns=[c for c in COMPOSITION_COLUMNS if c in table.columns])
     out["mass_kg"] = comp.mass_kg
     out["bmi"] = comp.bmi
-    at = out.columns.get_loc(LOCAL_CHANGE_COLUMNS[-1]) + 1 if LOCAL_CHANGE_COLUMNS[-1] in out else len(out.columns)
+    last = next((c for c in reversed(ALL_LOCAL_CHANGE_COLUMNS) if c in out.columns), None)
+    at = out.columns.get_loc(last) + 1 if last is not None else len(out.columns)
     out.insert(at, "fat_fraction", comp.fat_fraction)
     out.insert(at + 1, "density_kg_m3", comp.density_kg_m3)
     out.insert(at + 2, "fat_residual_z", z)
@@ -150,7 +152,7 @@ def read_population(path: str | os.PathLike) -> pd.DataFrame:
     """Read and validate a population table written by ``wbsa population``.
 
     Tables without the local-change columns (written before they existed) get them as 0,
-    which rebuilds the same bodies.
+    which rebuilds the same bodies; tables without the NHANES limb measures are read without them.
 
     Raises
     ------
@@ -163,7 +165,7 @@ def read_population(path: str | os.PathLike) -> pd.DataFrame:
 
         raise WbsaError(f"{path} has duplicate subject_id values; regenerate it with wbsa population")
     df["subject_id"] = df["subject_id"].astype(np.int64)
-    for name in LOCAL_CHANGE_COLUMNS:
+    for name in ALL_LOCAL_CHANGE_COLUMNS:
         if name not in df.columns:
             df[name] = 0.0
     return df

@@ -31,7 +31,8 @@ def run_estimate(depth_m: np.ndarray, camera, model, options):
 
     model = None if options.method == "body-fit" else model  # the body fit has no estimator model
     return wbsa.estimate(depth_m, camera, model, method=options.method, azimuth_deg=options.azimuth_deg,
-                         elevation_deg=options.elevation_deg, clothing_m=options.clothing_m,
+                         elevation_deg=options.elevation_deg, clothing=options.clothes, clothing_m=options.clothing_m,
+                         stature_m=None if options.height_cm is None else options.height_cm / 100.0,
                          segment=SegmentSettings(pick=options.pick))
 
 

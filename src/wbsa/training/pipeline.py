@@ -40,11 +40,14 @@ def training_population(settings: TrainSettings, show_progress: bool | None = No
     if settings.n_survey:
         import warnings
 
-        from wbsa.bodies.survey import build_survey_population
+        from wbsa.bodies.survey import SurveyPopulationSettings, build_survey_population
+        from wbsa.bodies.survey_match import MatchSettings
 
+        # the training world's survey people are matched on four measures (the recipe of the shipped model)
+        survey = SurveyPopulationSettings(match=MatchSettings(measures="four"))
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # unmatched people are still people; their truth is their body
-            parts.append(build_survey_population(settings.n_survey, seed=settings.seed + 1,
+            parts.append(build_survey_population(settings.n_survey, seed=settings.seed + 1, settings=survey,
                                                  show_progress=show_progress).assign(population="survey"))
     pop = pd.concat(parts, ignore_index=True)
     pop["subject_id"] = np.arange(len(pop))

@@ -326,7 +326,7 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
 def _clothes_widened(prediction, routes: dict, predictors: list, subject, request, clothes: Clothes):
     """The lead prediction and the routes with their intervals widened by the clothes' uncertainty
     (:func:`wbsa.estimation.clothes.widened`): each predictor predicts again with the layer thicker by it; a
-    route that takes no layer that thick (the body fit takes none) keeps its interval."""
+    route that refuses a layer that thick keeps its interval (the body fit takes it: it fits again, dressed thicker)."""
     from wbsa.estimation.clothes import widened
 
     thicker = dataclasses.replace(request, clothing_m=clothes.layer_m + clothes.sd_m)

@@ -54,6 +54,8 @@ def drift_chunk(population: pd.DataFrame, seed: int, draws: int, cameras: tuple[
     distance (a random azimuth) with ``draws`` draws of its sensor's noise (the held-out captures' sensor of the
     camera, :func:`wbsa.training.capture.sensor_for`: axial and lateral noise, grazing dropout, the camera's
     disparity quantisation, the working range; no holes or dropped pixels); the subject's true pixels and floor.
+    A capture that cuts the body off (:func:`wbsa.training.capture.fits_frame`) is skipped, as the held-out
+    captures step back until the body fits.
     Returns one row per fit: the fitted body's WBSA error against the subject's."""
     from wbsa.bodies.body_model import BodyModel, body_parameter_array
     from wbsa.bodies.posture import POSTURES, draw_angles, settle_posture
@@ -62,7 +64,7 @@ def drift_chunk(population: pd.DataFrame, seed: int, draws: int, cameras: tuple[
     from wbsa.camera.views import View
     from wbsa.estimation.methods.body_fit import fit_body
     from wbsa.estimation.subject.cloud import Plane
-    from wbsa.training.capture import Capture, CaptureSettings, sensor_for
+    from wbsa.training.capture import Capture, CaptureSettings, fits_frame, sensor_for
     from wbsa.training.room import capture_room, compose_room
 
     body_model = BodyModel()
@@ -94,6 +96,9 @@ def drift_chunk(population: pd.DataFrame, seed: int, draws: int, cameras: tuple[
                     centre = room.subject_center
                     el = float(np.degrees(np.arcsin(np.clip((1.2 - centre[2]) / distance, -0.95, 0.95))))
                     view = View(az, el, distance)
+                    if not fits_frame(posed, camera, view, centre):  # cut off: the held-out captures step back
+                        print(f"subject {b} {name}, {camera_name} {distance:g} m, draw {k}: cut off, skipped")
+                        continue
                     cap = Capture(camera, view, sensor, 1.2, True)
                     frame, depth = capture_room(room, cap, seed=seed,
                                                 subject_id=((b * 100 + cam_index) * 10 + band_index) * 100 + k)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass, field
+from typing import Callable
 
 import numpy as np
 
@@ -144,7 +145,7 @@ def _depth_array(depth, depth_scale: float | None) -> np.ndarray:
 def estimate(depth, camera, model=None, method: Method = "regression", *, azimuth_deg: float | None = None,
              elevation_deg: float | None = None, clothing_m: float = 0.0, level: float = 0.95,
              depth_scale: float | None = None, segment: SegmentSettings | None = SegmentSettings(),
-             show_progress: bool | None = None) -> Estimate:
+             show_progress: bool | None = None, progress: Callable[[str, int, int], None] | None = None) -> Estimate:
     """Estimate WBSA from one depth image of a standing person.
 
     Parameters
@@ -173,6 +174,11 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
         Units per metre of the depth values (files: see :func:`wbsa.core.read_depth`; arrays: default 1).
     segment : SegmentSettings or None
         How to find the subject in a room; None: every return is the subject.
+    progress : callable, optional
+        Called as ``progress(stage, done, total)`` as the work goes on: ``("subject", 0, 1)`` before the subject
+        is found and measured, then for each route ``(route, 0, 1)`` as it starts (``regression``, ``body-fit``),
+        the body fit also ``("body-fit", step, steps)`` after each of its steps (a fit that settles stops
+        early). For a page or a log; the estimate is the same with or without it.
 
     Returns
     -------
@@ -205,7 +211,8 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     if elevation_deg is not None:
         elevation_deg = check_angle(elevation_deg, "elevation", "elevation_deg")
     checks.check_clothing(clothing_m)
-    request = Request(azimuth_deg, elevation_deg, float(clothing_m), level)
+    request = Request(azimuth_deg, elevation_deg, float(clothing_m), level,
+                      progress=None if progress is None else lambda step, steps: progress("body-fit", step, steps))
     predictors = list(predictors_for(method, model))  # a model is read (and refused if broken) before any work
     intrinsics = resolve_camera(camera)
     depth_m = _depth_array(depth, depth_scale)
@@ -220,6 +227,8 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
                 raise
             flags["body_fit_failed"] = str(exc)  # both: the second route cannot serve this request
             predictors[k] = None
+    if progress is not None:
+        progress("subject", 0, 1)
     if segment is None:
         mask, floor = np.isfinite(depth_m) & (depth_m > 0), None
         if not mask.any():
@@ -241,11 +250,15 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     flags.update(checks.working_range_flags(m.distance_m, intrinsics))
     flags.update(checks.feet_flags(m.distance_m, intrinsics))
     subject = Subject(depth_m, mask, intrinsics, floor, m)
+    if progress is not None:
+        progress(predictors[0].name, 0, 1)
     prediction = predictors[0].predict(subject, request)
     routes = {predictors[0].name: prediction} if len(predictors) > 1 else {}
     for predictor in predictors[1:]:
         if predictor is None:
             continue
+        if progress is not None:
+            progress(predictor.name, 0, 1)
         try:  # both: a body fit that fails leaves the regression's answer standing, flagged
             routes[predictor.name] = predictor.predict(subject, request)
         except WbsaError as exc:

@@ -5,6 +5,9 @@ const $ = (id) => document.getElementById(id);
 let current = null;       // the answer shown
 let viewer = null;
 let info = { max_upload_bytes: Infinity };
+let lastFiles = null;     // the depth file last measured alone, sent again when the camera changes
+let rerunWaiting = "";    // a camera chosen while busy: run again when the current estimate ends
+window.progressLog = [];  // every progress line of the last estimate (the tests read it)
 
 function el(tag, attrs, text) {
   const e = document.createElement(tag);
@@ -20,7 +23,6 @@ function showError(message) {
 }
 
 function setBusy(on) {
-  $("busy").hidden = !on;
   $("go").disabled = on;
   document.body.dataset.busy = on ? "1" : "0";
 }
@@ -47,69 +49,155 @@ function formData(files) {
   return fd;
 }
 
-async function readAnswer(response) {
-  let body;
-  try { body = await response.json(); } catch (e) { body = { error: `the server answered ${response.status} without a message` }; }
-  return body;
+// The stages of an estimate as the server reports them (wbsa.server.progress), in the page's words.
+const STAGES = {
+  reading: "Reading the depth file",
+  subject: "Finding and measuring the person",
+  regression: "Regression: predicting the area from the measured surface",
+  "body-fit": "Fitting a whole body to the picture",
+  answer: "Making the answer and the downloads",
+};
+
+function startProgress() {
+  window.progressLog = [];
+  $("progress-stages").replaceChildren();
+  $("progress-stage").textContent = "Sending the file";
+  $("progress-count").textContent = "";
+  $("progress-bar").removeAttribute("value");
+  $("progress").hidden = false;
 }
 
-async function send(files) {
+function showProgress(p) {
+  window.progressLog.push(p);
+  const list = $("progress-stages");
+  let item = list.querySelector(`li[data-stage="${p.stage}"]`);
+  for (const li of list.children) if (li !== item) li.classList.add("done");
+  if (!item) {
+    item = el("li", { "data-stage": p.stage }, STAGES[p.stage] || p.stage);
+    list.append(item);
+  }
+  $("progress-stage").textContent = STAGES[p.stage] || p.stage;
+  const steps = p.total > 1;
+  $("progress-count").textContent = steps ? `step ${p.done} of ${p.total}` : "";
+  if (steps) { $("progress-bar").max = p.total; $("progress-bar").value = p.done; }
+  else $("progress-bar").removeAttribute("value");
+  if (steps) item.dataset.steps = `${p.done}/${p.total}`;
+}
+
+// One answer: JSON, or the progress stream (one JSON object a line, the answer last).
+async function readAnswer(response) {
+  const type = response.headers.get("content-type") || "";
+  if (!type.startsWith("application/x-ndjson") || !response.body) {
+    try { return await response.json(); } catch (e) { return { error: `the server answered ${response.status} without a message` }; }
+  }
+  const reader = response.body.getReader();
+  const decoder = new TextDecoder();
+  let buffered = "", last = null;
+  const take = (line) => {
+    if (!line.trim()) return;
+    const msg = JSON.parse(line);
+    if (msg.progress) showProgress(msg.progress);
+    else if (msg.answer) last = msg.answer;
+  };
+  while (true) {
+    const { value, done } = await reader.read();
+    if (done) break;
+    buffered += decoder.decode(value, { stream: true });
+    let cut;
+    while ((cut = buffered.indexOf("\n")) >= 0) { take(buffered.slice(0, cut)); buffered = buffered.slice(cut + 1); }
+  }
+  take(buffered);
+  return last || { error: "the server stopped before its answer; send the file again" };
+}
+
+async function estimate(url, body) {
+  showError("");
+  setBusy(true);
+  startProgress();
+  try {
+    const response = await fetch(url, { method: "POST", body, headers: { Accept: "application/x-ndjson" } });
+    const answer = await readAnswer(response);
+    show(answer);
+    return answer;
+  } catch (e) {
+    showError(`the server did not answer (${e.message}); is wbsa serve still running?`);
+    return null;
+  } finally {
+    $("progress").hidden = true;
+    setBusy(false);
+  }
+}
+
+// rerun: what changed, said on the answer ("" for a new file)
+async function send(files, rerun = "") {
   if (!files.length) { showError("choose or drop a depth file first"); return; }
   const bytes = files.reduce((n, f) => n + f.size, 0);
   if (bytes > info.max_upload_bytes) {
     showError(`the upload is ${(bytes / 2 ** 20).toFixed(1)} MiB, above this server's limit of ${(info.max_upload_bytes / 2 ** 20).toFixed(0)} MiB; send one depth image at a time, or a smaller image`);
     return;
   }
-  if (files.length > 1) return sendBatch(files);
-  showError("");
-  setBusy(true);
-  try {
-    const response = await fetch("api/estimate", { method: "POST", body: formData(files) });
-    show(await readAnswer(response));
-  } catch (e) {
-    showError(`the server did not answer (${e.message}); is wbsa serve still running?`);
-  } finally {
-    setBusy(false);
-  }
+  if (files.length > 1) { lastFiles = null; return sendBatch(files); }
+  lastFiles = files;
+  const body = formData(files);
+  if (rerun && current && Array.isArray(current.pick)) body.append("pick", current.pick.join(","));  // the same person
+  const answer = await estimate("api/estimate", body);
+  const note = $("rerun-note");
+  note.hidden = !(rerun && answer);
+  note.textContent = rerun ? `Measured again with ${rerun}, chosen after the depth file.` : "";
+  document.body.dataset.reruns = String(Number(document.body.dataset.reruns || 0) + (rerun && answer ? 1 : 0));
+  if (rerunWaiting) { const why = rerunWaiting; rerunWaiting = ""; send(lastFiles, why); }
+}
+
+// The camera changed after a depth file was measured: measure it again with the new camera.
+function cameraChanged(what) {
+  if (!lastFiles) return;
+  if (document.body.dataset.busy === "1") { rerunWaiting = what; return; }
+  send(lastFiles, what);
 }
 
 async function pickAt(x, y) {
   if (!current || !current.id) return;
-  showError("");
-  setBusy(true);
-  try {
-    const response = await fetch(`api/result/${current.id}/pick?pick=${x},${y}`, { method: "POST" });
-    show(await readAnswer(response));
-  } catch (e) {
-    showError(`the server did not answer (${e.message}); is wbsa serve still running?`);
-  } finally {
-    setBusy(false);
-  }
+  await estimate(`api/result/${current.id}/pick?pick=${x},${y}`, null);
 }
 
 function fmt(v, digits) { return Number(v).toFixed(digits); }
 // " ± 3°" for a spread that was estimated, nothing for one that was not (a fitted body's view)
 function spread(v) { return v === null || v === undefined ? "" : ` ± ${fmt(v, 0)}°`; }
 
+function interval(level, lo, hi) { return `${Math.round(100 * level)} % interval ${fmt(lo, 2)} – ${fmt(hi, 2)} m²`; }
+
 function show(a) {
   $("batch").hidden = true;
+  $("rerun-note").hidden = true;
   if (a.error) showError(a.error);
   if (!a.depth) { if (!a.error) showError("the server's answer holds no result"); return; }
   current = a;
   $("result").hidden = false;
   const ok = a.error === undefined;
   document.body.dataset.answer = ok ? a.id : "";
-  $("wbsa-value").textContent = ok ? fmt(a.wbsa_m2, 2) : "—";
+  // no answer: no number, sketch, 3-D view or downloads; the depth picture alone, large when a click is asked for
+  for (const id of ["answer", "sketch-card", "viewer-card", "downloads-card"]) $(id).hidden = !ok;
+  const choose = !ok && Boolean(a.choose_person);
+  $("pick-card").hidden = ok || !choose;
+  $("depth-card").hidden = !ok && choose;
+  $((ok || !choose) ? "depth-slot" : "pick-slot").append($("depth-img"));
+  $("depth-img").classList.toggle("large", choose);
+  // large: as wide as the page allows while the whole picture stays in the window below the message
+  $("depth-img").style.width = choose ? `min(100%, calc((100vh - 230px) * ${a.depth.width / a.depth.height}), ${4 * a.depth.width}px)` : "";
+  $("result").classList.toggle("choose", choose);
+  $("wbsa-value").textContent = ok ? fmt(a.wbsa_m2, 2) : "";
   $("wbsa-value").dataset.wbsaM2 = ok ? a.wbsa_m2 : "";
-  $("interval").textContent = ok ? `${Math.round(100 * a.level)} % interval ${fmt(a.wbsa_lo_m2, 2)} – ${fmt(a.wbsa_hi_m2, 2)} m²` : "no estimate: see the message above";
+  $("interval").textContent = ok ? interval(a.level, a.wbsa_lo_m2, a.wbsa_hi_m2) : "";
   $("method-line").textContent = ok ? `Method: ${a.method_text}` : "";
-  $("file-line").textContent = a.name ? `File: ${a.name}` : "";
+  $("file-line").textContent = a.name ? `File: ${a.name}` + (ok ? `, camera ${a.camera}` : "") : "";
   showDepth(a.depth);
-  showFlags(ok ? a.flags : null);
+  showRoutes(ok ? a.routes : null, ok ? a.level : null);
+  showFlags(ok ? (a.routes ? a.image_flags : a.flags) : null, Boolean(ok && a.routes));
   showView(ok ? a.view : null);
   showFormulae(ok ? a.formulae : null, ok ? a.wbsa_m2 : null);
   showDownloads(ok ? a.downloads : []);
   if (ok) showMeshes(a.meshes); else if (viewer) viewer.clear();
+  if (choose) $("error").scrollIntoView({ block: "start" });
 }
 
 function showDepth(d) {
@@ -117,20 +205,56 @@ function showDepth(d) {
   img.src = d.url;
   img.dataset.width = d.width;
   img.dataset.height = d.height;
-  $("depth-legend").textContent = `Colour by distance: blue ${fmt(d.near_m, 2)} m (near) to red ${fmt(d.far_m, 2)} m (far), grey: no return. White outline: the person measured.`;
+  const legend = `Colour by distance: blue ${fmt(d.near_m, 2)} m (near) to red ${fmt(d.far_m, 2)} m (far), grey: no return.`;
+  $("depth-legend").textContent = `${legend} White outline: the person measured.`;
+  $("pick-legend").textContent = legend;
 }
 
-function showFlags(flags) {
+function flagItem(f) {
+  const li = el("li", { "data-flag": f.name, title: f.name });
+  li.append(el("b", {}, f.meaning.charAt(0).toUpperCase() + f.meaning.slice(1) + "."));
+  li.append(el("span", { class: "todo" }, f.todo));
+  li.append(el("span", { class: "detail" }, `Detail: ${f.detail}`));
+  return li;
+}
+
+// With method both: the flags of the picture itself here, each route's own under its number.
+function showFlags(flags, both) {
   const list = $("flag-list");
   list.replaceChildren();
   $("flags").hidden = !flags || flags.length === 0;
   $("no-flags").hidden = !flags || flags.length > 0;
-  for (const f of flags || []) {
-    const li = el("li", { "data-flag": f.name });
-    li.append(el("b", {}, f.meaning.charAt(0).toUpperCase() + f.meaning.slice(1) + "."));
-    li.append(el("span", { class: "todo" }, f.todo));
-    li.append(el("span", { class: "detail" }, `${f.name}: ${f.detail}`));
-    list.append(li);
+  $("no-flags").textContent = both ? "All checks of the picture passed." : "All checks passed.";
+  $("flags-title").textContent = both ? "Check the picture before you use the numbers" : "Check before you use the number";
+  for (const f of flags || []) list.append(flagItem(f));
+}
+
+// Method both: each route with its own number, interval and flags, which one leads and why.
+function showRoutes(r, level) {
+  $("routes").hidden = !r;
+  $("lead-label").hidden = !r;
+  const list = $("route-list");
+  list.replaceChildren();
+  if (!r) return;
+  $("lead-label").textContent = `${r.lead_label} (leads)`;
+  $("lead-why").textContent = r.why;
+  const rows = r.combined ? [r.combined, ...r.rows] : r.rows;
+  for (const row of rows) {
+    const box = el("div", { class: "route" + (row.leads ? " leads" : ""), "data-route": row.name });
+    box.append(el("h3", {}, row.label + (row.leads ? " — leads" : "")));
+    if (row.failed) {
+      box.append(el("p", { class: "error-inline" }, `No answer: ${row.failed}`));
+    } else {
+      box.append(el("div", { class: "route-value" }, `${fmt(row.wbsa_m2, 2)} m²`));
+      box.append(el("div", { class: "small" }, interval(level, row.wbsa_lo_m2, row.wbsa_hi_m2)));
+      const flags = row.flags || [];
+      if (flags.length) {
+        const ul = el("ul", { class: "route-flags" });
+        for (const f of flags) ul.append(flagItem(f));
+        box.append(ul);
+      } else if (row.flags) box.append(el("p", { class: "ok small" }, "No warnings for this method."));
+    }
+    list.append(box);
   }
 }
 
@@ -167,13 +291,32 @@ function showView(v) {
   const front = svg("text", { x: cx, y: cy + 34, "text-anchor": "middle", "font-size": 11, fill: "#5b6577" });
   front.textContent = "front";
   s.append(front);
-  // elevation inset
-  const ex = 40, ey = 280, el_ = v.elevation_used_deg * Math.PI / 180;
-  s.append(svg("line", { x1: ex, y1: ey, x2: ex, y2: ey - 40, stroke: "#8a5a3c", "stroke-width": 5 }));
-  s.append(svg("line", { x1: ex, y1: ey - 20, x2: ex + 70 * Math.cos(el_), y2: ey - 20 - 70 * Math.sin(el_), stroke: "#0b63c5", "stroke-dasharray": "4 4" }));
-  s.append(svg("rect", { x: ex + 70 * Math.cos(el_) - 6, y: ey - 20 - 70 * Math.sin(el_) - 5, width: 12, height: 10, fill: "#0b63c5" }));
-  const et = svg("text", { x: ex + 90, y: ey - 5, "font-size": 11, fill: "#5b6577" });
-  et.textContent = `elevation ${fmt(v.elevation_used_deg, 0)}°`;
+  const above = svg("text", { x: cx, y: 18, "text-anchor": "middle", "font-size": 12, fill: "#5b6577" });
+  above.textContent = "from above";
+  s.append(above);
+  // from the side: the person upright, the camera at its elevation; the whole range −90° … 90° is drawn
+  const px = 350, py = 150, R = 95, elev = v.elevation_used_deg * Math.PI / 180;
+  const side = svg("text", { x: px + 20, y: 18, "text-anchor": "middle", "font-size": 12, fill: "#5b6577" });
+  side.textContent = "from the side";
+  s.append(side);
+  s.append(svg("path", { d: `M${px},${py - R} A${R},${R} 0 0 1 ${px},${py + R}`, fill: "none", stroke: "#d7dce4" }));
+  for (const t of [-90, -45, 0, 45, 90]) {
+    const a = t * Math.PI / 180;
+    const [tx, ty] = [px + R * Math.cos(a), py - R * Math.sin(a)];
+    s.append(svg("line", { x1: tx, y1: ty, x2: px + (R + 6) * Math.cos(a), y2: py - (R + 6) * Math.sin(a), stroke: "#9aa3b2" }));
+    const label = svg("text", { x: px + (R + 10) * Math.cos(a), y: py - (R + 10) * Math.sin(a) + 4, "font-size": 10, fill: "#9aa3b2" });
+    label.textContent = `${t}°`;
+    s.append(label);
+  }
+  s.append(svg("line", { x1: px, y1: py - 45, x2: px, y2: py + 45, stroke: "#8a5a3c", "stroke-width": 7, "stroke-linecap": "round" }));
+  s.append(svg("circle", { cx: px, cy: py - 58, r: 9, fill: "#e5b08a", stroke: "#8a5a3c" }));
+  const [camx, camy] = [px + R * Math.cos(elev), py - R * Math.sin(elev)];
+  s.append(svg("line", { x1: px, y1: py, x2: camx, y2: camy, stroke: "#0b63c5", "stroke-dasharray": "4 4" }));
+  const cam = svg("g", { id: "side-camera", transform: `translate(${camx},${camy}) rotate(${-v.elevation_used_deg})` });
+  cam.append(svg("rect", { x: -8, y: -7, width: 16, height: 14, rx: 2, fill: "#0b63c5" }));
+  s.append(cam);
+  const et = svg("text", { x: px, y: 290, "text-anchor": "middle", "font-size": 12, fill: "#5b6577" });
+  et.textContent = `elevation ${fmt(v.elevation_used_deg, 0)}° (+: camera above)`;
   s.append(et);
   $("view-line").textContent = `Azimuth ${fmt(v.azimuth_deg, 0)}°${spread(v.azimuth_sd_deg)} (0 = in front, 90 = at the person's left; its mirror image, −azimuth, looks the same${v.uncertain ? "; the faint camera: front and back may be swapped" : ""}), elevation ${fmt(v.elevation_deg, 0)}°${spread(v.elevation_sd_deg)}, ${fmt(v.distance_m, 2)} m away.`;
 }
@@ -204,9 +347,19 @@ function showDownloads(items) {
 
 async function showMeshes(meshes) {
   if (!viewer) viewer = new WbsaViewer($("viewer"));
+  const legend = $("viewer-legend");
+  legend.replaceChildren();
   try {
     const n = await viewer.show(meshes);
-    $("viewer-line").textContent = `${meshes.map((m) => m.name).join(", ")}: ${n.toLocaleString()} triangles.`;
+    meshes.forEach((m, k) => {
+      const [r, g, b] = WbsaViewer.COLOURS[k % WbsaViewer.COLOURS.length];
+      const li = el("li", { "data-mesh": m.name });
+      const swatch = el("span", { class: "swatch" });
+      swatch.style.background = `rgb(${r},${g},${b})`;  // CSSOM, allowed by the page's CSP (no inline style)
+      li.append(swatch, document.createTextNode(m.label || m.name));
+      legend.append(li);
+    });
+    $("viewer-line").textContent = `${n.toLocaleString()} triangles.`;
   } catch (e) {
     $("viewer-line").textContent = `the 3-D view could not be drawn (${e.message})`;
   }
@@ -270,6 +423,11 @@ function init() {
     drop.classList.remove("over");
     send([...e.dataTransfer.files]);
   });
+  $("intrinsics").addEventListener("change", () => {
+    const f = $("intrinsics").files[0];
+    cameraChanged(f ? `the camera file ${f.name}` : "the camera chosen");
+  });
+  $("camera").addEventListener("change", () => cameraChanged(`the camera ${$("camera").selectedOptions[0].textContent}`));
   $("depth-img").addEventListener("click", (e) => {
     const img = e.currentTarget;
     const x = Math.floor(e.offsetX * Number(img.dataset.width) / img.clientWidth);

@@ -145,10 +145,11 @@ def routes_json(est) -> dict | None:
 
     if not est.routes:
         return None
-    shown = est.to_dict()["routes"]
+    whole = est.to_dict()
+    shown = whole["routes"]
     rows = []
     for key, route in shown.items():
-        same = all(abs(route[k] - getattr(est, k)) < 1e-9 for k in ("wbsa_m2", "wbsa_lo_m2", "wbsa_hi_m2"))
+        same = all(route[k] == whole[k] for k in ("wbsa_m2", "wbsa_lo_m2", "wbsa_hi_m2"))  # both rounded alike
         rows.append({"name": key, "label": ROUTE_LABELS.get(key, key), "wbsa_m2": round(route["wbsa_m2"], 3),
                      "wbsa_lo_m2": round(route["wbsa_lo_m2"], 3), "wbsa_hi_m2": round(route["wbsa_hi_m2"], 3),
                      "model": route["model"], "flags": page_flag_rows(route["flags"]), "leads": same})

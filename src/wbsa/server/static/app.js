@@ -183,7 +183,7 @@ function show(a) {
   $((ok || !choose) ? "depth-slot" : "pick-slot").append($("depth-img"));
   $("depth-img").classList.toggle("large", choose);
   // large: as wide as the page allows while the whole picture stays in the window below the message
-  $("depth-img").style.width = choose ? `min(100%, calc((100vh - 230px) * ${a.depth.width / a.depth.height}), ${4 * a.depth.width}px)` : "";
+  $("depth-img").style.width = choose ? `min(100%, calc((100vh - 190px) * ${a.depth.width / a.depth.height}), ${4 * a.depth.width}px)` : "";
   $("result").classList.toggle("choose", choose);
   $("wbsa-value").textContent = ok ? fmt(a.wbsa_m2, 2) : "";
   $("wbsa-value").dataset.wbsaM2 = ok ? a.wbsa_m2 : "";
@@ -197,7 +197,13 @@ function show(a) {
   showFormulae(ok ? a.formulae : null, ok ? a.wbsa_m2 : null);
   showDownloads(ok ? a.downloads : []);
   if (ok) showMeshes(a.meshes); else if (viewer) viewer.clear();
-  if (choose) $("error").scrollIntoView({ block: "start" });
+  if (choose) {  // the message heads the picture, which fills the window below it
+    showError("");
+    $("pick-title").textContent = a.error;
+    const img = $("depth-img");
+    const scroll = () => $("pick-card").scrollIntoView({ block: "start" });
+    if (img.complete && img.naturalWidth) scroll(); else img.addEventListener("load", scroll, { once: true });
+  }
 }
 
 function showDepth(d) {

@@ -170,7 +170,12 @@ function show(a) {
   $("batch").hidden = true;
   $("rerun-note").hidden = true;
   if (a.error) showError(a.error);
-  if (!a.depth) { if (!a.error) showError("the server's answer holds no result"); return; }
+  if (!a.depth) {  // nothing was read: no earlier answer stays on show under the message
+    if (!a.error) showError("the server's answer holds no result");
+    $("result").hidden = true;
+    document.body.dataset.answer = "";
+    return;
+  }
   current = a;
   $("result").hidden = false;
   const ok = a.error === undefined;

@@ -76,6 +76,10 @@ def browser():
         yield driver
 
 
+#: What a body fit of the tests is given besides the defaults (none yet).
+BOTH_OPTIONS: dict = {}
+
+
 def _estimate(path, model, pick=None):
     import wbsa
     from wbsa.estimation import SegmentSettings
@@ -90,8 +94,9 @@ def _wait(driver, script: str, timeout: float = 60):
     WebDriverWait(driver, timeout, poll_frequency=0.1).until(lambda d: d.execute_script(f"return {script}"))
 
 
-def _upload(driver, url: str, *paths, camera: str = "kinect-v2", height_cm: str = "", mass_kg: str = ""):
-    """Open the page, fill the form and choose ``paths`` (the page sends them on choosing)."""
+def _upload(driver, url: str, *paths, camera: str = "kinect-v2", height_cm: str = "", mass_kg: str = "",
+            method: str = "regression"):
+    """Open the page, fill the form and choose ``paths`` (the page sends them on choosing; none: only fill it)."""
     from selenium.webdriver.common.by import By
     from selenium.webdriver.support.ui import Select
 
@@ -100,7 +105,9 @@ def _upload(driver, url: str, *paths, camera: str = "kinect-v2", height_cm: str 
     Select(driver.find_element(By.ID, "camera")).select_by_value(camera)
     driver.find_element(By.ID, "height").send_keys(height_cm)
     driver.find_element(By.ID, "mass").send_keys(mass_kg)
-    driver.find_element(By.ID, "depth-file").send_keys("\n".join(str(p) for p in paths))
+    Select(driver.find_element(By.ID, "method")).select_by_value(method)
+    if paths:
+        driver.find_element(By.ID, "depth-file").send_keys("\n".join(str(p) for p in paths))
 
 
 def _answer(driver) -> dict:
@@ -255,6 +262,46 @@ def test_a_bad_file_shows_its_error_and_the_server_still_answers(server, browser
                                   ".map(tr => [...tr.children].map(td => td.textContent))")
     assert len(rows) == 2 and rows[0][0] == "one.png" and float(rows[0][1]) > 1.0 and "is not a .png" in rows[1][4]
     assert browser.find_element("id", "batch-count").text == "2 of 2 done"
+
+
+def test_method_both_shows_each_route_which_leads_and_the_progress_of_the_fit(server, browser, frames,
+                                                                             small_estimator_model):
+    """Method both: each route's own number, interval and flags beside the leading number, which leads and why,
+    the 3-D view's two bodies with a legend; while it runs, the stages and the body fit's steps are shown."""
+    import wbsa
+    from selenium.webdriver.common.by import By
+
+    from wbsa.estimation import SegmentSettings
+
+    url, _ = server
+    _upload(browser, url, camera="kinect-v2", method="both")
+    browser.find_element(By.ID, "depth-file").send_keys(str(frames["one"]["path"]))
+    _wait(browser, "document.body.dataset.answer && document.body.dataset.busy === '0' "
+                   "&& document.getElementById('viewer').dataset.triangles > 0", timeout=300)
+    log = browser.execute_script("return window.progressLog")
+    stages = [p["stage"] for p in log]
+    assert [s for i, s in enumerate(stages) if i == 0 or stages[i - 1] != s] == \
+        ["reading", "subject", "regression", "body-fit", "answer"], stages
+    steps = [p["done"] for p in log if p["stage"] == "body-fit" and p["total"] > 1]
+    assert steps and steps == sorted(steps) and 0 < steps[-1] <= log[-2]["total"]  # the fit's steps, in order
+    est = wbsa.estimate(str(frames["one"]["path"]), "kinect-v2", str(small_estimator_model), method="both",
+                        segment=SegmentSettings(), **BOTH_OPTIONS)
+    routes = browser.execute_script("""return [...document.querySelectorAll('#route-list .route')].map(b => ({
+        name: b.dataset.route, leads: b.classList.contains('leads'), text: b.innerText,
+        flags: [...b.querySelectorAll('li')].map(li => li.dataset.flag)}))""")
+    assert [r["name"] for r in routes] == ["regression", "body-fit"] == list(est.routes)
+    for shown, (name, p) in zip(routes, est.routes.items()):
+        assert f"{p.wbsa_m2:.2f} m²" in shown["text"] and f"{p.lo_m2:.2f} – {p.hi_m2:.2f} m²" in shown["text"]
+        assert shown["flags"] == list(p.flags) and shown["leads"] == (name == "regression")
+    assert float(_answer(browser)["wbsa"]) == pytest.approx(est.routes["regression"].wbsa_m2, abs=5e-4)
+    assert "Regression (leads)" == browser.find_element(By.ID, "lead-label").text
+    assert "regression leads" in browser.find_element(By.ID, "lead-why").text
+    image_flags = _answer(browser)["flagNames"]  # the picture's own checks, apart from the routes'
+    assert set(image_flags) <= set(est.flags) and not set(image_flags) & set(est.routes["body-fit"].flags)
+    legend = browser.execute_script("return [...document.querySelectorAll('#viewer-legend li')].map(li => li.innerText)")
+    assert len(legend) == 2 and "measured" in legend[0] and "body fit" in legend[1]
+    assert not COMMAND_LINE_WORDS.search(_page_text(browser))
+    _screenshot(browser, "serve-both.png")
 
 
 def test_intrinsics_chosen_after_the_depth_file_run_it_again(server, browser, frames, small_estimator_model,

@@ -5,7 +5,7 @@ application/x-ndjson`` gets, instead of one JSON answer, one JSON object per lin
 
 - ``{"progress": {"stage": ..., "done": ..., "total": ...}}`` as the work goes on: ``reading`` the upload,
   ``subject`` (finding and measuring the person), ``regression``, ``body-fit`` (``done`` of ``total`` steps),
-  ``answer`` (making the downloads); a burst of steps is sent as its latest;
+  ``answer`` (making the downloads); of a burst of one stage's steps only the latest is sent;
 - ``{"status": 200 or 422 or 500, "answer": {...}}`` last: the answer a plain request gets, with the status it
   would have had.
 
@@ -69,16 +69,15 @@ async def stream_answer(runner, job, keep, failed):
     future.add_done_callback(ended)
     finished = False
     while not finished:
-        item = await queue.get()
-        while item is not None and not queue.empty():  # a burst of steps: only the latest is sent
-            following = queue.get_nowait()
-            if following is None:
-                finished = True
-                break
-            item = following
-        if item is None:
-            break
-        yield _line({"progress": item})
+        burst = [await queue.get()]
+        while not queue.empty():
+            burst.append(queue.get_nowait())
+        if burst[-1] is None:
+            finished = True
+            burst.pop()
+        for k, item in enumerate(burst):  # of a run of one stage's steps, only the latest is sent
+            if k + 1 == len(burst) or burst[k + 1]["stage"] != item["stage"]:
+                yield _line({"progress": item})
     try:
         result = future.result()
     except Exception as exc:  # a failure of wbsa itself: the answer says so, the server keeps running

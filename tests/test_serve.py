@@ -304,6 +304,32 @@ def test_method_both_shows_each_route_which_leads_and_the_progress_of_the_fit(se
     _screenshot(browser, "serve-both.png")
 
 
+@pytest.mark.slow
+def test_the_readme_picture_is_the_shipped_default_models_answer(browser, frames, tmp_path):
+    """The page as ``wbsa serve`` starts it (no --model: wbsa.estimate's default model) on the tests' frame: its
+    number is the default model's, and the whole page is saved (test-artefacts/serve-page.png, the picture of
+    docs/serve-page.png and the README)."""
+    import wbsa
+    from wbsa.server.app import create_app
+    from wbsa.server.command import start_in_thread
+
+    app = create_app(None, temp_dir=str(tmp_path))
+    url, stop = start_in_thread(app)
+    try:
+        _upload(browser, url, frames["one"]["path"], height_cm="186", mass_kg="84")
+        _wait(browser, "document.body.dataset.answer && document.getElementById('viewer').dataset.triangles > 0")
+        est = wbsa.estimate(str(frames["one"]["path"]), "kinect-v2")
+        shown = _answer(browser)
+        assert float(shown["wbsa"]) == pytest.approx(est.wbsa_m2, abs=5e-4) and shown["flagNames"] == list(est.flags)
+        assert browser.execute_script("return current.model") == est.model  # the default model's name
+        height = browser.execute_script("return document.documentElement.scrollHeight")
+        browser.set_window_size(1280, height + 120)
+        _screenshot(browser, "serve-page.png")
+    finally:
+        browser.set_window_size(1280, 1900)
+        stop()
+
+
 def test_intrinsics_chosen_after_the_depth_file_run_it_again(server, browser, frames, small_estimator_model,
                                                              tmp_path):
     """The depth file first (camera from the image size: assumed, flagged), then the camera's intrinsics file: the

@@ -133,7 +133,7 @@ def test_settings_refuse_bad_values():
     from wbsa.estimation.methods.body_fit import BodyFitSettings
 
     for bad in (dict(steps=0), dict(restarts=1.5), dict(robust_loss="l2"), dict(time_budget_s=-1.0),
-                dict(density_model="bmi"), dict(vertex_spacing_m=1.0)):
+                dict(composition="constant"), dict(vertex_spacing_m=1.0)):
         with pytest.raises(SettingsError):
             BodyFitSettings(**bad)
 

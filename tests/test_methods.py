@@ -73,8 +73,8 @@ def test_both_routes_report_side_by_side_with_the_fitted_body(person_view, tmp_p
     fit = est.body
     assert abs(est.routes["body-fit"].wbsa_m2 / truth - 1) < 0.10 and fit.wbsa_m2 == est.routes["body-fit"].wbsa_m2
     assert abs(fit.stature_m - est.stature_m) < 0.06 and 10 < fit.mass_kg < 200  # the point cloud's stature
-    overlap = not (est.routes["regression"].hi_m2 < est.routes["body-fit"].lo_m2
-                   or est.routes["body-fit"].hi_m2 < est.routes["regression"].lo_m2)
+    overlap = not (est.routes["regression"].wbsa_hi_m2 < est.routes["body-fit"].wbsa_lo_m2
+                   or est.routes["body-fit"].wbsa_hi_m2 < est.routes["regression"].wbsa_lo_m2)
     assert ("methods_disagree" in est.flags) is not overlap
     png = tmp_path / "depth.png"
     Image.fromarray(np.round(depth * 1000).astype(np.uint16)).save(png)
@@ -121,3 +121,71 @@ def test_both_keeps_the_regression_when_the_body_fit_cannot_serve(person_view):
     est = estimate(depth, camera, method="both", clothing_m=0.01)
     assert est.body is None and "regression" in est.routes and "body-fit" not in est.routes
     assert "does not yet allow for clothes" in est.flags["body_fit_failed"]
+
+
+def test_every_flag_raised_has_one_record_and_every_record_is_raised():
+    """A flag written anywhere in the code (``...flags["name"] = ...``, or a key of a dict built in a ``*_flags``
+    check) has its record in :data:`wbsa.estimation.flags.FLAG_RECORDS`, and no record is dead."""
+    import ast
+    from pathlib import Path
+
+    import wbsa
+    from wbsa.estimation.flags import FLAG_RECORDS, FLAGS
+
+    raised = set()
+    for path in Path(wbsa.__file__).parent.rglob("*.py"):
+        tree = ast.parse(path.read_text())
+        for node in ast.walk(tree):
+            if (isinstance(node, ast.Subscript) and isinstance(node.ctx, ast.Store) and isinstance(node.slice, ast.Constant)
+                    and ast.unparse(node.value).endswith("flags")):
+                raised.add(node.slice.value)
+            if isinstance(node, ast.FunctionDef) and node.name.endswith("_flags"):
+                raised |= {k.value for d in ast.walk(node) if isinstance(d, ast.Dict)
+                           for k in d.keys if isinstance(k, ast.Constant)}
+    assert raised == set(FLAG_RECORDS)
+    assert FLAGS == {name: flag.meaning for name, flag in FLAG_RECORDS.items()}
+    assert all(flag.routes and set(flag.routes) <= {"image", "regression", "body-fit", "both"} and flag.meaning
+               and flag.advice for flag in FLAG_RECORDS.values())
+
+
+def test_the_body_fit_settings_reach_the_fit_through_estimate(person_view):
+    """``wbsa.estimate(..., body_fit=BodyFitSettings(...))`` is the fit's budget; refused with the regression."""
+    import wbsa
+
+    depth, camera, _ = person_view
+    est = wbsa.estimate(depth, camera, method="body-fit", body_fit=wbsa.BodyFitSettings(steps=3, restarts=2))
+    assert est.body.steps <= 3 and est.body.restarts == 2
+    with pytest.raises(WbsaError, match="body-fit settings go with method body-fit or both"):
+        wbsa.estimate(depth, camera, body_fit=wbsa.BodyFitSettings(steps=3))
+    with pytest.raises(WbsaError, match="body_fit must be BodyFitSettings or None, got dict"):
+        wbsa.estimate(depth, camera, method="both", body_fit={"steps": 3})
+
+
+def test_the_cli_body_fit_options_reach_the_settings_and_are_checked(tmp_path):
+    from helpers.cli import assert_one_line_error, run_cli
+
+    depth = tmp_path / "d.npy"
+    np.save(depth, np.zeros((424, 512)))
+    code, _, err = run_cli("estimate", depth, "--method", "body-fit", "--body-fit-steps", "0")
+    assert_one_line_error(code, err, "--body-fit-steps must be a whole number of at least 1, got 0")
+    code, _, err = run_cli("estimate", depth, "--body-fit-restarts", "2")
+    assert_one_line_error(code, err, "body-fit settings go with method body-fit or both")
+
+
+def test_auto_camera_is_the_one_preset_of_the_image_size(person_view):
+    """``camera="auto"``: the preset of the image's size, flagged; the same estimate as naming it. A size two
+    presets share is refused in one line, and TUM (another calibration of Kinect v1's size) is never assumed."""
+    from wbsa.camera.presets import camera_for_image
+    from wbsa.estimation import estimate
+
+    depth, camera, _ = person_view
+    auto = estimate(depth, "auto")
+    named = estimate(depth, camera.name)
+    assert auto.camera == "kinect-v2" and "kinect-v2 preset fits the image size (512 x 424)" in auto.flags.pop(
+        "camera_assumed")
+    assert auto.to_dict() == named.to_dict()
+    assert camera_for_image((480, 640)).name == "kinect-v1"
+    with pytest.raises(WbsaError, match="a 848x480 depth image fits realsense-d435, realsense-d455; give --camera"):
+        camera_for_image((480, 848))
+    with pytest.raises(WbsaError, match="a 10x10 depth image fits none of the presets"):
+        estimate(np.ones((10, 10)), "auto")

@@ -56,13 +56,13 @@ def frames(body_model, tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def server(small_estimator_model, tmp_path_factory):
-    """The app on a free loopback port (upload limit 8 MiB, so the limit is cheap to test); its temporary
-    folder is checked to be gone after the server stops."""
+    """The app on a free loopback port (upload limit 8 MiB, so the limit is cheap to test; body fits of
+    :data:`FIT_STEPS` steps); its temporary folder is checked to be gone after the server stops."""
     from wbsa.server.app import create_app
     from wbsa.server.command import start_in_thread
 
     app = create_app(small_estimator_model, temp_dir=str(tmp_path_factory.mktemp("serve")),
-                     max_upload_bytes=8 * 2**20, max_pending=24)
+                     max_upload_bytes=8 * 2**20, max_pending=24, body_fit=_fit_settings())
     url, stop = start_in_thread(app)
     yield url, app
     stop()
@@ -76,8 +76,14 @@ def browser():
         yield driver
 
 
-#: What a body fit of the tests is given besides the defaults (none yet).
-BOTH_OPTIONS: dict = {}
+#: Steps of the tests' body fits: few, so a fit takes a second or two (the page's behaviour, not the fit's quality).
+FIT_STEPS = 30
+
+
+def _fit_settings():
+    from wbsa.estimation.methods.body_fit.settings import BodyFitSettings
+
+    return BodyFitSettings(steps=FIT_STEPS)
 
 
 def _estimate(path, model, pick=None):
@@ -156,7 +162,7 @@ def test_the_page_shows_the_answer_of_wbsa_estimate_for_a_rendered_body(server, 
     """A known body in a room: the page's WBSA, interval and flags are wbsa.estimate's on the same file; the
     depth picture, the 3-D view (every triangle of the surface), the view sketch, the formulae and the
     downloads are shown. A screenshot is kept as a test artefact."""
-    from wbsa.estimation.subject.checks import FLAGS
+    from wbsa.estimation.flags import FLAGS
 
     url, app = server
     est = _estimate(frames["one"]["path"], small_estimator_model)
@@ -283,15 +289,16 @@ def test_method_both_shows_each_route_which_leads_and_the_progress_of_the_fit(se
     assert [s for i, s in enumerate(stages) if i == 0 or stages[i - 1] != s] == \
         ["reading", "subject", "regression", "body-fit", "answer"], stages
     steps = [p["done"] for p in log if p["stage"] == "body-fit" and p["total"] > 1]
-    assert steps and steps == sorted(steps) and 0 < steps[-1] <= log[-2]["total"]  # the fit's steps, in order
+    totals = {p["total"] for p in log if p["stage"] == "body-fit" and p["total"] > 1}
+    assert steps and steps == sorted(steps) and 0 < steps[-1] <= FIT_STEPS and totals == {FIT_STEPS}  # in order
     est = wbsa.estimate(str(frames["one"]["path"]), "kinect-v2", str(small_estimator_model), method="both",
-                        segment=SegmentSettings(), **BOTH_OPTIONS)
+                        segment=SegmentSettings(), body_fit=_fit_settings())
     routes = browser.execute_script("""return [...document.querySelectorAll('#route-list .route')].map(b => ({
         name: b.dataset.route, leads: b.classList.contains('leads'), text: b.innerText,
         flags: [...b.querySelectorAll('li')].map(li => li.dataset.flag)}))""")
     assert [r["name"] for r in routes] == ["regression", "body-fit"] == list(est.routes)
     for shown, (name, p) in zip(routes, est.routes.items()):
-        assert f"{p.wbsa_m2:.2f} m²" in shown["text"] and f"{p.lo_m2:.2f} – {p.hi_m2:.2f} m²" in shown["text"]
+        assert f"{p.wbsa_m2:.2f} m²" in shown["text"] and f"{p.wbsa_lo_m2:.2f} – {p.wbsa_hi_m2:.2f} m²" in shown["text"]
         assert shown["flags"] == list(p.flags) and shown["leads"] == (name == "regression")
     assert float(_answer(browser)["wbsa"]) == pytest.approx(est.routes["regression"].wbsa_m2, abs=5e-4)
     assert "Regression (leads)" == browser.find_element(By.ID, "lead-label").text
@@ -574,13 +581,14 @@ def test_a_batch_gives_one_row_per_file_and_a_csv(server, frames, small_estimato
     assert rows[1]["wbsa_m2"] == "" and "not a depth file type" in rows[1]["error"]
 
 
-def test_the_advice_names_every_flag_and_the_answer_reads_them_from_flags():
-    from wbsa.estimation.subject.checks import FLAGS
-    from wbsa.server.advice import ADVICE, flag_rows
+def test_the_page_reads_each_flags_meaning_and_advice_from_its_record():
+    from wbsa.estimation.flags import DEFAULT_ADVICE, FLAG_RECORDS
+    from wbsa.server.advice import flag_rows
 
-    assert set(ADVICE) == set(FLAGS)
-    row = flag_rows({"cut_off": "subject pixels on the image border"})[0]
-    assert row["meaning"] == FLAGS["cut_off"] and row["todo"] == ADVICE["cut_off"]
+    row, unknown = flag_rows({"cut_off": "subject pixels on the image border", "new_flag": "detail"})
+    assert row == {"name": "cut_off", "meaning": FLAG_RECORDS["cut_off"].meaning,
+                   "detail": "subject pixels on the image border", "todo": FLAG_RECORDS["cut_off"].advice}
+    assert unknown["meaning"] == "new flag" and unknown["todo"] == DEFAULT_ADVICE
 
 
 def test_upload_names_never_carry_folders_and_messages_never_carry_the_servers_paths():

@@ -51,6 +51,7 @@ if TYPE_CHECKING:  # pragma: no cover - real types for IDEs and type checkers
     from wbsa.core.mesh import TriangleMesh
     from wbsa.errors import WbsaError
     from wbsa.estimation import Estimate, estimate
+    from wbsa.estimation.methods.body_fit.settings import BodyFitSettings
     from wbsa.formulae.compute import bsa
     from wbsa.sensor.settings import SensorSettings
     from wbsa.simulate.view import SimulatedView, render
@@ -65,6 +66,7 @@ _EXPORTS = {
     "SimulatedView": "wbsa.simulate.view",
     "estimate": "wbsa.estimation",
     "Estimate": "wbsa.estimation",
+    "BodyFitSettings": "wbsa.estimation.methods.body_fit.settings",
     "bsa": "wbsa.formulae.compute",
     "Study": "wbsa.study.study",
     "TriangleMesh": "wbsa.core.mesh",

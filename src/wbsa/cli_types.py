@@ -7,6 +7,30 @@ import math
 from typing import Callable
 
 
+def pick(text: str) -> str | tuple[int, int]:
+    """An argparse type for ``--pick`` (and the page's pick field): ``nearest``, ``largest``, ``center`` or ``x,y``
+    (a pixel of the subject).
+
+    Parameters
+    ----------
+    text : str
+
+    Returns
+    -------
+    str or (int, int)
+        A :data:`wbsa.typing.PICK_RULES` name or the pixel (x, y).
+    """
+    from wbsa.typing import PICK_RULES
+
+    if text in PICK_RULES:
+        return text
+    try:
+        x, y = (int(v) for v in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not nearest, largest, center or x,y") from None
+    return (x, y)
+
+
 def number_in(low: float = -math.inf, high: float = math.inf, *, low_open: bool = False, high_open: bool = False,
               what: str = "a number") -> Callable[[str], float]:
     """An argparse type that accepts a float in the interval [low, high] (ends open when asked).

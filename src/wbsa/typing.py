@@ -55,6 +55,8 @@ DepthTechnology = Literal["structured-light", "time-of-flight", "active-stereo",
 Method = Literal["regression", "body-fit", "both"]
 #: A population's ``posture`` setting: a posture name, or ``mixed`` (a random name per subject).
 PostureChoice = Literal[Literal["a-pose", "mixed"], PostureName]
+#: How the estimator picks the subject among several people (besides an (x, y) pixel of it).
+PickRule = Literal["nearest", "largest", "center"]
 #: Robust penalty of the body fit's point-to-surface residuals (:mod:`wbsa.estimation.methods.body_fit.objective`).
 RobustLoss = Literal["geman-mcclure", "huber"]
 
@@ -79,3 +81,4 @@ METHODS: tuple[str, ...] = get_args(Method)
 MESH_UNITS: tuple[str, ...] = get_args(MeshUnits)
 MESH_UPS: tuple[str, ...] = get_args(MeshUp)
 ROBUST_LOSSES: tuple[str, ...] = get_args(RobustLoss)
+PICK_RULES: tuple[str, ...] = get_args(PickRule)

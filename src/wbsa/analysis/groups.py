@@ -9,10 +9,10 @@ from wbsa.analysis.settings import PAPER_GROUPS, GroupSpec, check_group_names  #
 from wbsa.errors import WbsaError
 from wbsa.typing import GROUP_NAMES, GroupName  # noqa: F401 - GroupName re-exported for the analysis modules
 
-#: Groups of the formulae comparison (issue: overall, kids, adults, BMI >= 30, big stature) plus the rest.
+#: Groups of the formulae comparison (overall, kids, adults, BMI >= 30, big stature) plus the rest.
 COMPARISON_GROUPS: tuple[str, ...] = GROUP_NAMES
 
-#: Groups of the headline claim table (issue 10), in its order: who the height/weight formulae are said to fail.
+#: Groups of the headline claim table, in its order: who the height/weight formulae are said to fail.
 CLAIM_GROUPS: tuple[str, ...] = ("all", "adults", "kids", "obese", "underweight", "small", "tall", "females", "males")
 
 #: Columns of the population table that :func:`assign_groups` reads.

@@ -226,7 +226,7 @@ def composition_table(table: pd.DataFrame, spec: GroupSpec = GroupSpec()) -> pd.
 def group_masks(table: pd.DataFrame, spec: GroupSpec = GroupSpec()) -> dict[str, np.ndarray]:
     """Membership ``(n,) bool`` of every :data:`REALISM_GROUPS` group: the analysis groups
     (:func:`wbsa.analysis.groups.assign_groups`, the same definitions as the fits and the claim) under the
-    issue's plain names (children = kids, women = females, men = males)."""
+    plain names (children = kids, women = females, men = males)."""
     members = assign_groups(table, spec)
     return {name: members[_GROUP_OF.get(name, name)].to_numpy(dtype=bool) for name in REALISM_GROUPS}
 

@@ -69,7 +69,15 @@ def pixel_footprint_m2(z_m: np.ndarray, n_dot_d: np.ndarray, d_dot_d: np.ndarray
 
 
 def hit_area_m2(triangle_ids: np.ndarray, triangle_areas: np.ndarray) -> float:
-    """Summed area of the unique triangles among ``triangle_ids`` (k,) int; ids < 0 are ignored."""
+    """Summed area of the unique triangles among ``triangle_ids`` (k,) int; ids < 0 are ignored.
+
+    Parameters
+    ----------
+    triangle_ids : (k,) int
+        Triangle hit by each pixel, < 0 for none.
+    triangle_areas : (m,) float64
+        Every triangle's area (m²).
+    """
     return float(np.einsum("i,i->", triangle_areas, hit_mask(triangle_ids, triangle_areas.shape[0])))
 
 
@@ -77,6 +85,13 @@ def hit_mask(triangle_ids: np.ndarray, n_triangles: int) -> np.ndarray:
     """(m,) float64 indicator (0/1) of the triangles hit at least once; ids < 0 are ignored.
 
     A float mask, so that sums over it are cheap dot products (numpy's bool matmul is a slow loop).
+
+    Parameters
+    ----------
+    triangle_ids : (k,) int
+        Triangle hit by each pixel, < 0 for none.
+    n_triangles : int
+        m, the mesh's triangle count.
     """
     ids = np.asarray(triangle_ids)
     if ids.size and ids.dtype.kind == "i":
@@ -88,6 +103,12 @@ def hit_mask(triangle_ids: np.ndarray, n_triangles: int) -> np.ndarray:
 
 def triangle_view_terms(scene, camera_center: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Per triangle: the camera's height above its plane and the cosine of the view angle.
+
+    Parameters
+    ----------
+    scene : MeshScene
+    camera_center : (3,) float64
+        The camera centre (world frame, m).
 
     Returns
     -------
@@ -118,6 +139,12 @@ def triangle_view_cosines(scene, camera_center: np.ndarray) -> np.ndarray:
 
     Positive for triangles that face the camera, negative for back faces (normals made outward for a
     one-sided scene, by vertex order otherwise).
+
+    Parameters
+    ----------
+    scene : MeshScene
+    camera_center : (3,) float64
+        The camera centre (world frame, m).
     """
     return triangle_view_terms(scene, camera_center)[1]
 
@@ -207,7 +234,14 @@ def vbsa_visible_m2(frame: DepthFrame, scene=None, grazing_cos: float = GRAZING_
 
 
 def sphere_cap_area_m2(radius_m: float, distance_m: float) -> float:
-    """Area of a sphere visible from a point at ``distance_m`` from its centre: 2πr²(1 − r/d)."""
+    """Area of a sphere visible from a point at ``distance_m`` from its centre: 2πr²(1 − r/d).
+
+    Parameters
+    ----------
+    radius_m : float
+    distance_m : float
+        From the point to the sphere's centre, more than ``radius_m``.
+    """
     if distance_m <= radius_m:
         return 0.0
     return 2.0 * math.pi * radius_m**2 * (1.0 - radius_m / distance_m)

@@ -84,7 +84,13 @@ class Pose:
 
     @classmethod
     def from_dict(cls, data: dict) -> "Pose":
-        """Read the ``R`` and ``T`` written by :meth:`to_dict`."""
+        """Read the ``R`` and ``T`` written by :meth:`to_dict`.
+
+        Parameters
+        ----------
+        data : dict
+            ``{"R": 3x3 nested list, "T": 3 numbers}``.
+        """
         return cls(np.asarray(data["R"], dtype=np.float64), np.asarray(data["T"], dtype=np.float64))
 
 
@@ -96,6 +102,11 @@ def look_at_rotation(azimuth_deg: float, elevation_deg: float) -> np.ndarray:
     projection of world +Z; at φ = ±90°, where that projection vanishes, the same formula still holds and
     gives the limit of φ → ±90° at that azimuth: looking down from above at θ = 0 the image's up is +Y
     (towards the subject's back), the subject's left (+X) is on the image's right.
+
+    Parameters
+    ----------
+    azimuth_deg, elevation_deg : float
+        The camera's azimuth θ and elevation φ (degrees).
     """
     return _rotation(float(azimuth_deg), float(elevation_deg)).copy()
 

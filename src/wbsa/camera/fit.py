@@ -20,6 +20,10 @@ def vertical_half_fov_deg(intrinsics: Intrinsics) -> float:
 
     With an off-centre principal point the two halves differ; the smaller one decides whether a
     subject centred on the optical axis fits.
+
+    Parameters
+    ----------
+    intrinsics : Intrinsics
     """
     k = intrinsics
     up = (k.cy + 0.5) / k.fy
@@ -55,7 +59,16 @@ def distance_to_fit(stature_m: float, intrinsics: Intrinsics, margin: float = 0.
 
 
 def max_stature_m(distance_m: float, intrinsics: Intrinsics, margin: float = 0.0) -> float:
-    """Inverse of :func:`distance_to_fit`: the tallest subject that fits at ``distance_m``."""
+    """Inverse of :func:`distance_to_fit`: the tallest subject that fits at ``distance_m``.
+
+    Parameters
+    ----------
+    distance_m : float
+        Camera distance to the subject's centre (m).
+    intrinsics : Intrinsics
+    margin : float
+        Extra fraction of the stature kept free, as :func:`distance_to_fit`.
+    """
     if not (math.isfinite(distance_m) and distance_m > 0):
         raise WbsaError(f"distance must be a positive number of metres, got {distance_m!r}")
     tan_psi = math.tan(math.radians(vertical_half_fov_deg(intrinsics)))

@@ -234,6 +234,11 @@ def subtriangle_centroids(s: int) -> np.ndarray:
 
     Each side is cut into s; the s(s + 1)/2 sub-triangles that point like the triangle have centroids at
     ((i + ⅓)/s, (j + ⅓)/s), the s(s − 1)/2 others at ((i + ⅔)/s, (j + ⅔)/s) (weights of vertices 1 and 2).
+
+    Parameters
+    ----------
+    s : int
+        Cuts per side.
     """
     i, j = np.meshgrid(np.arange(s), np.arange(s), indexing="ij")
     up, down = i + j <= s - 1, i + j <= s - 2

@@ -105,6 +105,11 @@ class Intrinsics:
         """The same camera with ``factor`` times as many pixels per side (same field of view).
 
         Pixel centres stay at integer coordinates, so ``cx' = (cx + 0.5)·k − 0.5``.
+
+        Parameters
+        ----------
+        factor : float
+            Pixels per side, relative to this camera's.
         """
         if not (factor > 0 and math.isfinite(factor)):
             raise WbsaError(f"resolution scale must be positive, got {factor!r}")
@@ -142,6 +147,11 @@ class Intrinsics:
     @classmethod
     def from_open3d_json(cls, source: dict | str | os.PathLike) -> "Intrinsics":
         """Read Open3D ``PinholeCameraIntrinsic`` JSON: a dict, or the path of a ``.json`` file.
+
+        Parameters
+        ----------
+        source : dict, str or path
+            The JSON's content, or its file.
 
         Raises
         ------
@@ -197,6 +207,10 @@ FIELD_OF_VIEW_RANGE_DEG = (1.0, 170.0)
 def pixel_rays(intrinsics: Intrinsics) -> tuple[np.ndarray, np.ndarray]:
     """Un-normalised ray directions of every pixel and their cosines with the optical axis (cached).
 
+    Parameters
+    ----------
+    intrinsics : Intrinsics
+
     Returns
     -------
     dirs : (h, w, 3) float32
@@ -218,6 +232,10 @@ def pixel_rays(intrinsics: Intrinsics) -> tuple[np.ndarray, np.ndarray]:
 @lru_cache(maxsize=16)
 def pixel_axes(intrinsics: Intrinsics) -> tuple[np.ndarray, np.ndarray, float]:
     """Separable form of the pixel rays: ``x = xu[u] + shear · yv[v]``, ``y = yv[v]`` (cached).
+
+    Parameters
+    ----------
+    intrinsics : Intrinsics
 
     Returns
     -------

@@ -49,6 +49,9 @@ class CameraRecord:
         Farthest distance at which the estimator's segmentation tells the feet from the floor in 99 % of the
         benchmark's frames (``benchmarks/bench_estimate.py``, segmentation by camera and band); beyond it an
         estimate is flagged ``feet_unsure``. None: the whole working range.
+    by_image_size : bool
+        Whether ``camera="auto"`` may pick this preset from the image's size (:func:`camera_for_image`); False
+        for a preset that is another calibration of a camera of the same size (TUM's Kinect v1).
     """
 
     intrinsics: Intrinsics
@@ -57,6 +60,7 @@ class CameraRecord:
     trained: bool
     note: str
     feet_within_m: float | None = None
+    by_image_size: bool = True
 
     def __post_init__(self) -> None:
         if self.disparity is not None:
@@ -83,9 +87,9 @@ class CameraRecord:
 
 def _record(name: str, size: tuple[int, int], focal: tuple[float, float], centre: tuple[float, float],
             range_m: tuple[float, float], technology: DepthTechnology, disparity: tuple[float, float] | None,
-            trained: bool, note: str, feet_within_m: float | None = None) -> CameraRecord:
+            trained: bool, note: str, feet_within_m: float | None = None, by_image_size: bool = True) -> CameraRecord:
     return CameraRecord(Intrinsics(*size, *focal, *centre, name=name, min_range_m=range_m[0], max_range_m=range_m[1]),
-                        technology, disparity, trained, note, feet_within_m)
+                        technology, disparity, trained, note, feet_within_m, by_image_size)
 
 
 #: Every camera preset, by name (the order of :data:`wbsa.typing.PresetName`).
@@ -95,7 +99,7 @@ CAMERAS: dict[str, CameraRecord] = {r.name: r for r in (
     _record("kinect-v2", (512, 424), (365.456, 365.456), (254.878, 205.395), (0.5, 4.5), "time-of-flight", None, True,
             "Kinect v2 depth camera"),
     _record("tum", (640, 480), (525.0, 525.0), (319.5, 239.5), (0.8, 4.0), "structured-light", (0.075, 1 / 8),
-            False, "TUM RGB-D default, a Kinect v1"),
+            False, "TUM RGB-D default, a Kinect v1", by_image_size=False),
     _record("azure-kinect-nfov", (640, 576), (503.9, 504.0), (332.1, 325.9), (0.5, 3.86), "time-of-flight", None,
             True, "Azure Kinect NFOV unbinned"),
     _record("azure-kinect-wfov", (512, 512), (252.0, 252.0), (261.8, 253.0), (0.25, 2.88), "time-of-flight", None,
@@ -104,7 +108,7 @@ CAMERAS: dict[str, CameraRecord] = {r.name: r for r in (
             (0.050, 1 / 12), True, "Intel RealSense D435"),
     _record("realsense-d455", (848, 480), (415.0, 415.0), (423.5, 239.5), (0.6, 6.0), "active-stereo",
             (0.095, 1 / 12), True, "Intel RealSense D455"),
-    # 3 m: the range the segmentation target is judged over for this camera (issue 27); held-out seed 1000 told
+    # 3 m: the range the segmentation target is judged over for this camera; held-out seed 1000 told
     # the feet from the floor in 32 of 32 frames within 3 m, 17 of 19 at 3-4 m and 3 of 6 at 4-5 m
     _record("phone-lidar", (256, 192), (209.2, 209.2), (124.2, 96.4), (0.25, 5.0), "lidar", None, True,
             "phone LiDAR, ARKit scene depth", feet_within_m=3.0),
@@ -113,12 +117,20 @@ assert tuple(CAMERAS) == PRESET_NAMES, "the camera table and wbsa.typing.PresetN
 
 #: The intrinsics of every preset, by name.
 PRESETS: dict[str, Intrinsics] = {name: r.intrinsics for name, r in CAMERAS.items()}
+#: The camera argument that asks for the preset of the image's size (:func:`camera_for_image`).
+AUTO_CAMERA = "auto"
 #: Cameras of the default training world.
 TRAINED_CAMERAS: tuple[str, ...] = tuple(name for name, r in CAMERAS.items() if r.trained)
 
 
 def camera_record(name: str) -> CameraRecord:
-    """The record of a preset; a one-line :class:`WbsaError` naming the presets otherwise."""
+    """The record of a preset; a one-line :class:`WbsaError` naming the presets otherwise.
+
+    Parameters
+    ----------
+    name : str
+        A preset's name (a key of :data:`CAMERAS`).
+    """
     try:
         return CAMERAS[name]
     except (KeyError, TypeError):
@@ -126,20 +138,65 @@ def camera_record(name: str) -> CameraRecord:
 
 
 def presets_help(default: str | None = None) -> str:
-    """The presets as a ``--help`` text: ``preset (one of ...) or Open3D intrinsics JSON``."""
+    """The presets as a ``--help`` text: ``preset (one of ...) or Open3D intrinsics JSON``.
+
+    Parameters
+    ----------
+    default : str or None
+        The option's default, said at the end when given.
+    """
     tail = f" (default {default})" if default else ""
     return (f"camera preset, one of: {'; '.join(r.describe() for r in CAMERAS.values())}; or an Open3D "
             f"PinholeCameraIntrinsic JSON file{tail}")
 
 
 def preset(name: PresetName) -> Intrinsics:
-    """The intrinsics of a named camera (a key of :data:`~wbsa.camera.presets.CAMERAS`, e.g. ``kinect-v2``)."""
+    """The intrinsics of a named camera (a key of :data:`~wbsa.camera.presets.CAMERAS`, e.g. ``kinect-v2``).
+
+    Parameters
+    ----------
+    name : str
+        A preset's name (a key of :data:`CAMERAS`).
+    """
     return camera_record(name).intrinsics
 
 
-def resolve_camera(spec: str | os.PathLike | Intrinsics) -> Intrinsics:
-    """A preset name, the path of an Open3D intrinsics JSON file, or an Open3D
-    ``PinholeCameraIntrinsic`` object, as intrinsics."""
+def camera_for_image(depth_shape: tuple[int, int]) -> Intrinsics:
+    """The one preset told by its image size (:attr:`CameraRecord.by_image_size`) whose image is ``depth_shape``.
+
+    Parameters
+    ----------
+    depth_shape : (int, int)
+        The depth image's (h, w).
+
+    Raises
+    ------
+    WbsaError
+        No preset or several have that size.
+    """
+    h, w = depth_shape
+    found = [name for name, r in CAMERAS.items()
+             if r.by_image_size and (r.intrinsics.width, r.intrinsics.height) == (w, h)]
+    if len(found) != 1:
+        have = ", ".join(found) if found else "none of the presets"
+        raise WbsaError(f"a {w}x{h} depth image fits {have}; give --camera PRESET or an intrinsics JSON")
+    return CAMERAS[found[0]].intrinsics
+
+
+def resolve_camera(spec: str | os.PathLike | Intrinsics, depth_shape: tuple[int, int] | None = None) -> Intrinsics:
+    """A preset name, the path of an Open3D intrinsics JSON file, or an Open3D ``PinholeCameraIntrinsic`` object,
+    as intrinsics; ``auto``: the preset of the image's size (:func:`camera_for_image` of ``depth_shape``).
+
+    Parameters
+    ----------
+    spec : str, path, Intrinsics or open3d.camera.PinholeCameraIntrinsic
+    depth_shape : (int, int), optional
+        The depth image's (h, w), for ``auto``.
+    """
+    if isinstance(spec, str) and spec == AUTO_CAMERA:
+        if depth_shape is None:
+            raise WbsaError("camera auto is found from the depth image's size; give the image, or a preset")
+        return camera_for_image(depth_shape)
     if isinstance(spec, Intrinsics):
         return spec
     if hasattr(spec, "intrinsic_matrix") and hasattr(spec, "width"):  # open3d.camera.PinholeCameraIntrinsic

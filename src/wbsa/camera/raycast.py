@@ -146,6 +146,14 @@ class RayHits:
         ``grazing_cos`` 0 gives the plain sum of the pixel footprints (:meth:`pixel_areas_m2`);
         ``split_px`` (default ``GRAZING_SPLIT_PX``; None: never) sub-samples large grazing triangles.
         A view in which no pixel sees the body has no visible area (0).
+
+        Parameters
+        ----------
+        scene : MeshScene
+            The scene the rays were cast into.
+        grazing_cos : float or None
+            None: the default of :func:`wbsa.camera.area.visible_area_m2`.
+        split_px : float, None or 'default'
         """
         from wbsa.camera.area import GRAZING_COS, GRAZING_SPLIT_PX, visible_area_m2
 
@@ -170,7 +178,13 @@ class RayHits:
         return bool(np.any((rows == 0) | (rows == k.height - 1) | (cols == 0) | (cols == k.width - 1)))
 
     def to_frame(self, settings: dict | None = None) -> DepthFrame:
-        """Expand to a full-image :class:`DepthFrame` (points and camera-facing normals in the camera frame)."""
+        """Expand to a full-image :class:`DepthFrame` (points and camera-facing normals in the camera frame).
+
+        Parameters
+        ----------
+        settings : dict or None
+            Stored with the frame (how it was made).
+        """
         k = self.intrinsics
         h, w = k.height, k.width
         depth = np.zeros((h, w), dtype=np.float32)
@@ -218,7 +232,15 @@ def _ray_terms(intrinsics: Intrinsics, pose: Pose, v0: int, v1: int, u0: int, u1
 
 
 def rect_rays(intrinsics: Intrinsics, pose: Pose, rect: tuple[int, int, int, int]) -> np.ndarray:
-    """(n, 6) float32 rays of the pixels in ``rect`` = (v0, v1, u0, u1), row-major."""
+    """(n, 6) float32 rays of the pixels in ``rect`` = (v0, v1, u0, u1), row-major.
+
+    Parameters
+    ----------
+    intrinsics : Intrinsics
+    pose : Pose
+    rect : (int, int, int, int)
+        Rows v0..v1-1 and columns u0..u1-1.
+    """
     v0, v1, u0, u1 = rect
     hr, wr = v1 - v0, u1 - u0
     rows, cols = _ray_terms(intrinsics, pose, v0, v1, u0, u1)
@@ -236,6 +258,12 @@ def grid_rays(intrinsics: Intrinsics, pose: Pose, grid: PixelGrid) -> tuple[np.n
 
     Bit-identical to :func:`rect_rays` for the same pixel: the same float32 row and column terms, added
     (the y and z terms as the two halves of one complex64 number, the same float32 additions).
+
+    Parameters
+    ----------
+    intrinsics : Intrinsics
+    pose : Pose
+    grid : PixelGrid
 
     Returns
     -------

@@ -72,7 +72,13 @@ class PixelGrid:
         return rows, cols
 
     def image_index(self, width: int) -> np.ndarray:
-        """(n,) int64 flat image index ``row · width + col`` of the pixels."""
+        """(n,) int64 flat image index ``row · width + col`` of the pixels.
+
+        Parameters
+        ----------
+        width : int
+            The image's width (pixels).
+        """
         rows, cols = self.rows_cols()
         rows *= width
         rows += cols
@@ -80,7 +86,13 @@ class PixelGrid:
 
     @classmethod
     def from_rect(cls, rect: tuple[int, int, int, int]) -> "PixelGrid":
-        """All pixels of the rectangle (v0, v1, u0, u1), row-major."""
+        """All pixels of the rectangle (v0, v1, u0, u1), row-major.
+
+        Parameters
+        ----------
+        rect : (int, int, int, int)
+            Rows v0..v1-1 and columns u0..u1-1.
+        """
         v0, v1, u0, u1 = rect
         h, w = max(0, v1 - v0), max(0, u1 - u0)
         stride = w + 2
@@ -93,6 +105,15 @@ def homogeneous_pixels(intrinsics: Intrinsics, pose: Pose, origin: np.ndarray, p
 
     Rows: u·z, v·z and the z-depth z. ``numpy.einsum`` (its own loops) rather than a matrix product, so
     that no BLAS thread pool is woken for a (3, 3) × (3, n) product (its idle threads spin on the CPU).
+
+    Parameters
+    ----------
+    intrinsics : Intrinsics
+    pose : Pose
+    origin : (3,) float64
+        The points' common origin (world frame, m).
+    points_t : (3, n) float32
+        The points relative to ``origin``, as columns.
     """
     A = (intrinsics.K @ pose.R).astype(np.float32)
     b = (intrinsics.K @ (pose.R @ origin + pose.T)).astype(np.float32)
@@ -186,6 +207,12 @@ def projected_roi(scene, intrinsics: Intrinsics, pose: Pose) -> tuple[int, int, 
     The 8 bounding-box corners are projected; the box is convex, so its image lies in their convex hull
     and hence inside the corners' pixel range. One pixel of slack absorbs float32 rounding of the rays.
     If a corner is at or behind the camera plane, the whole frame is returned.
+
+    Parameters
+    ----------
+    scene : MeshScene
+    intrinsics : Intrinsics
+    pose : Pose
 
     Returns
     -------

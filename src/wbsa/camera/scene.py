@@ -112,6 +112,11 @@ class MeshScene:
         Points outside the bounding box are outside without casting. For open meshes the answer is
         only as good as the parity test (it is used to refuse a camera placed inside the body). A scene
         built with ``surroundings=True`` (a room the camera stands in) contains no point.
+
+        Parameters
+        ----------
+        point : (3,) float64
+            World frame, m.
         """
         if self.surroundings:
             return False
@@ -122,12 +127,25 @@ class MeshScene:
         return bool(self._scene.compute_occupancy(q, nthreads=self.nthreads, nsamples=3).numpy()[0] > 0.5)
 
     def cast_rays(self, rays: np.ndarray) -> dict[str, np.ndarray]:
-        """Bare Open3D ``cast_rays`` on (n, 6) float32 rays (origin, direction); numpy views of its outputs."""
+        """Bare Open3D ``cast_rays`` on (n, 6) float32 rays (origin, direction); numpy views of its outputs.
+
+        Parameters
+        ----------
+        rays : (n, 6) float32
+        """
         ans = self._scene.cast_rays(self._o3c.Tensor.from_numpy(rays), nthreads=self.nthreads)
         return {k: v.numpy() for k, v in ans.items()}
 
     def occluded(self, rays: np.ndarray, t_far: float) -> np.ndarray:
-        """(n,) bool: whether anything lies on each ray for 0 < t < ``t_far`` (Open3D ``test_occlusions``)."""
+        """(n,) bool: whether anything lies on each ray for 0 < t < ``t_far`` (Open3D ``test_occlusions``).
+
+        Parameters
+        ----------
+        rays : (n, 6) float32
+            Origin and direction.
+        t_far : float
+            Farthest ray parameter tested.
+        """
         ans = self._scene.test_occlusions(self._o3c.Tensor.from_numpy(rays), tnear=0.0, tfar=float(t_far),
                                           nthreads=self.nthreads)
         return ans.numpy().astype(bool)
@@ -218,6 +236,12 @@ def boundary_loops(faces_bytes: bytes, n_vertices: int) -> list[np.ndarray]:
     """Vertex sets of the connected groups of boundary edges (edges of one face) of a mesh (cached per topology).
 
     Each group is a hole; its cap (a fan from the mean of its vertices) closes it.
+
+    Parameters
+    ----------
+    faces_bytes : bytes
+        The faces' (m, 3) int64 array as bytes (the cache key).
+    n_vertices : int
     """
     faces = np.frombuffer(faces_bytes, dtype=np.int64).reshape(-1, 3)
     a = faces.reshape(-1)
@@ -266,6 +290,10 @@ def _orientation(faces: np.ndarray, n_vertices: int, areas: np.ndarray,
 
 def validate_mesh(mesh: TriangleMesh) -> tuple[np.ndarray, np.ndarray]:
     """Check a mesh for ray casting; returns (vertices (n, 3) float64, faces (m, 3) int64).
+
+    Parameters
+    ----------
+    mesh : TriangleMesh
 
     Raises
     ------

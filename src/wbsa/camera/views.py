@@ -79,6 +79,10 @@ def normalise_angles(azimuth_deg: float, elevation_deg: float) -> tuple[float, f
     """Bring any (azimuth, elevation) pair to azimuth in [0, 360) and elevation in [−90, 90].
 
     An elevation past a pole continues over it: (θ, 120°) is the same camera as (θ + 180°, 60°).
+
+    Parameters
+    ----------
+    azimuth_deg, elevation_deg : float
     """
     az, el = float(azimuth_deg), float(elevation_deg)
     if not (math.isfinite(az) and math.isfinite(el)):
@@ -136,20 +140,40 @@ class View:
 
 
 def view_direction(azimuth_deg: float, elevation_deg: float) -> np.ndarray:
-    """(3,) unit vector from the subject towards the camera: (sin θ cos φ, −cos θ cos φ, sin φ)."""
+    """(3,) unit vector from the subject towards the camera: (sin θ cos φ, −cos θ cos φ, sin φ).
+
+    Parameters
+    ----------
+    azimuth_deg, elevation_deg : float
+        The camera's azimuth θ and elevation φ (degrees).
+    """
     th, ph = math.radians(azimuth_deg), math.radians(elevation_deg)
     return np.array([math.sin(th) * math.cos(ph), -math.cos(th) * math.cos(ph), math.sin(ph)])
 
 
 def paper_views(distance_m: float = PAPER_DISTANCE_M) -> list[View]:
-    """The paper's 65 views: 9 azimuths × 7 elevations, plus straight down and straight up at azimuth 0."""
+    """The paper's 65 views: 9 azimuths × 7 elevations, plus straight down and straight up at azimuth 0.
+
+    Parameters
+    ----------
+    distance_m : float
+        Camera distance of every view.
+    """
     views = [View(az, el, distance_m) for el in PAPER_ELEVATIONS_DEG for az in PAPER_AZIMUTHS_DEG]
     views += [View(0.0, 90.0, distance_m), View(0.0, -90.0, distance_m)]
     return views
 
 
 def sphere_views(n: int, distance_m: float = PAPER_DISTANCE_M) -> list[View]:
-    """``n`` nearly uniform views over the whole sphere (Fibonacci lattice), the first one nearest the top."""
+    """``n`` nearly uniform views over the whole sphere (Fibonacci lattice), the first one nearest the top.
+
+    Parameters
+    ----------
+    n : int
+        Number of views.
+    distance_m : float
+        Camera distance of every view.
+    """
     if n < 1:
         raise WbsaError(f"sphere:N needs N >= 1, got {n}")
     i = np.arange(n, dtype=np.float64) + 0.5
@@ -160,7 +184,15 @@ def sphere_views(n: int, distance_m: float = PAPER_DISTANCE_M) -> list[View]:
 
 
 def grid_views(step_deg: float, distance_m: float = PAPER_DISTANCE_M) -> list[View]:
-    """A regular grid: azimuths 0, step, … < 360 at elevations −90 < k·step < 90, plus both poles once."""
+    """A regular grid: azimuths 0, step, … < 360 at elevations −90 < k·step < 90, plus both poles once.
+
+    Parameters
+    ----------
+    step_deg : float
+        Angular step of both azimuth and elevation (degrees).
+    distance_m : float
+        Camera distance of every view.
+    """
     if not (math.isfinite(step_deg) and 0 < step_deg <= 180):
         raise WbsaError(f"grid:STEP needs 0 < STEP <= 180 degrees, got {step_deg:g}")
     azimuths = np.arange(0.0, 360.0 - 1e-9, step_deg)
@@ -174,6 +206,12 @@ def parse_angles(text: str | Iterable[float], what: str = "angles") -> list[floa
     """Degrees from ``'0,30,90'`` or ``'0:180:30'`` (start:stop:step, stop included) or a sequence.
 
     ``what`` ``'azimuths'`` or ``'elevations'``: each angle is range-checked (:func:`check_angle`).
+
+    Parameters
+    ----------
+    text : str or iterable of float
+    what : str
+        ``azimuths``, ``elevations`` (range-checked) or another name for the messages.
     """
     out = _parse_angles(text, what)
     kind = {"azimuths": "azimuth", "elevations": "elevation"}.get(what)

@@ -54,12 +54,29 @@ def depth_to_png_mm(depth_m: np.ndarray, *, depth_scale: float = MM_PER_M) -> np
 
 
 def png_mm_to_depth(units: np.ndarray, *, depth_scale: float = MM_PER_M) -> np.ndarray:
-    """Decode 16-bit depth units into metres: (h, w) uint16 -> (h, w) float32, 0 = no return."""
+    """Decode 16-bit depth units into metres: (h, w) uint16 -> (h, w) float32, 0 = no return.
+
+    Parameters
+    ----------
+    units : (h, w) uint16
+        Depth in units, 0 = no return.
+    depth_scale : float
+        Units per metre (1000: millimetres).
+    """
     return metres_from_units(units, depth_scale)
 
 
 def write_depth_png(path: str | os.PathLike, depth_m: np.ndarray, *, depth_scale: float = MM_PER_M) -> Path:
-    """Write a depth image atomically as a 16-bit grayscale PNG (see :func:`depth_to_png_mm`)."""
+    """Write a depth image atomically as a 16-bit grayscale PNG (see :func:`depth_to_png_mm`).
+
+    Parameters
+    ----------
+    path : str or path
+    depth_m : (h, w) float
+        Depth in metres, 0 or NaN = no return.
+    depth_scale : float
+        Units per metre stored (1000: millimetres).
+    """
     from PIL import Image
 
     units = depth_to_png_mm(depth_m, depth_scale=depth_scale)
@@ -67,6 +84,34 @@ def write_depth_png(path: str | os.PathLike, depth_m: np.ndarray, *, depth_scale
     with atomic_path(path, verify=png_verifier(units.shape)) as tmp:
         Image.fromarray(units).save(tmp, format="PNG")
     return path
+
+
+def mask_image(mask: np.ndarray):
+    """A subject's mask as an 8-bit image (255 = subject), the format of ``wbsa estimate --mask-out``.
+
+    Parameters
+    ----------
+    mask : (h, w) bool
+
+    Returns
+    -------
+    PIL.Image.Image
+    """
+    from PIL import Image
+
+    return Image.fromarray(np.where(mask, 255, 0).astype(np.uint8))
+
+
+def write_mask(path: str | os.PathLike, mask: np.ndarray) -> None:
+    """Write :func:`mask_image` of ``mask`` to ``path`` as PNG, atomically (verified).
+
+    Parameters
+    ----------
+    path : str or path
+    mask : (h, w) bool
+    """
+    with atomic_path(path) as tmp:
+        mask_image(mask).save(tmp, format="PNG")
 
 
 def read_depth_png(path: str | os.PathLike, *, depth_scale: float = MM_PER_M) -> np.ndarray:
@@ -114,6 +159,10 @@ DEPTH_SUFFIXES = (".png", ".npy", ".tif", ".tiff", ".exr")
 def check_depth_path(path: Path) -> None:
     """Refuse a depth path that is not a regular file, saying what it is (missing, a folder, a FIFO or device,
     a symbolic-link loop) rather than "does not exist" for all of them.
+
+    Parameters
+    ----------
+    path : Path
 
     Raises
     ------
@@ -206,6 +255,12 @@ def read_depth(path: str | os.PathLike, *, depth_scale: float | None = None) -> 
         Single-channel float depth in metres, if the ``OpenEXR`` package is installed.
 
     NaN, infinite, zero and negative values are "no return".
+
+    Parameters
+    ----------
+    path : str or path
+    depth_scale : float or None
+        Units per metre of the stored values; None: the type's default above.
 
     Raises
     ------

@@ -17,6 +17,13 @@ MAX_IMAGE_PIXELS = 4096 * 4096
 def check_image_size(width: int, height: int, what: str = "image") -> None:
     """Refuse an image larger than :data:`MAX_IMAGE_PIXELS` before anything is allocated.
 
+    Parameters
+    ----------
+    width, height : int
+        The image's size in pixels.
+    what : str
+        What the image is, in the message.
+
     Raises
     ------
     WbsaError
@@ -30,6 +37,13 @@ def check_image_size(width: int, height: int, what: str = "image") -> None:
 
 def check_seed(seed: object, what: str = "seed") -> int:
     """A seed as a non-negative integer (what :class:`numpy.random.SeedSequence` takes).
+
+    Parameters
+    ----------
+    seed : object
+        The seed given.
+    what : str
+        Its name in the message.
 
     Raises
     ------

@@ -44,6 +44,11 @@ def read_mesh(path: str | os.PathLike) -> TriangleMesh:
     """Read a triangle mesh file with Open3D (vertices as stored, whatever their units; a person's mesh is
     checked for its size by :func:`wbsa.simulate.target.check_person_size`).
 
+    Parameters
+    ----------
+    path : str or path
+        A mesh file of :data:`READ_SUFFIXES`.
+
     Raises
     ------
     WbsaError
@@ -76,6 +81,12 @@ def write_mesh(mesh: TriangleMesh, path: str | os.PathLike) -> Path:
     The file is checked before it is renamed into place: a PLY must have exactly the size its header
     announces and the mesh's vertex and face counts, an OBJ the right number of ``v`` and ``f`` lines
     (Open3D reports success after a failed write, e.g. on a full disk).
+
+    Parameters
+    ----------
+    mesh : TriangleMesh
+    path : str or path
+        A ``.ply`` or ``.obj`` name.
 
     Raises
     ------

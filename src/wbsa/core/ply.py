@@ -21,6 +21,10 @@ _MAX_HEADER = 1 << 16
 def read_ply_header(path: str | os.PathLike) -> tuple[str, list[tuple[str, int, list[tuple]]], int]:
     """The format, the elements and the header length of a PLY file.
 
+    Parameters
+    ----------
+    path : str or path
+
     Returns
     -------
     format : str

@@ -5,6 +5,7 @@
 ``methods``      the method slot: :class:`Predictor` (``methods.base``), one dispatch point (:func:`predictor_for`),
                  the methods ``regression`` (the estimator model, the shipped default model) and ``body_fit``
 ``single_view``  :func:`estimate`, the entry point (``wbsa.estimate`` calls it)
+``flags``        every flag: its meaning, the page's advice, the routes that raise it
 ``fhir``         the FHIR R4 Observation
 ``command``      ``wbsa estimate``
 
@@ -20,7 +21,7 @@ _EXPORTS = {
     "Estimate": "wbsa.estimation.single_view",
     "estimate": "wbsa.estimation.single_view",
     "repair_mixed_pixels": "wbsa.estimation.subject.mixed_pixels",
-    "SegmentSettings": "wbsa.estimation.subject.segment",
+    "SegmentSettings": "wbsa.estimation.subject.settings",
     "Segmentation": "wbsa.estimation.subject.segment",
     "segment_subject": "wbsa.estimation.subject.segment",
     "SubjectMeasures": "wbsa.estimation.subject.measure",
@@ -30,11 +31,12 @@ _EXPORTS = {
     "EstimatorModel": "wbsa.estimation.methods.regression.model",
     "Predictor": "wbsa.estimation.methods.base",
     "predictor_for": "wbsa.estimation.methods.dispatch",
+    "BodyFitSettings": "wbsa.estimation.methods.body_fit.settings",
     "default_model": "wbsa.estimation.methods.regression.default_model",
     "default_model_path": "wbsa.estimation.methods.regression.default_model",
     "model_card": "wbsa.estimation.methods.regression.default_model",
     "fhir_observation": "wbsa.estimation.fhir",
-    "FLAGS": "wbsa.estimation.subject.checks",
+    "FLAGS": "wbsa.estimation.flags",
 }
 __all__ = sorted(_EXPORTS)
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -6,21 +6,16 @@ import argparse
 import sys
 
 
-def _pick(text: str):
-    """``nearest``, ``largest``, ``center`` or ``x,y`` (a pixel) for ``--pick``."""
-    if text in ("nearest", "largest", "center"):
-        return text
-    try:
-        x, y = (int(v) for v in text.split(","))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not nearest, largest, center or x,y") from None
-    return (x, y)
-
-
 def register(sub: argparse._SubParsersAction) -> None:
-    """Add the ``estimate`` subcommand."""
+    """Add the ``estimate`` subcommand.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The ``wbsa`` parser's subcommands.
+    """
     from wbsa.camera.presets import presets_help
-    from wbsa.cli_types import number_in
+    from wbsa.cli_types import number_in, pick
     from wbsa.typing import METHODS
 
     p = sub.add_parser("estimate", help="estimate WBSA from one depth image of a standing person",
@@ -54,7 +49,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--min-depth", type=number_in(0), default=0.3, help="nearest return kept, metres (default 0.3)")
     p.add_argument("--max-depth", type=number_in(0, low_open=True), default=8.0,
                    help="farthest return kept, metres (default 8)")
-    p.add_argument("--pick", type=_pick, default=None,
+    p.add_argument("--body-fit-steps", type=int, default=None,
+                   help="with --method body-fit or both: most optimiser steps of the fit (default 200)")
+    p.add_argument("--body-fit-restarts", type=int, default=None,
+                   help="with --method body-fit or both: starting points fitted together (default 6)")
+    p.add_argument("--pick", type=pick, default=None,
                    help="with several people: nearest, largest, center or x,y (a pixel of the subject)")
     p.add_argument("--no-segment", action="store_true",
                    help="every return is the subject (skip the segmentation; a body alone in the image is found "
@@ -70,37 +69,23 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run_estimate)
 
 
-def auto_camera(depth_shape: tuple[int, int]):
-    """The one preset (TUM excluded) whose image size is ``depth_shape`` (h, w); WbsaError if none or several."""
-    from wbsa.camera.presets import PRESETS
-    from wbsa.errors import WbsaError
-
-    h, w = depth_shape
-    found = [k for k, c in PRESETS.items() if (c.width, c.height) == (w, h) and k != "tum"]
-    if len(found) != 1:
-        have = ", ".join(found) if found else "none of the presets"
-        raise WbsaError(f"a {w}x{h} depth image fits {have}; give --camera PRESET or an intrinsics JSON")
-    return PRESETS[found[0]]
-
-
 def run_estimate(args: argparse.Namespace) -> int:
-    """Handler of ``wbsa estimate``."""
-    from wbsa.camera.presets import resolve_camera
-    from wbsa.core.depth_image import read_depth
-    from wbsa.errors import WbsaError
-    from wbsa.estimation.subject.segment import SegmentSettings
+    """Handler of ``wbsa estimate``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed options of ``wbsa estimate``.
+    """
     from wbsa.estimation.single_view import estimate
+    from wbsa.estimation.subject.segment import SegmentSettings
 
     _check_outputs(args)
-    camera = None if args.camera == "auto" else resolve_camera(args.camera)  # checked before the image is read
-    depth = read_depth(args.depth, depth_scale=args.depth_scale)
-    camera = auto_camera(depth.shape) if camera is None else camera
     segment = None if args.no_segment else SegmentSettings(min_depth_m=args.min_depth, max_depth_m=args.max_depth,
                                                            pick=args.pick)
-    est = estimate(depth, camera, args.model, args.method, azimuth_deg=args.azimuth, elevation_deg=args.elevation,
-                   clothing_m=args.clothing_cm / 100.0, level=args.level, segment=segment)
-    if args.camera == "auto":
-        est.flags["camera_assumed"] = f"no --camera given; the {camera.name} preset fits the image size"
+    est = estimate(args.depth, args.camera, args.model, args.method, azimuth_deg=args.azimuth,
+                   elevation_deg=args.elevation, clothing_m=args.clothing_cm / 100.0, level=args.level,
+                   depth_scale=args.depth_scale, segment=segment, body_fit=_body_fit_settings(args))
     _write_outputs(args, est)
     for name, text in est.flags.items():
         sys.stderr.write(f"warning: {name}: {text}\n")
@@ -118,13 +103,28 @@ def run_estimate(args: argparse.Namespace) -> int:
         print(f"view: {est.view_text()}; subject {est.distance_m:.2f} m away, "
               f"{est.stature_m:.2f} m tall, VBSA {est.vbsa_m2:.3f} m² from {est.n_pixels} pixels [{est.model}]")
         for name, p in est.routes.items():
-            print(f"  {name}: WBSA {p.wbsa_m2:.3f} m² ({p.lo_m2:.3f}–{p.hi_m2:.3f} m²) [{p.model_name}]")
+            print(f"  {name}: WBSA {p.wbsa_m2:.3f} m² ({p.wbsa_lo_m2:.3f}–{p.wbsa_hi_m2:.3f} m²) [{p.model_name}]")
         if est.body is not None:
             b = est.body
             print(f"fitted body: stature {b.stature_m:.3f} m, mass {b.mass_kg:.1f} kg (BMI {b.bmi:.1f}, from its "
                   f"volume {1000 * b.volume_m3:.1f} L), {b.sex}, residual {1000 * b.residual_m:.1f} mm, "
                   f"{b.seconds:.1f} s")
     return 0
+
+
+def _body_fit_settings(args: argparse.Namespace):
+    """The body fit's settings of ``--body-fit-*`` (None when none is given)."""
+    changes = {name: value for name, value in (("steps", args.body_fit_steps), ("restarts", args.body_fit_restarts))
+               if value is not None}
+    if not changes:
+        return None
+    from wbsa.errors import SettingsError, WbsaError
+    from wbsa.estimation.methods.body_fit.settings import BodyFitSettings
+
+    try:
+        return BodyFitSettings(**changes)
+    except SettingsError as exc:
+        raise WbsaError(f"--body-fit-{exc.field} {exc.problem}") from None
 
 
 def _check_outputs(args: argparse.Namespace) -> None:
@@ -167,6 +167,7 @@ def _write_outputs(args: argparse.Namespace, est) -> None:
     import contextlib
 
     from wbsa.atomic import atomic_path
+    from wbsa.core.depth_image import mask_image
     from wbsa.core.mesh_io import write_mesh
 
     with contextlib.ExitStack() as stack:  # left in reverse: the mask is checked and renamed first
@@ -180,19 +181,3 @@ def _write_outputs(args: argparse.Namespace, est) -> None:
         if args.mask_out:
             tmp = stack.enter_context(atomic_path(args.mask_out))
             mask_image(est.mask).save(tmp, format="PNG")
-
-
-def mask_image(mask):
-    """The subject's mask as an 8-bit image (255 = subject), the format of ``--mask-out``."""
-    import numpy as np
-    from PIL import Image
-
-    return Image.fromarray(np.where(mask, 255, 0).astype(np.uint8))
-
-
-def write_mask(path, mask) -> None:
-    """Write :func:`mask_image` of ``mask`` to ``path`` as PNG, atomically (verified)."""
-    from wbsa.atomic import atomic_path
-
-    with atomic_path(path) as tmp:
-        mask_image(mask).save(tmp, format="PNG")

@@ -1,7 +1,7 @@
 """WBSA from one depth image: find the subject, measure it, estimate the view, predict with an interval.
 
 :func:`estimate` is the library entry point (``wbsa.estimate`` calls it). Every number it returns carries
-its flags (:data:`wbsa.estimation.subject.checks.FLAGS`); what cannot be measured raises a one-line
+its flags (:data:`wbsa.estimation.flags.FLAGS`); what cannot be measured raises a one-line
 :class:`~wbsa.errors.WbsaError`.
 """
 
@@ -9,14 +9,17 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass, field
-from typing import Callable
+from typing import TYPE_CHECKING, Callable
 
 import numpy as np
 
 from wbsa.errors import WbsaError
-from wbsa.estimation.subject.segment import SegmentSettings
 from wbsa.estimation.methods.view import ViewEstimate
+from wbsa.estimation.subject.segment import SegmentSettings
 from wbsa.typing import Method
+
+if TYPE_CHECKING:  # pragma: no cover
+    from wbsa.estimation.methods.body_fit.settings import BodyFitSettings
 
 
 @dataclass(frozen=True)
@@ -37,7 +40,7 @@ class Estimate:
     view_used : (float, float)
         Azimuth and elevation the prediction used (the stated ones where given).
     flags : dict of str to str
-        Named warnings (see :data:`wbsa.estimation.subject.checks.FLAGS`); empty when all checks passed.
+        Named warnings (see :data:`wbsa.estimation.flags.FLAGS`); empty when all checks passed.
     clothing_m : float
         The stated layer of clothes the estimate allows for (m; 0: none or tight-fitting).
     method, model, camera : str
@@ -106,8 +109,8 @@ class Estimate:
         if self.body is not None:
             out["body"] = self.body.to_dict()
         if self.routes:
-            out["routes"] = {name: {"wbsa_m2": round(p.wbsa_m2, 5), "wbsa_lo_m2": round(p.lo_m2, 5),
-                                    "wbsa_hi_m2": round(p.hi_m2, 5), "model": p.model_name, "flags": dict(p.flags)}
+            out["routes"] = {name: {"wbsa_m2": round(p.wbsa_m2, 5), "wbsa_lo_m2": round(p.wbsa_lo_m2, 5),
+                                    "wbsa_hi_m2": round(p.wbsa_hi_m2, 5), "model": p.model_name, "flags": dict(p.flags)}
                              for name, p in self.routes.items()}
         return out
 
@@ -145,7 +148,8 @@ def _depth_array(depth, depth_scale: float | None) -> np.ndarray:
 def estimate(depth, camera, model=None, method: Method = "regression", *, azimuth_deg: float | None = None,
              elevation_deg: float | None = None, clothing_m: float = 0.0, level: float = 0.95,
              depth_scale: float | None = None, segment: SegmentSettings | None = SegmentSettings(),
-             show_progress: bool | None = None, progress: Callable[[str, int, int], None] | None = None) -> Estimate:
+             body_fit: BodyFitSettings | None = None, show_progress: bool | None = None,
+             progress: Callable[[str, int, int], None] | None = None) -> Estimate:
     """Estimate WBSA from one depth image of a standing person.
 
     Parameters
@@ -153,7 +157,8 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     depth : (h, w) float array (metres, 0 = no return) or path
         A path is read with :func:`wbsa.core.read_depth` (16-bit PNG, .npy, .tiff, .exr).
     camera : str, path or wbsa.camera.Intrinsics
-        A preset name (``kinect-v2``, ``realsense-d435``, ...) or an Open3D intrinsics JSON.
+        A preset name (``kinect-v2``, ``realsense-d435``, ...), an Open3D intrinsics JSON, or ``auto``: the preset
+        of the image's size (:func:`wbsa.camera.presets.camera_for_image`), flagged ``camera_assumed``.
     model : EstimatorModel, path or None
         None: the model shipped with wbsa (:func:`wbsa.estimation.methods.regression.default_model.default_model`). A path: an
         estimator model file (``.npz``, e.g. from ``wbsa train``) or a ``wbsa fit`` model file (``.json``).
@@ -174,6 +179,8 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
         Units per metre of the depth values (files: see :func:`wbsa.core.read_depth`; arrays: default 1).
     segment : SegmentSettings or None
         How to find the subject in a room; None: every return is the subject.
+    body_fit : BodyFitSettings or None
+        With ``method="body-fit"`` or ``"both"``: how the body is fitted (None: the defaults).
     progress : callable, optional
         Called as ``progress(stage, done, total)`` as the work goes on: ``("subject", 0, 1)`` before the subject
         is found and measured, then for each route ``(route, 0, 1)`` as it starts (``regression``, ``body-fit``),
@@ -191,8 +198,9 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
         a height that is not human (wrong depth scale), a broken model, an unknown method, a stated layer of
         clothes that is not 0–0.05 m, or one stated to a ``wbsa fit`` model.
     """
-    from wbsa.camera.presets import resolve_camera
+    from wbsa.camera.presets import AUTO_CAMERA, resolve_camera
     from wbsa.camera.views import check_angle
+    from wbsa.estimation.flags import FLAGS
     from wbsa.estimation.subject import checks
     from wbsa.estimation.subject.measure import measure_subject
     from wbsa.estimation.methods.base import Request, Subject
@@ -213,10 +221,14 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     checks.check_clothing(clothing_m)
     request = Request(azimuth_deg, elevation_deg, float(clothing_m), level,
                       progress=None if progress is None else lambda step, steps: progress("body-fit", step, steps))
-    predictors = list(predictors_for(method, model))  # a model is read (and refused if broken) before any work
-    intrinsics = resolve_camera(camera)
+    auto = isinstance(camera, str) and camera == AUTO_CAMERA
+    intrinsics = None if auto else resolve_camera(camera)  # a bad camera is refused before the image is read
     depth_m = _depth_array(depth, depth_scale)
+    if auto:
+        checks.check_two_dimensional(depth_m)
+        intrinsics = resolve_camera(camera, depth_m.shape)
     checks.check_image_size(depth_m, intrinsics)
+    predictors = list(predictors_for(method, model, body_fit))  # a model is read (and refused) before any measure
     depth_m, mixed = repair_mixed_pixels(depth_m, intrinsics.fx)
     flags: dict[str, str] = {}
     for k, predictor in enumerate(predictors):
@@ -246,7 +258,7 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     if m.touches_border:
         flags["cut_off"] = "subject pixels on the image border; step back or re-aim the camera"
     if floor is None:
-        flags["no_floor"] = checks.FLAGS["no_floor"]
+        flags["no_floor"] = FLAGS["no_floor"]
     flags.update(checks.working_range_flags(m.distance_m, intrinsics))
     flags.update(checks.feet_flags(m.distance_m, intrinsics))
     subject = Subject(depth_m, mask, intrinsics, floor, m)
@@ -264,7 +276,7 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
         except WbsaError as exc:
             flags["body_fit_failed"] = str(exc)
     for route in (prediction, *list(routes.values())[1:]):
-        if not all(np.isfinite(v) for v in (route.wbsa_m2, route.lo_m2, route.hi_m2)):
+        if not all(np.isfinite(v) for v in (route.wbsa_m2, route.wbsa_lo_m2, route.wbsa_hi_m2)):
             raise WbsaError(f"the {route.model_name} model gave no finite estimate ({route.wbsa_m2}); check the "
                             "model file, or rebuild it")
     view = prediction.view
@@ -273,8 +285,11 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
         flags.setdefault(name, text)
     for name, text in _agreement_flags(routes).items():
         flags.setdefault(name, text)
-    return Estimate(wbsa_m2=prediction.wbsa_m2, wbsa_lo_m2=prediction.lo_m2, wbsa_hi_m2=prediction.hi_m2, level=level,
-                    vbsa_m2=m.vbsa_m2, stature_m=m.stature_m, distance_m=m.distance_m, n_pixels=m.n_pixels,
+    if auto:
+        flags["camera_assumed"] = (f"no camera was given; the {intrinsics.name} preset fits the image size "
+                                   f"({depth_m.shape[1]} x {depth_m.shape[0]})")
+    return Estimate(wbsa_m2=prediction.wbsa_m2, wbsa_lo_m2=prediction.wbsa_lo_m2, wbsa_hi_m2=prediction.wbsa_hi_m2,
+                    level=level, vbsa_m2=m.vbsa_m2, stature_m=m.stature_m, distance_m=m.distance_m, n_pixels=m.n_pixels,
                     view=view, view_used=prediction.view_used, flags=flags, method=method, model=prediction.model_name,
                     camera=intrinsics.name, clothing_m=float(clothing_m),
                     mask=mask & np.isfinite(depth_m) & (depth_m > 0), surface=m.surface, measured_mask=m.mask,
@@ -289,8 +304,8 @@ def _agreement_flags(routes: dict) -> dict[str, str]:
         return {}
     (name_a, a), (name_b, b) = list(routes.items())[:2]
     flags = dict(b.flags)
-    if a.hi_m2 < b.lo_m2 or b.hi_m2 < a.lo_m2:
-        flags["methods_disagree"] = (f"{name_a} {a.wbsa_m2:.3f} m² [{a.lo_m2:.3f}–{a.hi_m2:.3f}] and {name_b} "
-                                     f"{b.wbsa_m2:.3f} m² [{b.lo_m2:.3f}–{b.hi_m2:.3f}] do not overlap; check the "
+    if a.wbsa_hi_m2 < b.wbsa_lo_m2 or b.wbsa_hi_m2 < a.wbsa_lo_m2:
+        flags["methods_disagree"] = (f"{name_a} {a.wbsa_m2:.3f} m² [{a.wbsa_lo_m2:.3f}–{a.wbsa_hi_m2:.3f}] and {name_b} "
+                                     f"{b.wbsa_m2:.3f} m² [{b.wbsa_lo_m2:.3f}–{b.wbsa_hi_m2:.3f}] do not overlap; check the "
                                      "frame (clothes, pose, the person picked)")
     return flags

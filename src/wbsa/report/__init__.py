@@ -10,7 +10,6 @@ from wbsa.lazy import lazy_exports
 _EXPORTS = {
     "build_report": "wbsa.report.build",
     "ReportResult": "wbsa.report.build",
-    "FIGURES": "wbsa.report.figures",
     "load_report_data": "wbsa.report.data",
     "ReportData": "wbsa.report.data",
     "resolve_sources": "wbsa.report.sources",

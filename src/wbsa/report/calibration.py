@@ -1,7 +1,7 @@
 """The report's calibration section: the study's own bodies beside what real bodies are published to do.
 
 Tables and plain sentences from :func:`wbsa.analysis.realism.realism_summary` of the study's population
-and the published figures of :mod:`wbsa.analysis.calibration_refs` (issue 10, point 4). Every sentence
+and the published figures of :mod:`wbsa.analysis.calibration_refs`. Every sentence
 names the virtual number, the published one and the difference; a published figure that the stored
 sources do not give is said to be missing, not guessed.
 """

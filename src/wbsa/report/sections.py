@@ -71,7 +71,7 @@ class SectionBuilder:
     # -- sections ------------------------------------------------------------------------------------------------
 
     def claim(self) -> None:
-        """The opening section: one view against height and weight, per group (issue 10)."""
+        """The opening section: one view against height and weight, per group."""
         from wbsa.analysis.claim import ClaimUnavailable
 
         p = self.page
@@ -94,7 +94,7 @@ class SectionBuilder:
         p.paragraph(method_text(r, k))
 
     def calibration(self) -> None:
-        """The study's own bodies beside the published real-body figures (issue 10, point 4)."""
+        """The study's own bodies beside the published real-body figures."""
         from wbsa.analysis.realism import realism_summary
         from wbsa.report import calibration as cal
         from wbsa.report.figures.calibration import calibration_figure
@@ -238,7 +238,7 @@ class SectionBuilder:
                 ms = ms[ms["fit_group"] == ms["group"]]
             ms = ms[(ms["group"] == "all") & (ms["vbsa_column"] == d.vbsa_column)]
             ms = select(ms, distance_m=d.distance_m, camera=d.camera if "camera" in ms else None)
-            # fit folders written before the fix hold the all-subjects rows twice (once from the group fits, once
+            # older fit folders may hold the all-subjects rows twice (once from the group fits, once
             # from the subgroup evaluation of the same model): keep the first, which has the Breusch–Pagan counts
             ms = ms.drop_duplicates(subset=[c for c in ("group", "predictors", "vbsa_column", "camera", "distance_m",
                                                         "model") if c in ms.columns])

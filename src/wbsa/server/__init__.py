@@ -4,7 +4,7 @@
 ``uploads``   upload checks: size, type and image size from the bytes, fields without paths
 ``jobs``      one estimate off the event loop (:func:`measure`, :class:`Runner`), results kept in memory
 ``answer``    an Estimate as the page shows it: number, flags, view, meshes, formulae, downloads, depth picture
-``advice``    what to do about each flag (:data:`ADVICE`, beside :data:`wbsa.estimation.subject.checks.FLAGS`)
+``advice``    the page's rows of an estimate's flags (from :data:`wbsa.estimation.flags.FLAG_RECORDS`)
 ``batch``     several files: rows, progress, CSV
 ``command``   the ``wbsa serve`` subcommand (uvicorn on 127.0.0.1 and a free port by default)
 ``static/``   the page: HTML, CSS and JavaScript (a small WebGL viewer), no build step, nothing fetched from
@@ -20,7 +20,6 @@ from wbsa.lazy import lazy_exports
 
 _EXPORTS = {
     "create_app": "wbsa.server.app",
-    "ADVICE": "wbsa.server.advice",
 }
 __all__ = sorted(_EXPORTS)
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

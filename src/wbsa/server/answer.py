@@ -31,9 +31,10 @@ def run_estimate(depth_m: np.ndarray, camera, model, options, progress=None):
     from wbsa.estimation import SegmentSettings
 
     model = None if options.method == "body-fit" else model  # the body fit has no estimator model
-    return wbsa.estimate(depth_m, camera, model, method=options.method, azimuth_deg=options.azimuth_deg,
-                         elevation_deg=options.elevation_deg, clothing_m=options.clothing_m,
-                         segment=SegmentSettings(pick=options.pick), progress=progress)
+    body_fit = None if options.method == "regression" else options.body_fit
+    return wbsa.estimate(depth_m, camera, model, method=options.method, body_fit=body_fit,
+                         azimuth_deg=options.azimuth_deg, elevation_deg=options.elevation_deg,
+                         clothing_m=options.clothing_m, segment=SegmentSettings(pick=options.pick), progress=progress)
 
 
 def _stem(name: str) -> str:
@@ -48,7 +49,7 @@ def downloads(est, folder: Path, name: str) -> dict[str, tuple[bytes, str, str]]
     (atomic, verified) into ``folder`` and read back.
     """
     from wbsa.core.mesh_io import write_mesh
-    from wbsa.estimation.command import write_mask
+    from wbsa.core.depth_image import write_mask
     from wbsa.estimation.fhir import fhir_observation
     from wbsa.strict_json import json_text
 
@@ -126,21 +127,13 @@ LEAD_REASONS = {
 }
 
 
-def page_flag_rows(flags: dict[str, str]) -> list[dict[str, str]]:
-    """The page's rows for ``flags`` (:func:`wbsa.server.advice.flag_rows`), the details in the page's words
-    (:func:`wbsa.server.wording.page_words`)."""
-    from wbsa.server.advice import flag_rows
-    from wbsa.server.wording import page_words
-
-    return [{**row, "detail": page_words(row["detail"])} for row in flag_rows(flags)]
-
-
 def routes_json(est) -> dict | None:
     """With method ``both``: each route's number, interval and own flags, which one leads and why; None otherwise.
 
     The route whose number is the estimate's leads; an estimate whose number is neither route's is their
     combination (``combined``). A body fit that failed is a route with its reason (``failed``).
     """
+    from wbsa.server.advice import flag_rows
     from wbsa.server.wording import page_words
 
     if not est.routes:
@@ -152,7 +145,7 @@ def routes_json(est) -> dict | None:
         same = all(route[k] == whole[k] for k in ("wbsa_m2", "wbsa_lo_m2", "wbsa_hi_m2"))  # both rounded alike
         rows.append({"name": key, "label": ROUTE_LABELS.get(key, key), "wbsa_m2": round(route["wbsa_m2"], 3),
                      "wbsa_lo_m2": round(route["wbsa_lo_m2"], 3), "wbsa_hi_m2": round(route["wbsa_hi_m2"], 3),
-                     "model": route["model"], "flags": page_flag_rows(route["flags"]), "leads": same})
+                     "model": route["model"], "flags": flag_rows(route["flags"]), "leads": same})
     if "body_fit_failed" in est.flags and "body-fit" not in shown:
         rows.append({"name": "body-fit", "label": ROUTE_LABELS["body-fit"], "leads": False, "flags": [],
                      "failed": page_words(est.flags["body_fit_failed"])})
@@ -173,13 +166,15 @@ def shared_flags(est) -> dict[str, str]:
 
 def answer_json(est, result_id: str, name: str, options, files: dict) -> dict:
     """What the page shows of one estimate (JSON-ready)."""
+    from wbsa.server.advice import flag_rows
+
     return {
         "id": result_id, "name": name,
         "wbsa_m2": round(est.wbsa_m2, 3), "wbsa_lo_m2": round(est.wbsa_lo_m2, 3),
         "wbsa_hi_m2": round(est.wbsa_hi_m2, 3), "level": est.level, "method": est.method,
         "method_text": est.method_text(), "model": est.model, "camera": est.camera,
         "estimate": est.to_dict(), "pick": list(options.pick) if isinstance(options.pick, tuple) else options.pick,
-        "flags": page_flag_rows(est.flags), "image_flags": page_flag_rows(shared_flags(est)),
+        "flags": flag_rows(est.flags), "image_flags": flag_rows(shared_flags(est)),
         "routes": routes_json(est),
         "view": {**est.view.to_dict(), "distance_m": round(est.distance_m, 3),
                  "azimuth_used_deg": est.view_used[0], "elevation_used_deg": est.view_used[1],

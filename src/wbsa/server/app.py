@@ -76,9 +76,10 @@ def _number(fields: dict, name: str, low: float, high: float, what: str) -> floa
         raise UploadError(f"{name}: {exc}") from None
 
 
-def options_from_form(form, presets, methods) -> "Options":
-    """The page's choices as :class:`~wbsa.server.jobs.Options`, every field checked."""
-    from wbsa.estimation.command import _pick
+def options_from_form(form, presets, methods, body_fit=None) -> "Options":
+    """The page's choices as :class:`~wbsa.server.jobs.Options`, every field checked (``body_fit``: the server's
+    settings of the body fit)."""
+    from wbsa.cli_types import pick as parse_pick
     from wbsa.server.jobs import Options, camera_from_upload
 
     check_fields(form, FIELDS, FILES)
@@ -99,7 +100,7 @@ def options_from_form(form, presets, methods) -> "Options":
     pick = None
     if f.get("pick", "").strip():
         try:
-            pick = _pick(f["pick"].strip())
+            pick = parse_pick(f["pick"].strip())
         except argparse.ArgumentTypeError as exc:
             raise UploadError(f"pick: {exc}") from None
     clothing_cm = _number(f, "clothing_cm", 0, 5, "a thickness of clothes in cm")
@@ -108,11 +109,11 @@ def options_from_form(form, presets, methods) -> "Options":
                    pick=pick, method=method, height_cm=_number(f, "height_cm", 1, 300, "a height in cm"),
                    mass_kg=_number(f, "mass_kg", 0.1, 700, "a mass in kg"), sex=sex,
                    azimuth_deg=_number(f, "azimuth_deg", -360, 360, "an azimuth in degrees"),
-                   elevation_deg=_number(f, "elevation_deg", -90, 90, "an elevation in degrees"))
+                   elevation_deg=_number(f, "elevation_deg", -90, 90, "an elevation in degrees"), body_fit=body_fit)
 
 
 def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_upload_bytes: int = MAX_UPLOAD_BYTES,
-               temp_dir: str | None = None, keep_results: int = 64, token: str | None = None):
+               temp_dir: str | None = None, keep_results: int = 64, token: str | None = None, body_fit=None):
     """The ``wbsa serve`` application (Starlette, ASGI).
 
     Parameters
@@ -133,6 +134,8 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
     token : str, optional
         A token every request must carry (:class:`wbsa.server.access.TokenGate`; 403 without it). None: no
         token (loopback only: ``wbsa serve`` makes one for any other address).
+    body_fit : BodyFitSettings, optional
+        The settings of the body fit (methods ``body-fit`` and ``both``; None: the defaults).
 
     Returns
     -------
@@ -145,11 +148,11 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
     from starlette.routing import Mount, Route
     from starlette.staticfiles import StaticFiles
 
-    from wbsa.camera.presets import PRESETS
+    from wbsa.camera.presets import CAMERAS
     from wbsa.strict_json import finite_or_none
     from wbsa.typing import METHODS
-    from wbsa.server.batch import Batch, BatchStore, run_batch
-    from wbsa.server.jobs import ResultStore, Runner, internal_error, measure, new_id
+    from wbsa.server.batch import Batch, run_batch
+    from wbsa.server.jobs import BoundedStore, Runner, internal_error, measure, new_id
     from wbsa.server.progress import STREAM, stream_answer, wants_stream
     from wbsa.server.wording import page_words
 
@@ -157,12 +160,13 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
         from wbsa.estimation.methods.regression.default_model import load_model
 
         model = load_model(model)
-    presets = [k for k in PRESETS if k != "tum"] + ["tum"]
+    presets = sorted(CAMERAS, key=lambda name: not CAMERAS[name].by_image_size)  # those auto may pick first
     methods = list(METHODS)
     root = Path(tempfile.mkdtemp(prefix="wbsa-serve-", dir=temp_dir))
     runner = Runner(workers=workers, max_pending=max_pending)
-    results = ResultStore(keep_results)
-    batches = BatchStore()
+    results = BoundedStore(keep_results, "this result is no longer kept (the server keeps the last "
+                                         f"{keep_results}); upload the depth file again")
+    batches = BoundedStore(16, "this batch is no longer kept; upload its files again")
 
     def error(exc: UploadError) -> JSONResponse:
         return JSONResponse({"error": page_words(str(exc))}, status_code=exc.status)
@@ -172,7 +176,7 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
 
     async def info(request: Request) -> Response:
         return JSONResponse({
-            "presets": [{"name": k, "width": PRESETS[k].width, "height": PRESETS[k].height} for k in presets],
+            "presets": [{"name": k, "width": CAMERAS[k].intrinsics.width, "height": CAMERAS[k].intrinsics.height} for k in presets],
             "methods": methods, "max_upload_bytes": max_upload_bytes, "max_clothing_cm": 5,
             "model": "default" if model is None else str(getattr(model, "meta", {}).get("name", "given"))})
 
@@ -211,7 +215,7 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
     async def estimate_one(request: Request) -> Response:
         async def prepare():
             form = await read_form(request, max_upload_bytes)
-            options = options_from_form(form, presets, methods)
+            options = options_from_form(form, presets, methods, body_fit)
             depth = form.files.get("depth", [])
             if len(depth) != 1:
                 raise UploadError("send one depth file in the field 'depth' (for several, use the batch)"
@@ -224,14 +228,14 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
     async def pick(request: Request) -> Response:
         import dataclasses
 
-        from wbsa.estimation.command import _pick
+        from wbsa.cli_types import pick as parse_pick
 
         async def prepare():
             before = results.get(request.path_params["rid"])
             if before.depth_m is None:
                 raise UploadError("this upload holds no depth image to pick from; upload a depth file")
             try:
-                at = _pick(request.query_params.get("pick", ""))
+                at = parse_pick(request.query_params.get("pick", ""))
             except argparse.ArgumentTypeError as exc:
                 raise UploadError(f"pick: {exc}") from None
             options = dataclasses.replace(before.options, pick=at)
@@ -265,7 +269,7 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
             return error(exc)
         try:
             form = await read_form(request, max_upload_bytes)
-            options = options_from_form(form, presets, methods)
+            options = options_from_form(form, presets, methods, body_fit)
             uploads = form.files.get("depth", [])
             if not uploads:
                 raise UploadError("no depth files were sent; choose or drop depth images")

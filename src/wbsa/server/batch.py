@@ -9,8 +9,6 @@ from __future__ import annotations
 
 import csv
 import io
-import threading
-from collections import OrderedDict
 from dataclasses import dataclass, field
 
 from wbsa.server.uploads import Upload, UploadError, check_depth_upload
@@ -73,27 +71,3 @@ def run_batch(batch: Batch, uploads: list[Upload], options, model, root, store) 
             batch.rows.append(row_of(result))
     finally:
         batch.done = True
-
-
-class BatchStore:
-    """The last ``capacity`` batches, by id."""
-
-    def __init__(self, capacity: int = 16) -> None:
-        self.capacity = capacity
-        self._items: OrderedDict[str, Batch] = OrderedDict()
-        self._lock = threading.Lock()
-
-    def add(self, batch: Batch) -> None:
-        """Keep ``batch``, dropping the oldest beyond the capacity."""
-        with self._lock:
-            self._items[batch.id] = batch
-            while len(self._items) > self.capacity:
-                self._items.popitem(last=False)
-
-    def get(self, batch_id: str) -> Batch:
-        """The batch of ``batch_id``; an :class:`UploadError` (404) if unknown."""
-        with self._lock:
-            try:
-                return self._items[batch_id]
-            except KeyError:
-                raise UploadError("this batch is no longer kept; upload its files again", status=404) from None

@@ -5,7 +5,7 @@ and ``wbsa estimate``) in a pool of worker threads and refuses new work once :at
 estimates are waiting, so a burst of uploads gets a clear "busy" message instead of exhausting memory.
 Each estimate reads its upload from its own folder inside the server's temporary folder, removed as soon as
 the answer is made; the answers (and the depth image, for a click on another person) stay in memory in a
-bounded :class:`ResultStore`.
+bounded :class:`BoundedStore`.
 """
 
 from __future__ import annotations
@@ -46,6 +46,8 @@ class Options:
     sex : str or None
     azimuth_deg, elevation_deg : float or None
         A stated view (optional; it is estimated, and checked when given).
+    body_fit : BodyFitSettings or None
+        The server's settings of the body fit (``create_app(body_fit=...)``; None: the defaults), not the page's.
     """
 
     camera: str = "auto"
@@ -59,6 +61,7 @@ class Options:
     sex: str | None = None
     azimuth_deg: float | None = None
     elevation_deg: float | None = None
+    body_fit: object = None
 
 
 @dataclass
@@ -75,7 +78,6 @@ class Result:
     files : dict of str to (bytes, str, str)
         Download name -> (content, media type, file name the browser saves).
     depth_m : (h, w) float32 or None
-    camera : Intrinsics or None
     options : Options
     estimate : wbsa.estimation.Estimate or None
     """
@@ -84,38 +86,45 @@ class Result:
     answer: dict
     files: dict = field(default_factory=dict)
     depth_m: np.ndarray | None = None
-    camera: object = None
     options: Options = Options()
     name: str = ""
     estimate: object = None
 
 
-class ResultStore:
-    """The last ``capacity`` results, in memory, by id (the oldest is dropped first)."""
+class BoundedStore:
+    """The last ``capacity`` items (results, batches), in memory, by their ``id`` (the oldest is dropped first).
 
-    def __init__(self, capacity: int = 64) -> None:
+    Parameters
+    ----------
+    capacity : int
+        Items kept.
+    missing : str
+        The 404 message for an id not kept (dropped, or never given).
+    """
+
+    def __init__(self, capacity: int, missing: str) -> None:
         self.capacity = capacity
-        self._items: OrderedDict[str, Result] = OrderedDict()
+        self.missing = missing
+        self._items: OrderedDict[str, object] = OrderedDict()
         self._lock = threading.Lock()
 
-    def add(self, result: Result) -> None:
-        """Keep ``result``, dropping the oldest beyond the capacity."""
+    def add(self, item) -> None:
+        """Keep ``item`` under ``item.id``, dropping the oldest beyond the capacity."""
         with self._lock:
-            self._items[result.id] = result
+            self._items[item.id] = item
             while len(self._items) > self.capacity:
                 self._items.popitem(last=False)
 
     def __len__(self) -> int:
         return len(self._items)
 
-    def get(self, result_id: str) -> Result:
-        """The result of ``result_id``; an :class:`UploadError` (404) if unknown or dropped."""
+    def get(self, item_id: str):
+        """The item of ``item_id``; an :class:`UploadError` (404) with :attr:`missing` if it is not kept."""
         with self._lock:
             try:
-                return self._items[result_id]
+                return self._items[item_id]
             except KeyError:
-                raise UploadError("this result is no longer kept (the server keeps the last "
-                                  f"{self.capacity}); upload the depth file again", status=404) from None
+                raise UploadError(self.missing, status=404) from None
 
 
 def internal_error(exc: BaseException) -> str:
@@ -154,17 +163,14 @@ def read_upload(upload: Upload, folder: Path) -> np.ndarray:
     return read_depth(path)
 
 
-def resolve(depth_m: np.ndarray, options: Options):
-    """The camera of ``options`` for an image of ``depth_m``'s size and whether it was assumed."""
+def camera_of(options: Options):
+    """The camera argument of :func:`wbsa.estimate` for ``options``: the uploaded intrinsics, else the preset's
+    name or ``auto``."""
     from wbsa.camera.intrinsics import Intrinsics
-    from wbsa.camera.presets import resolve_camera
-    from wbsa.estimation.command import auto_camera
 
     if options.intrinsics is not None:
-        return Intrinsics.from_open3d_json(options.intrinsics), False
-    if options.camera == "auto":
-        return auto_camera(depth_m.shape), True
-    return resolve_camera(options.camera), False
+        return Intrinsics.from_open3d_json(options.intrinsics)
+    return options.camera
 
 
 def measure(upload: Upload | None, options: Options, model, root: Path, *, depth_m: np.ndarray | None = None,
@@ -211,12 +217,7 @@ def measure(upload: Upload | None, options: Options, model, root: Path, *, depth
             report("reading")
             depth_m = read_upload(upload, folder)
         result.depth_m = depth_m
-        camera, assumed = resolve(depth_m, options)
-        result.camera = camera
-        est = answer.run_estimate(depth_m, camera, model, options, progress)
-        if assumed:
-            est.flags["camera_assumed"] = (f"no camera was chosen; the {camera.name} preset fits the image size "
-                                           f"({depth_m.shape[1]} x {depth_m.shape[0]})")
+        est = answer.run_estimate(depth_m, camera_of(options), model, options, progress)
         result.estimate = est
         report("answer")
         result.files = answer.downloads(est, folder, name)

@@ -128,14 +128,6 @@ def _quadratic_pass(values, ref, index, base, step, sigma, sigma_depth, r):
     return np.where(ok3, c0_3, np.where(ok2, c0_2, np.where(s0 > 0, c0_1, 0.0)))
 
 
-def _well_conditioned(A: np.ndarray, min_det: float = 1e-9) -> np.ndarray:
-    """(n,) bool: unit-diagonal symmetric matrices far enough from singular (determinant test;
-    Hadamard's inequality bounds it by 1, collinear neighbourhoods drive it to 0)."""
-    if A.shape[0] == 0:
-        return np.zeros(0, dtype=bool)
-    return np.linalg.det(A) > min_det
-
-
 def _bilateral(z: np.ndarray, m: np.ndarray, sigma: float, sigma_depth: float, r: int) -> np.ndarray:
     """Masked bilateral filter: loops over the window offsets, vectorised over pixels."""
     h, w = z.shape

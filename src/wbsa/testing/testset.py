@@ -29,7 +29,7 @@ class RoomTestSettings:
     ----------
     capture : CaptureSettings
         Its ``edge_pixels`` draw is not used: ``edge_pixels`` below applies to every image. The default is
-        the issue's benchmark: noise at Kinect v1's level (``noise_scale`` 1), no ideal captures. Both are
+        the benchmark's default: noise at Kinect v1's level (``noise_scale`` 1), no ideal captures. Both are
         drawn last, so ``noise_scale=(f, f)`` or ``ideal_share=1`` give the same captures at another noise
         level or with no sensor effects.
     wall_behind_m : (float, float)
@@ -42,7 +42,7 @@ class RoomTestSettings:
         How the estimator chooses among several people (the operator aims the camera at the subject).
     edge_pixels : {'kept', 'mixed', 'dropped'}
         What the camera returns for a pixel straddling a depth edge (:func:`wbsa.sensor.depth_edges.edge_pixels`):
-        the render's depth (the issue's benchmark), a time-of-flight mix of the two surfaces, or nothing.
+        the render's depth (the benchmark's default), a time-of-flight mix of the two surfaces, or nothing.
     edge_share : float
         Share of the depth edges so affected.
     scene : {'room', 'alone'}
@@ -101,7 +101,7 @@ def contact_strip(truth: np.ndarray, surface_height_m: np.ndarray) -> np.ndarray
     measured depth over the found floor, not from the true surface, so the cut matches this strip only up
     to the depth noise and the floor's error. With no floor found (flag ``no_floor``; a body alone)
     nothing is cut and the soles are measured with the body. Segmentation benchmarks leave such a band out
-    as "void" (the object boundaries of PASCAL VOC); the issue's figures count it, and both are reported.
+    as "void" (the object boundaries of PASCAL VOC); the benchmark's figures count it, and both are reported.
 
     Parameters
     ----------

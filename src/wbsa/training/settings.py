@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from wbsa.errors import WbsaError
+from wbsa.errors import SettingsError
 from wbsa.training.capture import CaptureSettings
 
 @dataclass(frozen=True)
@@ -56,30 +56,25 @@ class RenderSettings:
     clothing_m: tuple[float, float] = (0.0, 0.015)
 
     def __post_init__(self) -> None:
-        from wbsa.errors import WbsaError
-
         check_clothing_settings(self.clothed_share, self.clothing_m)
         if not isinstance(self.views_per_subject, int) or self.views_per_subject < 1:
-            raise WbsaError(f"views_per_subject must be an integer >= 1, got {self.views_per_subject!r}")
+            raise SettingsError("views_per_subject", f"must be an integer >= 1, got {self.views_per_subject!r}")
         if not 0.0 <= self.alone_share <= 1.0:
-            raise WbsaError(f"alone_share {self.alone_share} must be a share of the captures in [0, 1]")
+            raise SettingsError("alone_share", f"{self.alone_share} must be a share of the captures in [0, 1]")
         if not 0.0 <= self.scan_share <= 1.0:
-            raise WbsaError(f"scan_share {self.scan_share} must be a share of the captures of a body alone in [0, 1]")
+            raise SettingsError("scan_share", f"{self.scan_share} must be a share of the captures of a body alone in [0, 1]")
 
 
 def check_clothing_settings(clothed_share: float, clothing_m: tuple[float, float]) -> None:
-    """Refuse a share of dressed captures outside [0, 1] or a thickness range outside 0–5 cm (one-line WbsaError)."""
-    from wbsa.errors import WbsaError
+    """Refuse a share of dressed captures outside [0, 1] or a thickness range outside 0–5 cm (one-line SettingsError)."""
     from wbsa.estimation.subject.checks import MAX_CLOTHING_M
 
     if not 0.0 <= clothed_share <= 1.0:
-        raise WbsaError(f"clothed_share {clothed_share} must be a share of the captures in [0, 1]")
+        raise SettingsError("clothed_share", f"{clothed_share} must be a share of the captures in [0, 1]")
     lo, hi = (float(v) for v in clothing_m)
     if not 0.0 <= lo <= hi <= MAX_CLOTHING_M:
-        raise WbsaError(f"clothing_m {tuple(clothing_m)} must be a range (low, high) of layers within "
-                        f"0–{MAX_CLOTHING_M:g} m, "
-                        "e.g. (0.0, 0.015)")
-
+        raise SettingsError("clothing_m", f"{tuple(clothing_m)} must be a range (low, high) of layers within "
+                                          f"0–{MAX_CLOTHING_M:g} m, e.g. (0.0, 0.015)")
 
 
 @dataclass(frozen=True)
@@ -124,16 +119,17 @@ class TrainSettings:
 
     def __post_init__(self) -> None:
         if self.n_random < 0 or self.n_survey < 0 or self.n_random + self.n_survey < 8:
-            raise WbsaError("n_random + n_survey must be at least 8 subjects")
+            raise SettingsError("n_random", "+ n_survey must be at least 8 subjects")
         if not 0.05 <= self.calibration_fraction <= 0.5:
-            raise WbsaError(f"calibration_fraction {self.calibration_fraction} must lie in [0.05, 0.5]")
+            raise SettingsError("calibration_fraction", f"{self.calibration_fraction} must lie in [0.05, 0.5]")
         if not isinstance(self.render, RenderSettings):
-            raise WbsaError(f"render must be a RenderSettings, got {type(self.render).__name__}")
+            raise SettingsError("render", f"must be a RenderSettings, got {type(self.render).__name__}")
         if not isinstance(self.folds, int) or self.folds < 2:
-            raise WbsaError(f"folds must be an integer >= 2, got {self.folds!r}")
+            raise SettingsError("folds", f"must be an integer >= 2, got {self.folds!r}")
         counts_ok = all(isinstance(v, int) for v in (self.tree_iterations, self.tree_leaves, self.tree_bags))
         if not (counts_ok and self.tree_iterations >= 1 and self.tree_leaves >= 2 and self.tree_l2 >= 0
                 and self.tree_bags >= 1):
-            raise WbsaError(f"tree_iterations ({self.tree_iterations!r}) must be an integer >= 1, tree_leaves "
-                            f"({self.tree_leaves!r}) an integer >= 2, tree_bags ({self.tree_bags!r}) an integer "
-                            f">= 1 and tree_l2 ({self.tree_l2!r}) a number >= 0")
+            raise SettingsError("tree_iterations",
+                                f"({self.tree_iterations!r}) must be an integer >= 1, tree_leaves ({self.tree_leaves!r}) "
+                                f"an integer >= 2, tree_bags ({self.tree_bags!r}) an integer >= 1 and tree_l2 "
+                                f"({self.tree_l2!r}) a number >= 0")

@@ -47,11 +47,22 @@ class Backend(Protocol):
     def measure_views(self, scene: MeshScene, intrinsics: Intrinsics, views: list[View],
                       target: np.ndarray | None = None, *, return_frames: bool = True, grazing_cos: float = ...,
                       grazing_split_px: float | None = ...) -> list[tuple[dict, DepthFrame | None]]:
-        """One ``(row, frame)`` per view, as :func:`wbsa.camera.measure.measure_view` returns them."""
+        """One ``(row, frame)`` per view, as :func:`wbsa.camera.measure.measure_view` returns them.
+
+        Parameters
+        ----------
+        scene, intrinsics, views, target, return_frames, grazing_cos, grazing_split_px
+            As for :func:`measure_views` (without its ``backend``).
+        """
 
 
 def check_backend(name: str) -> str:
-    """``name`` if it is a back end, else a one-line :class:`WbsaError`."""
+    """``name`` if it is a back end, else a one-line :class:`WbsaError`.
+
+    Parameters
+    ----------
+    name : str
+    """
     if name not in BACKENDS:
         raise WbsaError(f"unknown ray-casting backend {name!r}: backend must be one of {', '.join(BACKENDS)}")
     return name
@@ -70,7 +81,12 @@ def cuda_available() -> bool:
 
 
 def resolve_backend(name: str) -> str:
-    """The concrete back end (``open3d`` or ``warp``) that ``name`` stands for on this machine."""
+    """The concrete back end (``open3d`` or ``warp``) that ``name`` stands for on this machine.
+
+    Parameters
+    ----------
+    name : {'auto', 'open3d', 'warp'}
+    """
     check_backend(name)
     if name == "auto":
         return "warp" if cuda_available() else "open3d"
@@ -79,7 +95,12 @@ def resolve_backend(name: str) -> str:
 
 @lru_cache(maxsize=4)
 def get_backend(name: str = DEFAULT_BACKEND) -> Backend:
-    """The (process-wide) back end object of ``name`` (``auto`` resolved first)."""
+    """The (process-wide) back end object of ``name`` (``auto`` resolved first).
+
+    Parameters
+    ----------
+    name : {'auto', 'open3d', 'warp'}
+    """
     name = resolve_backend(name)
     if name == "warp":
         try:
@@ -137,6 +158,11 @@ def iter_measure_views(scene: MeshScene, intrinsics: Intrinsics, views, target: 
 
     Without frames all views go to the back end in one call; with frames, ``FRAMES_PER_CALL`` views per
     call, so that a long view list does not hold all its frames at once.
+
+    Parameters
+    ----------
+    scene, intrinsics, views, target, backend, return_frames
+        As for :func:`measure_views`.
     """
     views = list(views)
     step = FRAMES_PER_CALL if return_frames else max(1, len(views))

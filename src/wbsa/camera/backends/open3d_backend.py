@@ -20,6 +20,13 @@ class Open3DBackend:
                       target: np.ndarray | None = None, *, return_frames: bool = True,
                       grazing_cos: float = GRAZING_COS,
                       grazing_split_px: float | None = GRAZING_SPLIT_PX) -> list[tuple[dict, DepthFrame | None]]:
+        """One ``(row, frame)`` per view: :func:`wbsa.camera.measure.measure_view` of each.
+
+        Parameters
+        ----------
+        scene, intrinsics, views, target, return_frames, grazing_cos, grazing_split_px
+            As for :func:`wbsa.camera.backends.measure_views` (without its ``backend``).
+        """
         from wbsa.camera.measure import measure_view
 
         return [measure_view(scene, intrinsics, view, target, return_frame=return_frames, grazing_cos=grazing_cos,

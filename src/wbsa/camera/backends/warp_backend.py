@@ -105,6 +105,11 @@ class WarpBackend:
 
         ``grazing_cos`` ≤ 0 (the plain pixel sum, with its cos θ clip) is left to the Open3D back end.
 
+        Parameters
+        ----------
+        scene, intrinsics, views, target, return_frames, grazing_cos, grazing_split_px
+            As for :func:`wbsa.camera.backends.measure_views` (without its ``backend``).
+
         Raises
         ------
         WbsaError

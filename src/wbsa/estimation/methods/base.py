@@ -61,8 +61,8 @@ class Prediction:
     for a method that fits a whole body, the fitted body."""
 
     wbsa_m2: float
-    lo_m2: float
-    hi_m2: float
+    wbsa_lo_m2: float
+    wbsa_hi_m2: float
     view: ViewEstimate
     view_used: tuple[float, float]
     model_name: str
@@ -76,10 +76,28 @@ class Predictor(Protocol):
     name: str
 
     def check_request(self, request: Request) -> None:
-        """Raise :class:`WbsaError` for a request this predictor cannot serve (before the image is measured)."""
+        """Raise :class:`WbsaError` for a request this predictor cannot serve (before the image is measured).
+
+        Parameters
+        ----------
+        request : Request
+            The stated view, clothes and interval level.
+        """
 
     def predict(self, subject: Subject, request: Request) -> Prediction:
-        """WBSA of ``subject`` with its interval and flags."""
+        """WBSA of ``subject`` with its interval and flags.
+
+        Parameters
+        ----------
+        subject : Subject
+            The segmented, measured subject.
+        request : Request
+            The stated view, clothes and interval level.
+
+        Returns
+        -------
+        Prediction
+        """
 
 
 __all__ = ["Prediction", "Predictor", "Request", "Subject"]

@@ -20,26 +20,54 @@ in a module of its own, and :func:`predictor_for` is the one place that picks it
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from wbsa.errors import WbsaError
 from wbsa.typing import METHODS, Method
 
+if TYPE_CHECKING:  # pragma: no cover
+    from wbsa.estimation.methods.base import Predictor
+    from wbsa.estimation.methods.body_fit.settings import BodyFitSettings
+
 
 def check_method(method: str) -> Method:
-    """``method`` if it is a method name, else a one-line :class:`WbsaError`."""
+    """``method`` if it is a method name, else a one-line :class:`WbsaError`.
+
+    Parameters
+    ----------
+    method : str
+        A name of :data:`wbsa.typing.METHODS`.
+    """
     if not isinstance(method, str) or method not in METHODS:
         raise WbsaError(f"estimation method {method!r} is unknown; use one of {', '.join(METHODS)}")
     return method  # type: ignore[return-value]
 
 
-def predictors_for(method: Method, model=None) -> tuple[Predictor, ...]:
-    """The predictors of ``method``: one, or for ``both`` the regression's then the body fit's."""
-    check_method(method)
+def predictors_for(method: Method, model=None, body_fit: BodyFitSettings | None = None) -> tuple[Predictor, ...]:
+    """The predictors of ``method``: one, or for ``both`` the regression's then the body fit's.
+
+    ``method`` is not checked again here (:func:`wbsa.estimation.estimate` checks it first, with
+    :func:`check_method`); a name that is none of the methods still gets that one-line refusal.
+
+    Parameters
+    ----------
+    method : {'regression', 'body-fit', 'both'}
+    model : EstimatorModel, WbsaModel, path or None
+        The regression's model (see :func:`predictor_for`).
+    body_fit : BodyFitSettings or None
+        The body fit's settings (None: the defaults); only with ``body-fit`` or ``both``.
+
+    Returns
+    -------
+    tuple of Predictor
+    """
     if method == "both":
-        return predictor_for("regression", model), predictor_for("body-fit")
-    return (predictor_for(method, model),)
+        _check_body_fit_settings(body_fit)
+        return _predictor("regression", model, None), _predictor("body-fit", None, body_fit)
+    return (_predictor(method, model, body_fit),)
 
 
-def predictor_for(method: Method, model=None) -> Predictor:
+def predictor_for(method: Method, model=None, body_fit: BodyFitSettings | None = None) -> Predictor:
     """The predictor of one method with ``model`` (the one dispatch point).
 
     Parameters
@@ -49,24 +77,44 @@ def predictor_for(method: Method, model=None) -> Predictor:
         The regression's model (the body fit has its own).
         None: the shipped default model. A path: an estimator model file (``.npz``) or a ``wbsa fit`` model
         file (``.json``), read and checked at once.
+    body_fit : BodyFitSettings or None
+        The body fit's settings (None: the defaults); only with ``body-fit``.
 
     Returns
     -------
     Predictor
     """
-    from wbsa.estimation.methods.regression.default_model import load_model
-    from wbsa.estimation.methods.regression.model import EstimatorModel
-
     check_method(method)
     if method == "both":
         raise WbsaError("predictor_for takes one method; use predictors_for for both")
+    return _predictor(method, model, body_fit)
+
+
+def _check_body_fit_settings(body_fit) -> None:
+    from wbsa.estimation.methods.body_fit.settings import BodyFitSettings
+
+    if body_fit is not None and not isinstance(body_fit, BodyFitSettings):
+        raise WbsaError(f"body_fit must be BodyFitSettings or None, got {type(body_fit).__name__}")
+
+
+def _predictor(method: Method, model, body_fit) -> Predictor:
+    """The predictor of one method name (the one dispatch; a name that is no method is refused here)."""
     if method == "body-fit":
         from wbsa.estimation.methods.body_fit.predictor import BodyFitPredictor
 
         if model is not None:
             raise WbsaError("the body fit uses no estimator model; drop the model (or use method both to run the "
                             "regression with it beside the body fit)")
-        return BodyFitPredictor()
+        _check_body_fit_settings(body_fit)
+        return BodyFitPredictor(body_fit)
+    if method != "regression":
+        check_method(method)  # refuses it: "both" is not one method, anything else is none
+        raise WbsaError("predictor_for takes one method; use predictors_for for both")
+    if body_fit is not None:
+        raise WbsaError("body-fit settings go with method body-fit or both; drop them for the regression")
+    from wbsa.estimation.methods.regression.default_model import load_model
+    from wbsa.estimation.methods.regression.model import EstimatorModel
+
     loaded = load_model(model)
     if isinstance(loaded, EstimatorModel):
         from wbsa.estimation.methods.regression.predictor import RegressionPredictor

@@ -18,12 +18,32 @@ VIEW_TOLERANCE_DEG = 30.0
 
 
 def fold_azimuth(azimuth_deg) -> np.ndarray:
-    """Mirror-equivalent azimuth ψ = |θ| in [0, 180] (θ and −θ are the same view of a symmetric body)."""
+    """Mirror-equivalent azimuth ψ = |θ| in [0, 180] (θ and −θ are the same view of a symmetric body).
+
+    Parameters
+    ----------
+    azimuth_deg : float or (n,) float64
+        Azimuths θ in degrees, any range.
+
+    Returns
+    -------
+    float64 array of the input's shape
+    """
     return np.abs((np.asarray(azimuth_deg, dtype=np.float64) + 180.0) % 360.0 - 180.0)
 
 
 def azimuth_error_deg(estimate_deg, truth_deg) -> np.ndarray:
-    """Mirror-equivalent azimuth error |ψ̂ − ψ| in degrees (0–180)."""
+    """Mirror-equivalent azimuth error |ψ̂ − ψ| in degrees (0–180).
+
+    Parameters
+    ----------
+    estimate_deg, truth_deg : float or (n,) float64
+        Azimuths in degrees, any range (folded by :func:`fold_azimuth`).
+
+    Returns
+    -------
+    float64 array of the inputs' broadcast shape
+    """
     return np.abs(fold_azimuth(estimate_deg) - fold_azimuth(truth_deg))
 
 
@@ -51,7 +71,20 @@ UNCERTAIN_AZIMUTH_SD_DEG = 30.0
 def view_used(view: ViewEstimate, azimuth_deg: float | None,
               elevation_deg: float | None) -> tuple[tuple[float, float], dict[str, str]]:
     """The view a prediction uses: the stated azimuth (folded, :func:`fold_azimuth`) and elevation where given,
-    else the estimated ones; flags ``uncertain_view`` when the azimuth is estimated and unsure."""
+    else the estimated ones; flags ``uncertain_view`` when the azimuth is estimated and unsure.
+
+    Parameters
+    ----------
+    view : ViewEstimate
+        The view estimated from the image.
+    azimuth_deg, elevation_deg : float or None
+        The stated view (degrees); None: use the estimated one.
+
+    Returns
+    -------
+    ((float, float), dict of str to str)
+        The azimuth and elevation used (degrees) and the flags.
+    """
     az = view.azimuth_deg if azimuth_deg is None else float(fold_azimuth(azimuth_deg))
     el = view.elevation_deg if elevation_deg is None else float(elevation_deg)
     flags: dict[str, str] = {}
@@ -63,7 +96,16 @@ def view_used(view: ViewEstimate, azimuth_deg: float | None,
 
 def view_flags(stated: tuple[float | None, float | None], estimated, tolerance_deg: float = VIEW_TOLERANCE_DEG
                ) -> dict[str, str]:
-    """``{"view_disagrees": ...}`` if a stated azimuth or elevation is more than ``tolerance_deg`` off."""
+    """``{"view_disagrees": ...}`` if a stated azimuth or elevation is more than ``tolerance_deg`` off.
+
+    Parameters
+    ----------
+    stated : (float or None, float or None)
+        The stated azimuth and elevation (degrees; None: not stated).
+    estimated : ViewEstimate
+    tolerance_deg : float
+        Largest difference not flagged (degrees; the azimuth's mirror-equivalent).
+    """
     az, el = stated
     parts = []
     if az is not None and math.isfinite(estimated.azimuth_deg):

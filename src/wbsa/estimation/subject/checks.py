@@ -3,7 +3,7 @@
 Errors (:class:`~wbsa.errors.WbsaError`, the CLI exits 2): an image whose size is not the camera's, a
 subject whose height from the point cloud is not a human height (wrong depth scale or units), a model with
 non-finite numbers. Flags (a name and a sentence, in ``Estimate.flags``; ``warning:`` lines on the terminal)
-for an estimate that is given but may be off: see :data:`FLAGS`.
+for an estimate that is given but may be off: see :data:`wbsa.estimation.flags.FLAGS`.
 """
 
 from __future__ import annotations
@@ -12,30 +12,8 @@ import math
 
 import numpy as np
 
-from wbsa.estimation.methods.body_fit.fit import FLAGS as BODY_FIT_FLAGS
 from wbsa.errors import WbsaError
 
-#: Every flag an estimate can carry, with what it means.
-FLAGS: dict[str, str] = {
-    "cut_off": "the subject touches the image border and may be cut off",
-    "no_floor": "no floor was found; the elevation comes from the body's long axis",
-    "several_people": "more than one person-sized object; one was picked",
-    "beyond_working_range": "the subject is closer or farther than the camera's documented working range",
-    "out_of_training_range": "a measure lies outside the range the model was trained on",
-    "view_disagrees": "the stated view differs from the estimated one by more than 30°",
-    "uncertain_view": "the camera may be in front of or behind the subject (azimuth uncertain)",
-    "model_mismatch": "the model was fitted for another camera, distance or view",
-    "camera_assumed": "no camera was given; the preset of the image's size was assumed",
-    "interval_unsure": "the model's calibration has too few subjects to promise the interval's level",
-    "mixed_pixels": "many returns at the subject's outline lay between two surfaces; the area may be off",
-    "not_a_person": "the object's silhouette is not a standing person's (a board, a post, a wall?)",
-    "feet_unsure": "the subject stands farther than this camera tells the feet from the floor; the area near "
-                   "the soles may be off",
-    "methods_disagree": "the regression's and the body fit's intervals do not overlap (method both)",
-    "body_fit_failed": "with method both, the body fit could not serve this image; the regression's answer stands",
-    "no_interval": "the body fit has no calibrated interval; its bounds are the estimate",
-    **{name: text for name, text in BODY_FIT_FLAGS.items() if name not in ("cut_off", "no_floor")},
-}
 #: The silhouette of a standing person (:func:`person_shape_flags`): the share of its bounding box
 #: (width × stature) it fills, and its width per metre of stature. Measured on rendered bodies in a room
 #: (Kinect v2, 3 m, 12° elevation; A-pose and arms-down adults and teenagers of 1.35–2.07 m, azimuths 0–180°):
@@ -53,10 +31,27 @@ MIXED_PER_OUTLINE_PIXEL = 0.1
 MAX_CLOTHING_M = 0.05
 
 
-def check_image_size(depth: np.ndarray, camera) -> None:
-    """Raise if the depth image is not 2-D or not the camera's size."""
+def check_two_dimensional(depth: np.ndarray) -> None:
+    """Raise if the depth image is not 2-D.
+
+    Parameters
+    ----------
+    depth : array
+        The depth image, (h, w) when right.
+    """
     if np.ndim(depth) != 2:
         raise WbsaError(f"a depth image must be 2-D (h, w), got shape {np.shape(depth)}; give a single-channel image")
+
+
+def check_image_size(depth: np.ndarray, camera) -> None:
+    """Raise if the depth image is not 2-D or not the camera's size.
+
+    Parameters
+    ----------
+    depth : (h, w) float64
+    camera : Intrinsics
+    """
+    check_two_dimensional(depth)
     h, w = np.shape(depth)
     if (w, h) != (camera.width, camera.height):
         raise WbsaError(f"the depth image is {w}x{h} but camera {camera.name} is {camera.width}x{camera.height}; "
@@ -91,7 +86,13 @@ def person_shape_flags(stature_m: float, width_m: float, silhouette_m2: float) -
 
 
 def check_height(stature_m: float) -> None:
-    """Raise if a height measured on the point cloud cannot be a person's."""
+    """Raise if a height measured on the point cloud cannot be a person's.
+
+    Parameters
+    ----------
+    stature_m : float
+        The subject's height over the floor (or along its long axis), metres.
+    """
     lo, hi = HUMAN_HEIGHT_M
     if not (math.isfinite(stature_m) and lo <= stature_m <= hi):
         raise WbsaError(f"the subject measures {stature_m:.2f} m tall in the point cloud, outside {lo:g}–{hi:g} m; "
@@ -99,12 +100,23 @@ def check_height(stature_m: float) -> None:
 
 
 def is_real_number(value: object) -> bool:
-    """Whether ``value`` is a real number (int, float or a NumPy real scalar; not a bool, str or complex)."""
+    """Whether ``value`` is a real number (int, float or a NumPy real scalar; not a bool, str or complex).
+
+    Parameters
+    ----------
+    value : object
+    """
     return (isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_)))
 
 
 def check_clothing(clothing_m: float) -> None:
-    """Raise if a stated layer of clothes is not a thickness of 0 to :data:`MAX_CLOTHING_M` metres."""
+    """Raise if a stated layer of clothes is not a thickness of 0 to :data:`MAX_CLOTHING_M` metres.
+
+    Parameters
+    ----------
+    clothing_m : float
+        The stated layer (m).
+    """
     ok = is_real_number(clothing_m) and math.isfinite(float(clothing_m)) and 0.0 <= float(clothing_m) <= MAX_CLOTHING_M
     if not ok:
         raise WbsaError(f"the clothes' layer {clothing_m!r} m must be a thickness of 0 to {MAX_CLOTHING_M:g} m "
@@ -112,7 +124,15 @@ def check_clothing(clothing_m: float) -> None:
 
 
 def check_finite_model(arrays: dict, source: str) -> None:
-    """Raise if any number of a model is NaN or infinite."""
+    """Raise if any number of a model is NaN or infinite.
+
+    Parameters
+    ----------
+    arrays : dict of str to array
+        The model's named arrays.
+    source : str
+        The model's name in the message (its file).
+    """
     for name, arr in arrays.items():
         a = np.asarray(arr)
         if a.dtype.kind in "fc" and not np.all(np.isfinite(a)):
@@ -120,7 +140,15 @@ def check_finite_model(arrays: dict, source: str) -> None:
 
 
 def range_flags(values: dict[str, float], ranges: dict[str, tuple[float, float]]) -> dict[str, str]:
-    """``{"out_of_training_range": ...}`` naming every value outside its training range, else ``{}``."""
+    """``{"out_of_training_range": ...}`` naming every value outside its training range, else ``{}``.
+
+    Parameters
+    ----------
+    values : dict of str to float
+        The subject's measures by name.
+    ranges : dict of str to (float, float)
+        The training range (low, high) of each checked measure; names not in it are not checked.
+    """
     out = []
     for name, value in values.items():
         if name in ranges:
@@ -132,7 +160,14 @@ def range_flags(values: dict[str, float], ranges: dict[str, tuple[float, float]]
 
 def working_range_flags(distance_m: float, camera) -> dict[str, str]:
     """``{"beyond_working_range": ...}`` if the subject's distance is outside the camera's working range
-    (:attr:`~wbsa.camera.presets.CameraRecord.working_range_m`; an intrinsics file's own range)."""
+    (:attr:`~wbsa.camera.presets.CameraRecord.working_range_m`; an intrinsics file's own range).
+
+    Parameters
+    ----------
+    distance_m : float
+        The subject's distance from the camera (m).
+    camera : Intrinsics
+    """
     lo, hi = float(camera.min_range_m), float(camera.max_range_m)
     if lo <= distance_m <= hi:
         return {}
@@ -142,7 +177,14 @@ def working_range_flags(distance_m: float, camera) -> dict[str, str]:
 
 def feet_flags(distance_m: float, camera) -> dict[str, str]:
     """``{"feet_unsure": ...}`` beyond the distance at which the camera's preset tells the feet from the floor
-    (:attr:`~wbsa.camera.presets.CameraRecord.feet_within_m`; none for a camera that is not a preset)."""
+    (:attr:`~wbsa.camera.presets.CameraRecord.feet_within_m`; none for a camera that is not a preset).
+
+    Parameters
+    ----------
+    distance_m : float
+        The subject's distance from the camera (m).
+    camera : Intrinsics
+    """
     from wbsa.camera.presets import CAMERAS
 
     record = CAMERAS.get(camera.name)

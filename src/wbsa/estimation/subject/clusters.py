@@ -37,7 +37,15 @@ LOOP_GAP_M = 0.65
 
 
 def footprint_m(points: np.ndarray, up: np.ndarray) -> float:
-    """Horizontal extent (m, bounding-box diagonal) of the points between 10 % and 40 % of the object's height."""
+    """Horizontal extent (m, bounding-box diagonal) of the points between 10 % and 40 % of the object's height.
+
+    Parameters
+    ----------
+    points : (k, 3) float64
+        The object's points (camera frame, m).
+    up : (3,) float64
+        Unit up direction (the floor's normal).
+    """
     along = points @ up
     lo, top = np.quantile(along, 0.002), np.quantile(along, 0.998)
     band = points[(along >= lo + 0.1 * (top - lo)) & (along <= lo + 0.4 * (top - lo))]
@@ -57,6 +65,17 @@ def attach_low(low: np.ndarray, tree, labels: np.ndarray, gap: float) -> np.ndar
 
     Low voxels are grouped among themselves (closer than ``gap``); a group joins the object that most of
     its members touching an object touch.
+
+    Parameters
+    ----------
+    low : (k, 3) float64
+        The low voxels' centres (camera frame, m).
+    tree : scipy.spatial.cKDTree
+        Of the objects' voxels.
+    labels : (v,) int
+        Object label of each voxel of ``tree``.
+    gap : float
+        Largest gap (m) within a group and to an object.
     """
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components

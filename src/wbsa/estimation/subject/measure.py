@@ -134,7 +134,15 @@ def measured_depth_noise(depth_m: np.ndarray, mask: np.ndarray) -> float:
 
 
 def clean_low_pixels(mask: np.ndarray, height_m: np.ndarray) -> np.ndarray:
-    """``mask`` without sparse pixels near the floor (fewer than 8 subject neighbours in a 5×5 window)."""
+    """``mask`` without sparse pixels near the floor (fewer than 8 subject neighbours in a 5×5 window).
+
+    Parameters
+    ----------
+    mask : (h, w) bool
+        The subject's pixels.
+    height_m : (h, w) float64
+        Height of each pixel's return over the floor (inf where none).
+    """
     from scipy import ndimage
 
     counts = ndimage.convolve(mask.astype(np.int16), np.ones((5, 5), np.int16), mode="constant")
@@ -277,6 +285,12 @@ def view_descriptor(q: np.ndarray, stature_m: float) -> np.ndarray:
 
 def shape_bands(q: np.ndarray, stature_m: float) -> np.ndarray:
     """Width and thickness (metres, 1–99 % quantile extents) of 20 height bands of body-frame points.
+
+    Parameters
+    ----------
+    q : (k, 3) float64
+        Body-frame points (lateral, height, toward the camera), metres.
+    stature_m : float
 
     Returns
     -------

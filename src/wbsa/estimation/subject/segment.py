@@ -29,20 +29,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from wbsa.errors import WbsaError, check_field
-from wbsa.estimation.subject.cloud import Plane, ransac_plane
+from wbsa.errors import WbsaError
+from wbsa.estimation.subject.cloud import Plane
 from wbsa.estimation.subject.clusters import MAX_FOOTPRINT_M, attach_low, footprint_m, merge_occluding
 from wbsa.estimation.subject.feet import grow_feet
+from wbsa.estimation.subject.room import find_room
+from wbsa.estimation.subject.settings import SegmentSettings, is_pixel
 
-PICKS = ("nearest", "largest", "center")
 #: Height over the floor below which returns are not used to link objects (only to extend them).
 LOW_BAND_M = 0.10
-#: A room surface reaches this close to the image's border (pixels).
-BORDER_PX = 3
-#: The floor's normal lies within this angle of the image's up. A camera looking down by ε sees it ε away,
-#: a wall behind the subject 90° + ε and a side wall 90° (plus the camera's roll); at 50° a camera 2 m up
-#: and 1.5 m from a child lost the floor.
-FLOOR_MAX_TILT_DEG = 75.0
 #: An object inside a nearer one's bounding box in the image and this much farther (m) is seen past it.
 #: The wall stands 0.5 m or more behind a subject's back; a body's own parts join it within 0.8 m of depth
 #: when they touch in the image (:func:`~wbsa.estimation.subject.clusters.merge_occluding`) and are larger.
@@ -50,62 +45,6 @@ SEEN_PAST_M = 0.4
 #: People standing side by side and touching span at most this at the hips (m; one person at most
 #: :data:`~wbsa.estimation.subject.clusters.MAX_FOOTPRINT_M`); a wall spans more.
 TOUCHING_FOOTPRINT_M = 2.5
-
-
-@dataclass(frozen=True)
-class SegmentSettings:
-    """How the subject is told apart from the room.
-
-    Attributes
-    ----------
-    min_depth_m, max_depth_m : float
-        Returns outside this z-range are background.
-    voxel_m : float
-        Voxel size of the thinned cloud used for planes and clusters.
-    max_planes : int
-        Planes tried as room surfaces.
-    min_plane_fraction : float
-        A room surface holds at least this fraction of the thinned returns.
-    behind_fraction : float
-        A plane is a room surface if at most this fraction of the other returns lies behind it ...
-        It must also run out of the image (reach its border, :data:`BORDER_PX`): a floor or a wall
-        does, a body alone in the image (no room), which a plane fits loosely, does not.
-    cluster_gap_m : float
-        Points closer than this (or three pixel pitches, if more) belong to one object.
-    min_person_height_m, max_person_height_m, max_person_width_m : float
-        What counts as a person-sized cluster.
-    pick : {'nearest', 'largest', 'center'} or (int, int) or None
-        Which person-sized cluster to take when there are several; None = refuse and list them.
-    seed : int
-        Seed of the RANSAC plane search (same seed, same mask).
-    """
-
-    min_depth_m: float = 0.3
-    max_depth_m: float = 8.0
-    voxel_m: float = 0.03
-    max_planes: int = 5
-    min_plane_fraction: float = 0.04
-    behind_fraction: float = 0.01
-    cluster_gap_m: float = 0.07
-    min_person_height_m: float = 0.45
-    max_person_height_m: float = 2.6
-    max_person_width_m: float = 2.6
-    pick: str | tuple[int, int] | None = None
-    seed: int = 0
-
-    def __post_init__(self) -> None:
-        check_field(0 <= self.min_depth_m < self.max_depth_m, "min_depth_m",
-                    f"must be 0 or more and below max_depth_m (the depth range {self.min_depth_m}–"
-                    f"{self.max_depth_m} m is empty)")
-        check_field(self.voxel_m > 0, "voxel_m", f"must be a positive length in metres, got {self.voxel_m}")
-        check_field(self.cluster_gap_m > 0, "cluster_gap_m",
-                    f"must be a positive length in metres, got {self.cluster_gap_m}")
-        check_field(self.pick is None or self.pick in PICKS or _is_pixel(self.pick), "pick",
-                    f"must be one of {', '.join(PICKS)} or an (x, y) pixel, got {self.pick!r}")
-
-
-def _is_pixel(pick: object) -> bool:
-    return isinstance(pick, tuple) and len(pick) == 2 and all(isinstance(v, (int, np.integer)) for v in pick)
 
 
 @dataclass(frozen=True)
@@ -178,45 +117,6 @@ def _voxelise(points: np.ndarray, voxel_m: float) -> tuple[np.ndarray, np.ndarra
     sums = np.zeros((len(counts), 3))
     np.add.at(sums, inverse, points)
     return sums / counts[:, None], inverse
-
-
-def find_room(cloud: np.ndarray, settings: SegmentSettings, intrinsics,
-              shape: tuple[int, int]) -> tuple[Plane | None, list[Plane]]:
-    """Floor and walls among the largest planes of a thinned (v, 3) cloud of an (h, w) image (see the module doc)."""
-    rng = np.random.default_rng(settings.seed)
-    free = np.ones(len(cloud), dtype=bool)
-    surfaces: list[Plane] = []
-    for _ in range(settings.max_planes):
-        idx = np.flatnonzero(free)
-        if len(idx) < max(50, settings.min_plane_fraction * len(cloud)):
-            break
-        found = ransac_plane(cloud[idx], rng)
-        if found is None:
-            break
-        plane, inliers = found
-        if inliers.sum() < settings.min_plane_fraction * len(cloud):
-            break
-        free[idx[inliers]] = False
-        h = plane.height(cloud)
-        behind = np.count_nonzero(h < -plane.tolerance(cloud) - 0.05)
-        if behind <= settings.behind_fraction * len(cloud) and _meets_border(cloud[idx[inliers]], intrinsics, shape):
-            surfaces.append(plane)
-    up = np.array([0.0, -1.0, 0.0])
-    floor = None
-    cands = [p for p in surfaces if p.normal @ up > np.cos(np.radians(FLOOR_MAX_TILT_DEG))]
-    if cands:
-        floor = max(cands, key=lambda p: p.normal @ up)
-    walls = [p for p in surfaces if p is not floor and (floor is None or abs(p.normal @ floor.normal) < 0.5)]
-    return floor, walls
-
-
-def _meets_border(points: np.ndarray, intrinsics, shape: tuple[int, int]) -> bool:
-    """Whether (k, 3) camera-frame points reach within :data:`BORDER_PX` pixels of the image's border."""
-    h, w = shape
-    z = np.maximum(points[:, 2], 1e-9)
-    u = float(intrinsics.fx) * points[:, 0] / z + float(intrinsics.cx)
-    v = float(intrinsics.fy) * points[:, 1] / z + float(intrinsics.cy)
-    return bool(np.any((u < BORDER_PX) | (u > w - 1 - BORDER_PX) | (v < BORDER_PX) | (v > h - 1 - BORDER_PX)))
 
 
 def segment_subject(depth_m: np.ndarray, intrinsics, settings: SegmentSettings = SegmentSettings()) -> Segmentation:
@@ -371,7 +271,7 @@ def seen_past(clusters: list[Cluster]) -> set[int]:
 
 def _choose(people: list[Cluster], pick, size: tuple[int, int], pixel_label: np.ndarray, pix: np.ndarray) -> Cluster:
     w, h = size
-    if _is_pixel(pick) and not (0 <= pick[0] < w and 0 <= pick[1] < h):  # refused with one person in view too
+    if is_pixel(pick) and not (0 <= pick[0] < w and 0 <= pick[1] < h):  # refused with one person in view too
         raise WbsaError(f"pick pixel ({pick[0]}, {pick[1]}) lies outside the {w} x {h} depth image; "
                         "give x,y of a pixel on the subject")
     if len(people) == 1:

@@ -24,23 +24,8 @@ Modules, one figure family each:
 - :mod:`~wbsa.report.figures.agreement`: the depth-image estimate against the truth, Bland–Altman and by group
   (``benchmarks/bench_estimate.py --figure``).
 
-This package imports none of them (nor matplotlib) itself.
+This package imports none of them (nor matplotlib) itself. Which paper figure each reproduces is said in
+the module's docstring and in the report itself (a ``FIGURES`` id list here was not read by anything and is gone).
 """
 
 from __future__ import annotations
-
-#: Figures of the report in order: id -> what it reproduces.
-FIGURES: dict[str, str] = {
-    "fig-calibration": "issue 10: mesh / Du Bois and density against BMI beside published real-body figures",
-    "fig-wbsa-distribution": "paper Fig 5",
-    "fig-vbsa-wbsa": "paper Fig 10 and S1 Fig",
-    "fig-view-<group>": "paper Figs 11, 13, 14",
-    "fig-group-errors": "paper Fig 12",
-    "fig-models": "paper section 4.2",
-    "fig-nonlinear": "paper Fig 16",
-    "fig-residuals": "paper S2 Fig",
-    "fig-snapshots": "paper Fig 8",
-    "fig-reconstruction": "paper Figs 15 and 17",
-    "fig-distance": "paper section 3.4",
-    "fig-formulae": "formulae comparison",
-}

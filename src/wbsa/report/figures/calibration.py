@@ -1,4 +1,4 @@
-"""The calibration figure: the study's bodies beside what real bodies are published to do (issue 10)."""
+"""The calibration figure: the study's bodies beside what real bodies are published to do."""
 
 from __future__ import annotations
 

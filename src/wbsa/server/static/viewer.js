@@ -1,6 +1,6 @@
 // A small 3-D viewer for triangle meshes on a 2-D canvas (no WebGL needed, so it also draws in a browser
 // without a GPU): flat shading, painter's order, drag to turn, wheel to zoom.
-// Meshes: [{name, url}] (a PLY file, ASCII or binary) or [{name, vertices: [x, y, z, ...], faces: [a, b, c, ...]}],
+// Meshes: [{name, url}] (a binary PLY file, as wbsa writes them) or [{name, vertices: [x, y, z, ...], faces: [a, b, c, ...]}],
 // in the camera frame (x right, y down, z forward, metres) unless frame: "world" (+z up).
 "use strict";
 
@@ -33,29 +33,7 @@ function parsePly(buffer) {
     }
   }
   const out = { vertices: null, faces: null };
-  if (format === "ascii") {
-    const words = new TextDecoder().decode(bytes.subarray(end)).trim().split(/\s+/).map(Number);
-    let i = 0;
-    for (const e of elements) {
-      const verts = e.name === "vertex" ? new Float32Array(3 * e.count) : null;
-      const faces = e.name === "face" ? [] : null;
-      for (let n = 0; n < e.count; n++) {
-        for (const p of e.props) {
-          if (p.list) {
-            const k = words[i++];
-            const idx = words.slice(i, i + k); i += k;
-            if (faces) for (let t = 1; t + 1 < k; t++) faces.push(idx[0], idx[t], idx[t + 1]);
-          } else {
-            const v = words[i++];
-            if (verts && "xyz".includes(p.name) && p.name.length === 1) verts[3 * n + "xyz".indexOf(p.name)] = v;
-          }
-        }
-      }
-      if (verts) out.vertices = verts;
-      if (faces) out.faces = Uint32Array.from(faces);
-    }
-    return out;
-  }
+  if (format === "ascii") throw new Error("an ASCII PLY; wbsa writes binary PLY files");
   const little = format === "binary_little_endian";
   const view = new DataView(buffer);
   let off = end;

@@ -4,8 +4,8 @@ subject's points and silhouette, and measure the fitted body as the population i
 Entry point: :func:`fit_body`; result: :class:`BodyFit`; settings: :class:`BodyFitSettings`.
 """
 
-from wbsa.estimation.methods.body_fit.fit import FLAGS, fit_body
+from wbsa.estimation.methods.body_fit.fit import fit_body
 from wbsa.estimation.methods.body_fit.result import BodyFit
 from wbsa.estimation.methods.body_fit.settings import BodyFitSettings
 
-__all__ = ["BodyFit", "BodyFitSettings", "FLAGS", "fit_body"]
+__all__ = ["BodyFit", "BodyFitSettings", "fit_body"]

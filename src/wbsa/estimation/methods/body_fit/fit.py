@@ -19,18 +19,6 @@ from wbsa.estimation.methods.body_fit.result import BodyFit
 from wbsa.estimation.methods.body_fit.settings import ANGLE_LIMITS_DEG, BodyFitSettings
 from wbsa.errors import WbsaError
 
-#: The flags a :class:`BodyFit` may carry, with their meaning.
-FLAGS = {
-    "not_converged": "the fit used all its steps without settling; the body may be off",
-    "time_budget": "the fit reached its wall-clock safety stop and returned its best body so far",
-    "posture_at_limit": "a joint angle sits at the edge of the standing postures the fit allows",
-    "outside_model_range": "a body parameter sits at the edge of anny's range: the person may be outside the model",
-    "poor_fit": "the fitted surface leaves many observed points unexplained (not a standing person, clothes, "
-                "occlusion or a body outside the model)",
-    "cut_off": "subject pixels on the image border; part of the body may be missing",
-    "no_floor": "no floor given: the body's height and uprightness come from its points alone",
-    "steep_view": "the camera looks at the body from more than 45° above or below",
-}
 #: Phenotypes whose value at 0 or 1 flags ``outside_model_range`` (the others are not measured by the view).
 _RANGE_CHECKED = ("p_age", "p_muscle", "p_weight", "p_height", "p_proportions")
 #: Residual (m) and inlier share beyond which ``poor_fit`` is flagged.
@@ -126,7 +114,7 @@ def _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fi
         starts = first_guesses(fit_model, objective, settings.restarts, azimuth_deg, settings.child_starts)
     opt = optimise(fit_model, objective, starts, settings, deadline, progress)
 
-    body = measure_body(meter, opt.params, settings.density_model, settings.density_kg_m3)
+    body = measure_body(meter, opt.params, settings.composition)
     rest = body["rest"]
     angles_deg = np.degrees(opt.angles_rad)
     posed = pose_vertices(rest.vertices[0], rest.bone_heads[0], angles_deg, body_model.rig)
@@ -163,9 +151,9 @@ def _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fi
     if residual > POOR_RESIDUAL_M or inliers < POOR_INLIER_SHARE:
         flags["poor_fit"] = f"residual {1000 * residual:.1f} mm, {100 * inliers:.0f} % of points within 3 cm"
     if mask[0].any() or mask[-1].any() or mask[:, 0].any() or mask[:, -1].any():
-        flags["cut_off"] = FLAGS["cut_off"]
+        flags["cut_off"] = "subject pixels on the image border; part of the body may be missing"
     if floor is None:
-        flags["no_floor"] = FLAGS["no_floor"]
+        flags["no_floor"] = "no floor given: the body's height and uprightness come from its points alone"
     if abs(elevation) > 45.0:
         flags["steep_view"] = f"elevation {elevation:.0f}°"
 

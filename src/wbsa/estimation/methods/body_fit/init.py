@@ -55,14 +55,26 @@ class Starts:
 
 
 def age_for_stature(stature_m: float) -> float:
-    """anny's age parameter of a typical person of this stature (adult from 1.55 m; children by height)."""
+    """anny's age parameter of a typical person of this stature (adult from 1.55 m; children by height).
+
+    Parameters
+    ----------
+    stature_m : float
+    """
     return float(np.interp(stature_m, [0.9, 1.1, 1.3, 1.45, 1.55], [0.2, 0.3, 0.4, 0.55, 0.8]))
 
 
 def start_ages(stature_m: float, child_starts: bool = False) -> list[float]:
     """anny age parameters to start from: the stature's typical age, and an adult's (0.8) from 1.2 m up (a short
     adult and a child of the same stature differ in shape; one view tells them apart only by fitting both);
-    with ``child_starts`` also a child (:data:`CHILD_AGE`) stretched to an adult stature."""
+    with ``child_starts`` also a child (:data:`CHILD_AGE`) stretched to an adult stature.
+
+    Parameters
+    ----------
+    stature_m : float
+    child_starts : bool
+        Also a child stretched to the stature.
+    """
     ages = [age_for_stature(stature_m)]
     if stature_m >= 1.2 and ages[0] < ADULT_AGE:
         ages.append(ADULT_AGE)
@@ -72,7 +84,15 @@ def start_ages(stature_m: float, child_starts: bool = False) -> list[float]:
 
 
 def base_params(gender: float, age: float, p_height: np.ndarray) -> np.ndarray:
-    """(g, 15) parameters of middle-build bodies of one sex and age at each ``p_height``."""
+    """(g, 15) parameters of middle-build bodies of one sex and age at each ``p_height``.
+
+    Parameters
+    ----------
+    gender, age : float
+        anny's gender and age parameters.
+    p_height : (g,) float64
+        anny's height parameter of each body.
+    """
     row = dict.fromkeys(PHENOTYPE_COLUMNS, 0.5)
     row.update(p_gender=gender, p_age=age, p_african=1 / 3, p_asian=1 / 3, p_caucasian=1 / 3)
     base = np.array([row[c] for c in PHENOTYPE_COLUMNS] + [0.0] * len(LOCAL_CHANGE_COLUMNS))
@@ -82,7 +102,20 @@ def base_params(gender: float, age: float, p_height: np.ndarray) -> np.ndarray:
 
 
 def first_guesses(fit_body, objective, n: int, azimuth_deg: float | None = None, child_starts: bool = False) -> Starts:
-    """The ``n`` best starts of the grid (see the module docstring); a stated azimuth keeps them within 45° of it."""
+    """The ``n`` best starts of the grid (see the module docstring); a stated azimuth keeps them within 45° of it.
+
+    Parameters
+    ----------
+    fit_body : FitBody
+    objective : Objective
+        The fit's objective on the observed points.
+    n : int
+        Starts kept (the restarts).
+    azimuth_deg : float or None
+        A stated azimuth (degrees).
+    child_starts : bool
+        Also start from children (:attr:`BodyFitSettings.child_starts`).
+    """
     import torch
     from scipy.spatial import cKDTree
 

@@ -48,12 +48,27 @@ class IntervalCalibration:
     command: str
 
     def interval(self, wbsa_m2: float) -> tuple[float, float]:
-        """(lo, hi) m² of a fitted WBSA."""
+        """(lo, hi) m² of a fitted WBSA.
+
+        Parameters
+        ----------
+        wbsa_m2 : float
+            The fitted body's WBSA.
+        """
         return wbsa_m2 / (1.0 + self.error_hi), wbsa_m2 / (1.0 + self.error_lo)
 
 
 def calibrate(errors: np.ndarray, level: float, command: str) -> IntervalCalibration:
     """The split-conformal bounds of relative errors ``errors (n,)`` at ``level``.
+
+    Parameters
+    ----------
+    errors : (n,) float64
+        Relative errors ``fit / truth − 1`` of the calibration fits.
+    level : float
+        The interval's coverage, in (0, 1).
+    command : str
+        The command that rebuilds the calibration.
 
     Raises
     ------
@@ -72,7 +87,14 @@ def calibrate(errors: np.ndarray, level: float, command: str) -> IntervalCalibra
 
 
 def save(cal: IntervalCalibration, path: Path = CALIBRATION_PATH) -> Path:
-    """Write the calibration as JSON (numbers and the rebuild command only)."""
+    """Write the calibration as JSON (numbers and the rebuild command only).
+
+    Parameters
+    ----------
+    cal : IntervalCalibration
+    path : Path
+        Where to write it (package data by default).
+    """
     from wbsa.io import write_json
 
     write_json({"level": cal.level, "error_lo": cal.error_lo, "error_hi": cal.error_hi, "n": cal.n,
@@ -81,7 +103,13 @@ def save(cal: IntervalCalibration, path: Path = CALIBRATION_PATH) -> Path:
 
 
 def load(path: Path = CALIBRATION_PATH) -> IntervalCalibration | None:
-    """The stored calibration, or None when there is none."""
+    """The stored calibration, or None when there is none.
+
+    Parameters
+    ----------
+    path : Path
+        The stored calibration (package data by default).
+    """
     if not Path(path).exists():
         return None
     try:

@@ -93,7 +93,13 @@ class FitBody:
         self.subset = self.select(self.index)
 
     def select(self, index: np.ndarray) -> "Selection":
-        """The blendshapes and skinning weights of the vertices ``index (m,)``."""
+        """The blendshapes and skinning weights of the vertices ``index (m,)``.
+
+        Parameters
+        ----------
+        index : (m,) int
+            Vertex indices of anny's mesh.
+        """
         idx = self.torch.as_tensor(np.asarray(index, dtype=np.int64))
         return Selection(np.asarray(index), self.template_full[idx],
                          self.basis_full[:, idx, :].reshape(self.basis_full.shape[0], -1), self.weights_full[idx])
@@ -103,7 +109,17 @@ class FitBody:
 
     def full_posed(self, params, angles_rad: np.ndarray, yaw_rad: np.ndarray, shift_m: np.ndarray) -> np.ndarray:
         """(b, n, 3) float64 every vertex of every body, posed (:func:`wbsa.bodies.posing.pose_vertices`) and placed
-        (turned by ``yaw_rad (b,)``, shifted by ``shift_m (b, 3)``); no gradient."""
+        (turned by ``yaw_rad (b,)``, shifted by ``shift_m (b, 3)``); no gradient.
+
+        Parameters
+        ----------
+        params : (b, 15) float64
+            Body parameters.
+        angles_rad : (b, 10) float64
+            Posture angles.
+        yaw_rad : (b,) float64
+        shift_m : (b, 3) float64
+        """
         import anny.skinning.skinning as skinning
 
         from wbsa.bodies.posing import pose_vertices
@@ -125,7 +141,15 @@ class FitBody:
 
     def rest(self, params, selection: "Selection | None" = None):
         """Rest vertices ``(b, m, 3)`` of a selection (default the subset) and joints ``(b, 10, 3)`` (float32) of
-        ``(b, 15)`` float64 body parameters."""
+        ``(b, 15)`` float64 body parameters.
+
+        Parameters
+        ----------
+        params : (b, 15) torch tensor
+            Body parameters.
+        selection : Selection or None
+            The vertices (default the subset).
+        """
         sel = self.subset if selection is None else selection
         coeffs = self.body_model.coefficients(params).to(self.torch.float32)
         b = coeffs.shape[0]
@@ -139,6 +163,12 @@ class FitBody:
         Segments in :data:`~wbsa.bodies.posing.SEGMENTS` order, left side then right. Mirrors
         :func:`wbsa.bodies.posing.segment_transforms` (tested against it), with both sides and all seven
         rotations of a side in one batched Rodrigues call (the cost of a step is the number of operations).
+
+        Parameters
+        ----------
+        joints : (b, 10, 3) torch tensor
+        angles_rad : (b, 10) torch tensor
+            Posture angles.
         """
         torch = self.torch
         b = joints.shape[0]
@@ -173,6 +203,18 @@ class FitBody:
 
         Dense linear blend skinning: every segment's transform is applied to every vertex and blended by the
         (mostly zero) weights; at a few thousand vertices this beats gathering the moving ones.
+
+        Parameters
+        ----------
+        rest : (b, k, 3) torch tensor
+            Rest vertices of the selection (:meth:`rest`).
+        joints : (b, 10, 3) torch tensor
+        angles_rad : (b, 10) torch tensor
+            Posture angles.
+        rotations : bool
+            Also return each vertex's blended rotation.
+        selection : Selection or None
+            The vertices (default the subset).
         """
         torch = self.torch
         r, t = self.segment_transforms(joints, angles_rad)  # (b, s, 3, 3), (b, s, 3)
@@ -207,7 +249,15 @@ class Selection:
 
 
 def rotation(axis, angle):
-    """Rodrigues: ``(b, 3, 3)`` rotations by ``angle (b,)`` about unit ``axis (b, 3)`` (right-hand rule)."""
+    """Rodrigues: ``(b, 3, 3)`` rotations by ``angle (b,)`` about unit ``axis (b, 3)`` (right-hand rule).
+
+    Parameters
+    ----------
+    axis : (b, 3) torch tensor
+        Unit axes.
+    angle : (b,) torch tensor
+        Radians.
+    """
     import torch
 
     x, y, z = axis[:, 0], axis[:, 1], axis[:, 2]
@@ -218,21 +268,45 @@ def rotation(axis, angle):
 
 
 def unit(v):
+    """``v`` over its length along the last axis (torch).
+
+    Parameters
+    ----------
+    v : (..., 3) torch tensor
+    """
     return v / v.norm(dim=-1, keepdim=True)
 
 
 def about(pivot, rot):
-    """``x -> rot x + t`` turning by ``rot (b, 3, 3)`` about ``pivot (b, 3)``."""
+    """``x -> rot x + t`` turning by ``rot (b, 3, 3)`` about ``pivot (b, 3)``.
+
+    Parameters
+    ----------
+    pivot : (b, 3) torch tensor
+    rot : (b, 3, 3) torch tensor
+    """
     return rot, pivot - (rot @ pivot[..., None])[..., 0]
 
 
 def then(outer, inner):
-    """``outer ∘ inner`` (inner first)."""
+    """``outer ∘ inner`` (inner first).
+
+    Parameters
+    ----------
+    outer, inner : (R (b, 3, 3), t (b, 3))
+        Rigid transforms.
+    """
     return outer[0] @ inner[0], (outer[0] @ inner[1][..., None])[..., 0] + outer[1]
 
 
 def yaw_matrix(yaw):
-    """``(b, 3, 3)`` rotations about +Z by ``yaw (b,)`` radians."""
+    """``(b, 3, 3)`` rotations about +Z by ``yaw (b,)`` radians.
+
+    Parameters
+    ----------
+    yaw : (b,) torch tensor
+        Radians.
+    """
     import torch
 
     c, s = torch.cos(yaw), torch.sin(yaw)
@@ -241,7 +315,13 @@ def yaw_matrix(yaw):
 
 
 def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """(b, n, 3) unit area-weighted vertex normals of ``(b, n, 3)`` vertices over ``(m, 3)`` faces."""
+    """(b, n, 3) unit area-weighted vertex normals of ``(b, n, 3)`` vertices over ``(m, 3)`` faces.
+
+    Parameters
+    ----------
+    vertices : (b, n, 3) float64
+    faces : (m, 3) int
+    """
     a, b, c = (vertices[:, faces[:, i]] for i in range(3))
     face_n = np.cross(b - a, c - a)
     out = np.zeros_like(vertices)
@@ -253,7 +333,14 @@ def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
 
 
 def subset_rest_normals(fit_body: FitBody, params) -> np.ndarray:
-    """(b, k, 3) rest-pose unit normals of the subset vertices of ``(b, 15)`` body parameters (whole mesh, no grad)."""
+    """(b, k, 3) rest-pose unit normals of the subset vertices of ``(b, 15)`` body parameters (whole mesh, no grad).
+
+    Parameters
+    ----------
+    fit_body : FitBody
+    params : (b, 15) float64
+        Body parameters.
+    """
     import torch
 
     model = fit_body.body_model

@@ -27,7 +27,13 @@ class BodyFitPredictor:
 
     def check_request(self, request: Request) -> None:
         """Refuse stated clothes (the body fit does not yet allow for them) and an interval level other than the
-        one its interval was calibrated at."""
+        one its interval was calibrated at.
+
+        Parameters
+        ----------
+        request : Request
+            As for :meth:`~wbsa.estimation.methods.base.Predictor.check_request`.
+        """
         from wbsa.estimation.methods.body_fit.interval import load
 
         if request.clothing_m > 0:
@@ -38,7 +44,13 @@ class BodyFitPredictor:
                             f"--level {calibration.level:g} or use --method regression")
 
     def predict(self, subject: Subject, request: Request) -> Prediction:
-        """WBSA of the fitted body at rest; its flags (``not_converged`` ...) become the estimate's."""
+        """WBSA of the fitted body at rest; its flags (``not_converged`` ...) become the estimate's.
+
+        Parameters
+        ----------
+        subject, request : Subject, Request
+            As for :meth:`~wbsa.estimation.methods.base.Predictor.predict`.
+        """
         from wbsa.estimation.methods.body_fit.fit import fit_body
 
         fit = fit_body(subject.depth_m, subject.mask, subject.camera, subject.floor, clothing_m=request.clothing_m,

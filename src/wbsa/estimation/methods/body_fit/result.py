@@ -26,7 +26,7 @@ class BodyFit:
         Its coverage (NaN without one).
     stature_m, volume_m3, mass_kg, bmi : float
         Of the fitted body at rest; mass and BMI from the composition model of the settings
-        (``density_model``; constant 980 kg/m³ by default, as the population tables).
+        (``BodyFitSettings.composition``; anny's constant 980 kg/m³ by default, as the population tables).
     tapes : dict of str to float
         The tape measures of :mod:`wbsa.bodies.anthropometry` (``waist_circ_m``, ``hip_circ_m`` ...), metres.
     sex : str
@@ -49,7 +49,7 @@ class BodyFit:
         The fit's final objective (:mod:`wbsa.estimation.methods.body_fit.objective`).
     converged : bool
     flags : dict of str to str
-        Named warnings (:data:`wbsa.estimation.methods.body_fit.fit.FLAGS`); empty when every check passed.
+        Named warnings (:data:`wbsa.estimation.flags.FLAGS`, route ``body-fit``); empty when every check passed.
     seconds : float
         Wall time of the fit (without loading anny, done once per process).
     steps, restarts : int
@@ -98,7 +98,12 @@ class BodyFit:
                 f"{self.seconds:.1f} s{flags})")
 
     def mesh(self, pose: Literal["rest", "observed"] = "rest") -> TriangleMesh:
-        """The fitted skin at rest (body frame) or in the observed pose (camera frame)."""
+        """The fitted skin at rest (body frame) or in the observed pose (camera frame).
+
+        Parameters
+        ----------
+        pose : {'rest', 'observed'}
+        """
         from wbsa.errors import WbsaError
 
         if pose not in ("rest", "observed"):
@@ -106,7 +111,13 @@ class BodyFit:
         return TriangleMesh(self.rest_vertices if pose == "rest" else self.posed_vertices, self.faces)
 
     def write_ply(self, path: str | os.PathLike, pose: Literal["rest", "observed"] = "rest"):
-        """Write :meth:`mesh` as a binary PLY (atomically, checked; :func:`wbsa.core.mesh_io.write_mesh`)."""
+        """Write :meth:`mesh` as a binary PLY (atomically, checked; :func:`wbsa.core.mesh_io.write_mesh`).
+
+        Parameters
+        ----------
+        path : str or path
+        pose : {'rest', 'observed'}
+        """
         from wbsa.core.mesh_io import write_mesh
 
         return write_mesh(self.mesh(pose), path)

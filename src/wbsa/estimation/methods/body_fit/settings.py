@@ -5,8 +5,9 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from wbsa.bodies.composition import CompositionSettings
 from wbsa.errors import SettingsError
-from wbsa.typing import DENSITY_MODELS, ROBUST_LOSSES, DensityModel, RobustLoss
+from wbsa.typing import ROBUST_LOSSES, RobustLoss
 
 #: Box of each posture motion (degrees, change from anny's rest A-pose; :data:`wbsa.bodies.posing.JOINT_MOTIONS`
 #: order): wide enough for every named standing posture with its jitter (:data:`wbsa.bodies.posture.POSTURES`)
@@ -61,10 +62,9 @@ class BodyFitSettings:
         flagged ``time_budget`` (at least one step always runs).
     tolerance : float
         Convergence: the best loss fell by less than this fraction over the last ``refresh_every`` steps.
-    density_model : {'constant', 'deurenberg-siri', 'deurenberg-brozek'}
-        Body composition for mass and BMI (:mod:`wbsa.bodies.composition`); ``constant`` with
-        ``density_kg_m3`` is how the population tables' ``mass_kg`` is made by default.
-    density_kg_m3 : float
+    composition : CompositionSettings
+        Body composition for mass and BMI (:mod:`wbsa.bodies.composition`, its equation's value: no residual);
+        the default is how the population tables' ``mass_kg`` is made by default.
     threads : int
         torch threads during the fit (restored after). The fit is thousands of small operations: one thread
         is fastest, and far faster than two on a busy machine (measured: 18 ms against up to 1 s a step).
@@ -91,8 +91,7 @@ class BodyFitSettings:
     local_changes: bool = True
     time_budget_s: float = 300.0
     tolerance: float = 0.0005
-    density_model: DensityModel = "constant"
-    density_kg_m3: float = 980.0
+    composition: CompositionSettings = CompositionSettings()
     threads: int = 1
 
     def __post_init__(self) -> None:
@@ -101,8 +100,7 @@ class BodyFitSettings:
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
                 raise SettingsError(name, f"must be a positive number, got {value!r}")
 
-        for name in ("age_prior_sd", "vertex_spacing_m", "learning_rate", "robust_scale_m", "time_budget_s", "density_kg_m3",
-                     "tolerance"):
+        for name in ("age_prior_sd", "vertex_spacing_m", "learning_rate", "robust_scale_m", "time_budget_s", "tolerance"):
             positive(name)
         for name in ("n_points", "restarts", "keep_restarts", "steps", "refresh_every", "threads"):
             value = getattr(self, name)
@@ -119,6 +117,5 @@ class BodyFitSettings:
             raise SettingsError("prune_at", f"must be a share of the steps in [0, 1], got {self.prune_at}")
         if self.robust_loss not in ROBUST_LOSSES:
             raise SettingsError("robust_loss", f"{self.robust_loss!r} is unknown; use one of {', '.join(ROBUST_LOSSES)}")
-        if self.density_model not in DENSITY_MODELS:
-            raise SettingsError("density_model",
-                                f"{self.density_model!r} is unknown; use one of {', '.join(DENSITY_MODELS)}")
+        if not isinstance(self.composition, CompositionSettings):
+            raise SettingsError("composition", f"must be CompositionSettings, got {type(self.composition).__name__}")

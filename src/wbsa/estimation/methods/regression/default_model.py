@@ -54,6 +54,10 @@ def load_model(model=None):
     ``None`` gives the shipped default model; a path ending in ``.npz`` an estimator model (e.g. one
     ``wbsa train`` wrote); ``.json`` a ``wbsa fit`` model file; a model object is returned as it is; anything else
     is refused in one line.
+
+    Parameters
+    ----------
+    model : EstimatorModel, WbsaModel, path or None
     """
     if model is None:
         return default_model()

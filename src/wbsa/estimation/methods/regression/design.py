@@ -30,6 +30,13 @@ SPREAD_TERMS = 7 + len(_OUTLINE) + len(_SCENE) + 2
 
 
 def check_measures(features: dict[str, np.ndarray]) -> None:
+    """Raise if a measure the model reads is missing (an image measured by another wbsa).
+
+    Parameters
+    ----------
+    features : dict of str to (n,) float64
+        The subjects' measures (:meth:`SubjectMeasures.features`).
+    """
     missing = [k for k in (*_BASE, "distance_m", "pitch_m", *_OUTLINE, *_SCENE, *_STATED) if k not in features]
     if missing:
         raise WbsaError(f"measures {', '.join(missing)} are missing; measure the image with this wbsa "
@@ -57,7 +64,13 @@ def with_clothing(features: dict[str, np.ndarray], clothing_m) -> dict[str, np.n
 def range_values(features: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     """The values of :data:`RANGE_KEYS`, (n,) float64 each: four measures, the depth noise over the pixel
     pitch (``depth_noise_px``: a camera noisier than any the model was trained on is flagged) and the stated
-    clothes."""
+    clothes.
+
+    Parameters
+    ----------
+    features : dict of str to (n,) float64
+        The subjects' measures with the stated clothes (:func:`with_clothing`).
+    """
     out = {k: np.asarray(features[k], dtype=np.float64) for k in RANGE_KEYS if k != "depth_noise_px"}
     out["depth_noise_px"] = _depth_noise_px(features)
     return out
@@ -74,7 +87,13 @@ def capture_terms(features: dict[str, np.ndarray]) -> list[np.ndarray]:
     11 mm: about 2.5 on Kinect v1's pixels, 1.6 on Kinect v2's; an ideal render in whole millimetres reads
     about 0.6 mm), whether a floor was seen (1) or not (0), and the stated clothes twice: their thickness in
     centimetres, and that thickness over the body's apparent width (VBSA / stature; a layer t over a limb of
-    radius r adds about t / r of its area, so thin bodies gain more)."""
+    radius r adds about t / r of its area, so thin bodies gain more).
+
+    Parameters
+    ----------
+    features : dict of str to (n,) float64
+        The subjects' measures with the stated clothes (:func:`with_clothing`).
+    """
     cols = [np.asarray(features[k], dtype=np.float64) for k in _OUTLINE]
     clothing_m = np.asarray(features["clothing_m"], dtype=np.float64)
     width_m = np.asarray(features["vbsa_m2"], dtype=np.float64) / np.asarray(features["stature_m"], dtype=np.float64)
@@ -83,7 +102,15 @@ def capture_terms(features: dict[str, np.ndarray]) -> list[np.ndarray]:
 
 
 def design(features: dict[str, np.ndarray], psi_deg: np.ndarray, elevation_deg: np.ndarray) -> np.ndarray:
-    """Linear design matrix (n, 38): log measures × view basis, view basis, log distance, pitch/stature, capture."""
+    """Linear design matrix (n, 38): log measures × view basis, view basis, log distance, pitch/stature, capture.
+
+    Parameters
+    ----------
+    features : dict of str to (n,) float64
+        The subjects' measures with the stated clothes (:func:`with_clothing`).
+    psi_deg, elevation_deg : (n,) float64
+        The view used: folded azimuth and elevation (degrees).
+    """
     check_measures(features)
     r = np.radians(np.asarray(psi_deg, dtype=np.float64))
     s_el = np.sin(np.radians(np.asarray(elevation_deg, dtype=np.float64)))
@@ -96,7 +123,17 @@ def design(features: dict[str, np.ndarray], psi_deg: np.ndarray, elevation_deg: 
 
 def tree_features(features: dict[str, np.ndarray], shape: np.ndarray, psi_deg: np.ndarray, psi_sd_deg: np.ndarray,
                   elevation_deg: np.ndarray) -> np.ndarray:
-    """Features of the residual trees (n, 56): log measures, view, its spread, distance, bands / stature, capture."""
+    """Features of the residual trees (n, 56): log measures, view, its spread, distance, bands / stature, capture.
+
+    Parameters
+    ----------
+    features : dict of str to (n,) float64
+        The subjects' measures with the stated clothes (:func:`with_clothing`).
+    shape : (n, b) float64
+        The subjects' shape bands (:attr:`SubjectMeasures.shape`), metres.
+    psi_deg, psi_sd_deg, elevation_deg : (n,) float64
+        The view used, its azimuth spread and its elevation (degrees).
+    """
     check_measures(features)
     st = np.asarray(features["stature_m"], dtype=np.float64)
     cols = [np.log(np.asarray(features[k], dtype=np.float64)) for k in _BASE]

@@ -134,7 +134,13 @@ class EstimatorModel:
 
     def log_wbsa(self, features: dict[str, np.ndarray], shape: np.ndarray, psi_deg, psi_sd_deg,
                  elevation_deg) -> np.ndarray:
-        """Predicted log WBSA (n,)."""
+        """Predicted log WBSA (n,).
+
+        Parameters
+        ----------
+        features, shape, psi_deg, psi_sd_deg, elevation_deg
+            As for :func:`~wbsa.estimation.methods.regression.design.tree_features`.
+        """
         X = (design(features, psi_deg, elevation_deg) - self.mean) / self.scale
         out = X @ self.coef + self.intercept
         if self.residual is not None:
@@ -152,6 +158,11 @@ class EstimatorModel:
         L′ = ⌈(m + 1) L⌉ / (m + 1) is taken, and the ⌈(n + 1) L′⌉-th of the n capture scores
         (:func:`conformal_rank`). When ⌈(m + 1) L⌉ > m, no score promises L; the largest is taken and
         :meth:`quantile_is_sure` is False.
+
+        Parameters
+        ----------
+        level : float
+            The interval's coverage, in (0, 1).
         """
         return float(self.scores[self._rank(level)[0] - 1])
 
@@ -162,7 +173,13 @@ class EstimatorModel:
         return max(int(self.meta.get("n_calibration_subjects", round(len(self.scores) / per_subject))), 1)
 
     def quantile_is_sure(self, level: float) -> bool:
-        """Whether the calibration has enough subjects for :meth:`quantile` to promise ``level``."""
+        """Whether the calibration has enough subjects for :meth:`quantile` to promise ``level``.
+
+        Parameters
+        ----------
+        level : float
+            The interval's coverage, in (0, 1).
+        """
         return not self._rank(level)[1]
 
     def _rank(self, level: float) -> tuple[int, bool]:
@@ -176,7 +193,15 @@ class EstimatorModel:
 
     def predict(self, features: dict[str, np.ndarray], shape: np.ndarray, psi_deg, psi_sd_deg, elevation_deg,
                 level: float = 0.95) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """WBSA (n,) and the interval bounds (n,), m²."""
+        """WBSA (n,) and the interval bounds (n,), m².
+
+        Parameters
+        ----------
+        features, shape, psi_deg, psi_sd_deg, elevation_deg
+            As for :func:`~wbsa.estimation.methods.regression.design.tree_features`.
+        level : float
+            The interval's coverage, in (0, 1).
+        """
         mu = self.log_wbsa(features, shape, psi_deg, psi_sd_deg, elevation_deg)
         half = self.quantile(level) * self.spread(features, psi_deg, psi_sd_deg, mu)
         return np.exp(mu), np.exp(mu - half), np.exp(mu + half)
@@ -202,7 +227,13 @@ class EstimatorModel:
 
     # ------------------------------------------------------------------ file
     def save(self, path: str | os.PathLike) -> Path:
-        """Write the model as one ``.npz`` of numbers, atomically."""
+        """Write the model as one ``.npz`` of numbers, atomically.
+
+        Parameters
+        ----------
+        path : str or path
+            The ``.npz`` file to write.
+        """
         from wbsa.io import atomic_path
 
         arrays = {**self.view.to_arrays(), "mean": self.mean, "scale": self.scale, "coef": self.coef,
@@ -220,7 +251,13 @@ class EstimatorModel:
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> "EstimatorModel":
-        """Read a model written by :meth:`save` (numbers only; no code is loaded)."""
+        """Read a model written by :meth:`save` (numbers only; no code is loaded).
+
+        Parameters
+        ----------
+        path : str or path
+            A ``.npz`` file :meth:`save` wrote.
+        """
         from wbsa.estimation.subject.checks import check_finite_model
 
         import zipfile

@@ -21,13 +21,25 @@ class PerViewPredictor:
         self.model = model
 
     def check_request(self, request: Request) -> None:
-        """Refuse stated clothes: the per-view fits know nothing of them."""
+        """Refuse stated clothes: the per-view fits know nothing of them.
+
+        Parameters
+        ----------
+        request : Request
+            As for :meth:`~wbsa.estimation.methods.base.Predictor.check_request`.
+        """
         if request.clothing_m > 0:
             raise WbsaError("a wbsa fit model allows for no clothes; state none (--clothing-cm 0) or use the default "
                             "estimator model")
 
     def predict(self, subject: Subject, request: Request) -> Prediction:
-        """WBSA from the nearest fitted view; flags ``model_mismatch`` and ``uncertain_view``."""
+        """WBSA from the nearest fitted view; flags ``model_mismatch`` and ``uncertain_view``.
+
+        Parameters
+        ----------
+        subject, request : Subject, Request
+            As for :meth:`~wbsa.estimation.methods.base.Predictor.predict`.
+        """
         from wbsa.estimation.methods.regression.default_model import default_model
 
         measures, camera = subject.measures, subject.camera

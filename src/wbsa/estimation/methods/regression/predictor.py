@@ -21,11 +21,23 @@ class RegressionPredictor:
         self.model = model
 
     def check_request(self, request: Request) -> None:
-        """Every request is served (a layer of clothes beyond the trained range is flagged, not refused)."""
+        """Every request is served (a layer of clothes beyond the trained range is flagged, not refused).
+
+        Parameters
+        ----------
+        request : Request
+            As for :meth:`~wbsa.estimation.methods.base.Predictor.check_request`.
+        """
 
     def predict(self, subject: Subject, request: Request) -> Prediction:
         """WBSA of ``subject`` with the model's split-conformal interval; flags ``uncertain_view``,
-        ``out_of_training_range`` and ``interval_unsure``."""
+        ``out_of_training_range`` and ``interval_unsure``.
+
+        Parameters
+        ----------
+        subject, request : Subject, Request
+            As for :meth:`~wbsa.estimation.methods.base.Predictor.predict`.
+        """
         from wbsa.estimation.subject.checks import range_flags
         from wbsa.estimation.methods.regression.design import range_values, with_clothing
 

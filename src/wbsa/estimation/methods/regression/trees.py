@@ -55,7 +55,13 @@ class TreeEnsemble:
 
     @classmethod
     def from_sklearn(cls, model) -> "TreeEnsemble":
-        """From a fitted ``HistGradientBoostingRegressor`` or binary ``HistGradientBoostingClassifier``."""
+        """From a fitted ``HistGradientBoostingRegressor`` or binary ``HistGradientBoostingClassifier``.
+
+        Parameters
+        ----------
+        model : sklearn.ensemble.HistGradientBoostingRegressor or HistGradientBoostingClassifier
+            Fitted, single output.
+        """
         parts, roots, offset = [], [], 0
         for iteration in model._predictors:
             if len(iteration) != 1:
@@ -99,7 +105,13 @@ class TreeEnsemble:
         return cls(*(cat[f] for f in _FIELDS), roots=roots, baseline=float(np.mean([e.baseline for e in ensembles])))
 
     def predict_raw(self, X: np.ndarray) -> np.ndarray:
-        """(n,) float64 raw prediction (a regressor's value; a classifier's log-odds) of (n, d) features."""
+        """(n,) float64 raw prediction (a regressor's value; a classifier's log-odds) of (n, d) features.
+
+        Parameters
+        ----------
+        X : (n, d) float64
+            Features; NaN goes the way each split learned for missing values.
+        """
         X = np.asarray(X, dtype=np.float64)
         n = X.shape[0]
         node = np.broadcast_to(self.roots, (n, len(self.roots))).copy()
@@ -114,7 +126,13 @@ class TreeEnsemble:
         return self.baseline + self.value[node].sum(axis=1)
 
     def to_arrays(self, prefix: str) -> dict[str, np.ndarray]:
-        """The ensemble as named arrays (for ``numpy.savez``)."""
+        """The ensemble as named arrays (for ``numpy.savez``).
+
+        Parameters
+        ----------
+        prefix : str
+            Put before every array's name.
+        """
         out = {f"{prefix}{f}": getattr(self, f) for f in _FIELDS}
         out[f"{prefix}roots"] = self.roots
         out[f"{prefix}baseline"] = np.array([self.baseline])
@@ -124,6 +142,15 @@ class TreeEnsemble:
     def from_arrays(cls, arrays, prefix: str, source: str = "the model") -> "TreeEnsemble":
         """Inverse of :meth:`to_arrays`, checked: every member there, of its kind and length, every node and root
         index inside the arrays, split features not negative.
+
+        Parameters
+        ----------
+        arrays : mapping of str to array
+            A model file's arrays.
+        prefix : str
+            The prefix :meth:`to_arrays` was given.
+        source : str
+            The file's name in the messages.
 
         Raises
         ------

@@ -74,6 +74,11 @@ class ViewModel:
         """ψ̂ (n,), its standard deviation (n,) and P(front) (n,) of view descriptors (n, d).
 
         The standard deviation is :func:`azimuth_sd_deg` with this model's ``axis_sd_deg``.
+
+        Parameters
+        ----------
+        descriptors : (n, d) float64
+            View descriptors (:attr:`SubjectMeasures.descriptor`).
         """
         X = np.atleast_2d(np.asarray(descriptors, dtype=np.float64))
         axis_deg = np.clip(self.axis.predict_raw(X), 0.0, 90.0)
@@ -83,7 +88,12 @@ class ViewModel:
 
     def estimate(self, measures) -> ViewEstimate:
         """The view of a measured subject: azimuth from its view descriptor, elevation measured
-        (:class:`~wbsa.estimation.subject.measure.SubjectMeasures`), with their spreads."""
+        (:class:`~wbsa.estimation.subject.measure.SubjectMeasures`), with their spreads.
+
+        Parameters
+        ----------
+        measures : SubjectMeasures
+        """
         psi, sd, p = (float(v[0]) for v in self.predict(measures.descriptor[None]))
         el_sd = self.elevation_sd_deg["floor" if measures.floor_seen else "axis"]
         return ViewEstimate(psi, sd, measures.elevation_deg, el_sd, p)
@@ -98,6 +108,13 @@ class ViewModel:
     @classmethod
     def from_arrays(cls, arrays, source: str = "the model") -> "ViewModel":
         """Inverse of :meth:`to_arrays`, checked (the spreads: positive finite degrees).
+
+        Parameters
+        ----------
+        arrays : mapping of str to array
+            A model file's arrays.
+        source : str
+            The file's name in the messages.
 
         Raises
         ------

@@ -30,6 +30,8 @@ PAGE_WORDS: tuple[tuple[str, str], ...] = (
     (r"use --method regression", "choose the method regression"),
     (r"give --level [0-9.]+ or ", ""),
     (r"; on the command line --clothing-cm 1\)", ")"),
+    (r"state none \(--clothing-cm 0\)", "choose no clothes"),
+    (r"--help lists them\) or an Open3D intrinsics JSON file", "the Camera list shows them) or add its intrinsics file"),
     (r"state them with --clothing-cm", "choose them under Clothes"),
     (r"--stature-cm", "the height field"),
     # the picture and the segmentation

@@ -33,6 +33,9 @@ PAGE_WORDS: tuple[tuple[str, str], ...] = (
     (r"state none \(--clothing-cm 0\)", "choose no clothes"),
     (r"--help lists them\) or an Open3D intrinsics JSON file", "the Camera list shows them) or add its intrinsics file"),
     (r"state them with --clothing-cm", "choose them under Clothes"),
+    (r"state them \(--clothes [^)]*\)", "choose them under Clothes"),
+    (r"\(--stature-cm, stature_m\)", "(type the height in cm under Height)"),
+    (r" \(on the command line --stature-cm \d+\)", ""),
     (r"--stature-cm", "the height field"),
     # the picture and the segmentation
     (r"check the segmentation \(--mask-out\) and pick the subject",

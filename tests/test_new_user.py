@@ -472,9 +472,13 @@ def _post():
 
 
 @pytest.mark.slow
-def test_objects_that_are_not_a_standing_person_are_flagged_and_people_are_not(fit_model, body_model, monkeypatch):
+def test_objects_that_are_not_a_standing_person_are_refused_or_flagged_and_people_are_not(fit_model, body_model,
+                                                                                          monkeypatch):
+    """A board, a post and a wall piece edge-on are no person: refused in one line (flat, no head) or, when the
+    segmentation takes them, flagged ``not_a_person``; people of every build and a young child are neither."""
     import wbsa
     from wbsa.core.mesh import TriangleMesh
+    from wbsa.errors import WbsaError
     from wbsa.estimation import SegmentSettings
 
     monkeypatch.setenv("WBSA_CACHE_DIR", "/nonexistent/wbsa-cache")
@@ -485,7 +489,10 @@ def test_objects_that_are_not_a_standing_person_are_flagged_and_people_are_not(f
 
     board = TriangleMesh(*_box((0.45, 0.02, 1.69)))
     for mesh, az in ((board, 0), (board, 45), (board, 90), (_post(), 0), (TriangleMesh(*_box((1.2, 0.1, 2.0))), 90)):
-        assert "not_a_person" in flags(mesh, az), (az, mesh)
+        try:
+            assert "not_a_person" in flags(mesh, az), (az, mesh)
+        except WbsaError as exc:
+            assert "no person in the depth image" in str(exc) and "is not one" in str(exc), (az, mesh, exc)
     people = wbsa.population(n=3, seed=1, posture="arms-down")  # the narrowest, fullest silhouettes
     child = wbsa.body(gender=1.0, age=0.15, height=0.3)  # a young child in anny's A-pose
     assert 0.8 < float(np.ptp(np.asarray(child.vertices)[:, 2])) < 1.4

@@ -23,7 +23,7 @@ K = preset("kinect-v1")
 CAMERA = Pose(np.eye(3), np.zeros(3))  # camera at the origin looking along +Z
 
 
-def plane_frame(distance_m: float, tilt_deg: float, half_size_m: float = 3.0, n: int = 1):
+def plane_frame(distance_m: float, tilt_deg: float, half_size_m: float = 3.0, n: int = 1, camera=K):
     """A square plane at ``distance_m`` on the optical axis, turned by ``tilt_deg`` about the image's
     vertical axis, split into ``2·n²`` triangles, rendered by the camera stage."""
     t = math.radians(tilt_deg)
@@ -36,7 +36,7 @@ def plane_frame(distance_m: float, tilt_deg: float, half_size_m: float = 3.0, n:
     v00 = i * (n + 1) + j
     faces = np.concatenate([np.stack([v00, v00 + 1, v00 + n + 2], -1).reshape(-1, 3),
                             np.stack([v00, v00 + n + 2, v00 + n + 1], -1).reshape(-1, 3)])
-    return render(MeshScene(TriangleMesh(verts, faces.astype(np.int32))), K, CAMERA)
+    return render(MeshScene(TriangleMesh(verts, faces.astype(np.int32))), camera, CAMERA)
 
 
 def interior(valid: np.ndarray, px: int = 3) -> np.ndarray:
@@ -240,12 +240,139 @@ def test_triangle_holes_need_triangle_ids():
 
 
 def test_settings_errors_name_the_field():
-    with pytest.raises(WbsaError, match="^noise must be one of 'none', 'nguyen2012', got 'kinect'$"):
+    with pytest.raises(WbsaError, match="^noise must be one of 'none', 'nguyen2012', 'camera', got 'kinect'$"):
         SensorSettings(noise="kinect")
     with pytest.raises(WbsaError, match=r"^holes_fraction must be a fraction in \[0, 1\], got 1.5$"):
         SensorSettings(holes_fraction=1.5)
     with pytest.raises(WbsaError, match=r"^grazing_dropout_deg must be degrees in \[0, 90\)"):
         SensorSettings(grazing_dropout_deg=90.0)
+
+
+# -- one model per technology ----------------------------------------------------------------------
+
+def test_every_camera_gets_its_technology_model_and_the_kinect_v1_disparity_is_its_records():
+    from wbsa.camera.presets import CAMERAS
+    from wbsa.sensor.settings import KINECT_V1_BASELINE_M, KINECT_V1_DISPARITY_STEP_PX
+    from wbsa.sensor.technology import TECHNOLOGIES, camera_model
+
+    assert (KINECT_V1_BASELINE_M, KINECT_V1_DISPARITY_STEP_PX) == CAMERAS["kinect-v1"].disparity
+    for name, record in CAMERAS.items():
+        model = camera_model(name)
+        assert model.noise is TECHNOLOGIES[record.technology]
+        assert model.quantised == (record.disparity is not None)
+    # only Kinect v1's model is published in full; the others say which figures stand in
+    assert TECHNOLOGIES["structured-light"].stand_in == ""
+    assert all("stand-in" in TECHNOLOGIES[t].stand_in for t in ("time-of-flight", "active-stereo", "lidar"))
+    # the depth step of Kinect v1's disparity at 4.3 m: about 5 cm (z² q / (f b))
+    assert camera_model("kinect-v1").depth_step_per_m * 4.3**2 == pytest.approx(0.0535, abs=5e-4)
+
+
+def test_active_stereo_follows_intels_depth_rms_relation():
+    """RMS = z² · subpixel / (f · baseline) (Intel's D400 relation): D435 (f 426 px, b 50 mm, 1/12 px) at 2 m
+    is 1.56 cm, and the sensor's face-on errors have that spread."""
+    from wbsa.sensor.technology import axial_sigma_m, camera_model
+
+    model = camera_model("realsense-d435")
+    assert axial_sigma_m(model, 2.0, 0.0) == pytest.approx(2.0**2 * (1 / 12) / (426.0 * 0.050))
+    assert axial_sigma_m(camera_model("realsense-d455"), 2.0, 0.0) == pytest.approx(4 * (1 / 12) / (415.0 * 0.095))
+    d435 = preset("realsense-d435")
+    frame = plane_frame(2.0, 0.0, camera=d435)
+    noisy = apply_sensor(frame, SensorSettings(noise="camera", lateral_noise=False), np.random.default_rng(7))
+    both = interior(frame.valid) & noisy.valid
+    z = ((noisy.depth_m[both] - frame.depth_m[both]) / axial_sigma_m(model, frame.depth_m[both], 0.0))
+    assert z.size > 300_000 and z.std() == pytest.approx(1.0, abs=4 / math.sqrt(2 * z.size))
+    # with --quantise the stereo camera's own disparity grid (1/12 px, 50 mm), not Kinect v1's
+    quantised = apply_sensor(frame, SensorSettings(noise="camera", quantise=True), np.random.default_rng(7))
+    steps = d435.fx * 0.050 / quantised.depth_m[quantised.valid].astype(np.float64) * 12
+    np.testing.assert_allclose(steps, np.round(steps), atol=1e-3)
+
+
+def test_noise_camera_reads_the_presets_technology_or_the_one_given():
+    from wbsa.camera import Intrinsics
+    from wbsa.sensor import nguyen2012
+
+    kinect = plane_frame(2.0, 0.0)
+    a = apply_sensor(kinect, SensorSettings(noise="camera"), np.random.default_rng(3))
+    b = apply_sensor(kinect, SensorSettings(noise="nguyen2012"), np.random.default_rng(3))
+    np.testing.assert_array_equal(a.depth_m, b.depth_m)  # Kinect v1's own model is Nguyen's
+    assert nguyen2012.MODEL.noise.technology == "structured-light"
+    # a time-of-flight camera is not quantised even when asked: it has no disparity
+    v2 = plane_frame(2.0, 30.0, camera=preset("kinect-v2"))
+    tof = SensorSettings(noise="camera", quantise=True)
+    assert tof.model_for(v2.intrinsics)[1] is None
+    assert tof.to_dict()["grazing_dropout_deg"] is None and "technology" not in tof.to_dict()
+    # a camera without a preset needs its technology said
+    custom = Intrinsics(64, 48, 50, 50, 31.5, 23.5)
+    with pytest.raises(WbsaError, match="^noise 'camera' needs a camera preset"):
+        SensorSettings(noise="camera").model_for(custom)
+    given = SensorSettings(noise="camera", technology="active-stereo", baseline_m=0.05, disparity_step_px=0.1)
+    model, disparity = given.model_for(custom)
+    assert disparity == (0.05, 0.1) and model.depth_step_per_m == pytest.approx(0.1 / (50 * 0.05))
+    assert given.to_dict()["technology"] == "active-stereo" and given.effective_grazing_dropout_deg == 8.0
+    with pytest.raises(WbsaError, match="^technology selects the model of noise 'camera'"):
+        SensorSettings(noise="nguyen2012", technology="lidar")
+
+
+def test_numpy_and_torch_give_the_same_noise_from_one_definition():
+    """Every technology's σz, σL and envelope, on every preset, from numpy (float64) and torch (float64 equal to
+    the last bits, float32 to its precision; differentiable)."""
+    torch = pytest.importorskip("torch")
+    from wbsa.camera.presets import CAMERAS
+    from wbsa.sensor.technology import axial_sigma_m, camera_model, envelope_m, lateral_sigma_px
+
+    z = np.linspace(0.25, 8.0, 301)[:, None] * np.ones((1, 40))
+    theta = np.linspace(0.0, math.radians(88.0), 40)[None, :] * np.ones((301, 1))
+    for name in CAMERAS:
+        model = camera_model(name)
+        for f, args in ((axial_sigma_m, (z, theta)), (lateral_sigma_px, (theta,)), (envelope_m, (z,))):
+            want = f(model, *args)
+            assert isinstance(want, np.ndarray) and want.dtype == np.float64 and np.all(want > 0)
+            got64 = f(model, *(torch.as_tensor(a) for a in args))
+            np.testing.assert_allclose(got64.numpy(), want, rtol=1e-14, atol=0, err_msg=f"{name} {f.__name__}")
+            got32 = f(model, *(torch.as_tensor(a, dtype=torch.float32) for a in args))
+            assert got32.dtype == torch.float32
+            np.testing.assert_allclose(got32.numpy(), want, rtol=1e-5, err_msg=f"{name} {f.__name__}")
+    zt = torch.tensor([1.0, 3.0], dtype=torch.float64, requires_grad=True)
+    envelope_m(camera_model("realsense-d435"), zt).sum().backward()
+    assert torch.all(zt.grad > 0)  # the envelope grows with depth
+
+
+#: Literals of the depth-noise models; they live in src/wbsa/sensor/ (and a camera's disparity in its record).
+_NOISE_CONSTANTS = {
+    "Nguyen axial": r"0\.0012|0\.0019",
+    "Nguyen grazing term": r"0\.0001\s*/",
+    "Nguyen lateral": r"0\.8\s*\+\s*0\.035|0\.035\s*\*\s*th",
+    "Kinect v1 focal length": r"575\.8",
+    "Kinect v1 disparity": r"(?<![\d.])0\.(?:075|125)(?!\d)",
+}
+#: Copies of them as they were once written outside the sensor package: each must be caught.
+_FORMER_COPIES = ("axial = 0.0012 + 0.0019 * (z - 0.4) ** 2", "_Q_STEP = 0.125 / (575.8 * 0.075)",
+                  "noise = ((0.0012 + 0.0019 * (z0 - 0.4).square()).square()",
+                  "baseline_m=baseline or 0.075, disparity_step_px=step or 0.125",
+                  "steep = 0.0001 / np.sqrt(z) * theta**2", "return 0.8 + 0.035 * theta / (np.pi / 2 - theta)")
+
+
+def test_the_noise_constants_are_written_only_in_the_sensor_package():
+    """A second copy of a noise constant anywhere in src/ outside wbsa/sensor/ (and the camera record table)
+    fails here: code that needs the noise calls wbsa.sensor.technology."""
+    import re
+    from pathlib import Path
+
+    import wbsa
+
+    caught = {what: [c for c in _FORMER_COPIES if re.search(p, c)] for what, p in _NOISE_CONSTANTS.items()}
+    assert all(caught.values()) and all(any(re.search(p, c) for p in _NOISE_CONSTANTS.values())
+                                        for c in _FORMER_COPIES), caught
+    root = Path(wbsa.__file__).parent
+    home = {root / "camera" / "presets.py"}
+    copies = []
+    for path in sorted(root.rglob("*.py")):
+        if path.parent == root / "sensor" or path in home:
+            continue
+        for i, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1):
+            copies += [f"{path.relative_to(root)}:{i}: {what}: {line.strip()}"
+                       for what, pattern in _NOISE_CONSTANTS.items() if re.search(pattern, line)]
+    assert not copies, "noise constants copied outside wbsa/sensor/ (call wbsa.sensor.technology):\n" + "\n".join(copies)
 
 
 # -- depth PNG -------------------------------------------------------------------------------------
@@ -307,6 +434,9 @@ def test_sensor_flags():
 
     with pytest.raises(WbsaError, match="range_limits needs a camera with a working range"):
         sensor_settings_from_args(p.parse_args(["--range-limits"]), Intrinsics(64, 48, 50, 50, 31.5, 23.5))
+    assert sensor_settings_from_args(p.parse_args(["--noise", "camera"]), preset("phone-lidar")).noise == "camera"
+    with pytest.raises(WbsaError, match="^noise 'camera' needs a camera preset to know its technology"):
+        sensor_settings_from_args(p.parse_args(["--noise", "camera"]), Intrinsics(64, 48, 50, 50, 31.5, 23.5))
 
 
 def test_sensor_rng_is_keyed():

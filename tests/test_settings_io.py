@@ -30,6 +30,7 @@ EXAMPLES = [
     SensorSettings(noise="nguyen2012", lateral_noise=False, quantise=True, holes_fraction=0.1, pixel_dropout=0.02,
                    range_limits=True),
     SensorSettings(grazing_dropout_deg=12.5),
+    SensorSettings(noise="camera", technology="lidar"),
     ReconstructionSettings(methods=("grid", "poisson"), denoise="median", boundary="footprint", smoothing="mls",
                            bpa_radii_px=(1.5, 3.0), poisson_depth=7),
     FitSettings(vbsa_columns=("vbsa_hit_m2", "vbsa_recon_m2:grid"), predictor_sets=((), ("stature_m", "mass_kg")),

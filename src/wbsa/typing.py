@@ -12,8 +12,9 @@ from typing import Literal, get_args
 #: How a population is made: ``random`` (paper: Virtual Random), ``survey`` (paper: Virtual NHANES),
 #: ``table`` (phenotypes read from a file).
 PopulationKind = Literal["random", "survey", "table"]
-#: Depth noise of the simulated sensor.
-NoiseModel = Literal["none", "nguyen2012"]
+#: Depth noise of the simulated sensor: none, Kinect v1's (Nguyen et al. 2012, the paper's), or the camera's own
+#: technology's (:data:`wbsa.sensor.technology.TECHNOLOGIES`).
+NoiseModel = Literal["none", "nguyen2012", "camera"]
 #: Surface reconstruction methods (each adds a ``vbsa_recon_<method>_m2`` column).
 ReconstructionMethod = Literal["grid", "ball-pivoting", "poisson"]
 #: Depth-image filters applied before reconstruction.

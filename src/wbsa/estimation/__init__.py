@@ -6,6 +6,7 @@
                  the methods ``regression`` (the estimator model, the shipped default model) and ``body_fit``
 ``single_view``  :func:`estimate`, the entry point (``wbsa.estimate`` calls it)
 ``flags``        every flag: its meaning, the page's advice, the routes that raise it
+``clothes``      the clothes a user states: the table of named layers and their uncertainty
 ``fhir``         the FHIR R4 Observation
 ``command``      ``wbsa estimate``
 

@@ -16,13 +16,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     """
     from wbsa.camera.presets import presets_help
     from wbsa.cli_types import number_in, pick
+    from wbsa.estimation.clothes import CLOTHES, clothes_help
     from wbsa.typing import METHODS
 
     p = sub.add_parser("estimate", help="estimate WBSA from one depth image of a standing person",
                        description="Find the person in a depth image of a room, measure the visible surface and "
                                    "stature, estimate the view, and predict WBSA with a calibrated interval. Every "
                                    "warning is printed; exit 2 on input that cannot be measured. The camera sees "
-                                   "the outside of the clothes: state them with --clothing-cm (a 1 cm layer "
+                                   "the outside of the clothes: state them with --clothes (a 1 cm layer "
                                    "not stated reads about 9 % high; docs/estimate.md, Clothes).")
     p.add_argument("depth", help="depth image: 16-bit PNG (mm), .npy (float metres), 32-bit float .tiff, .exr")
     p.add_argument("--camera", default="auto",
@@ -38,10 +39,16 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="stated azimuth in degrees (optional: it is estimated, and checked when given)")
     p.add_argument("--elevation", type=number_in(-90, 90), default=None,
                    help="stated elevation in degrees (optional: it is estimated, and checked when given)")
-    p.add_argument("--clothing-cm", type=number_in(0, 5), default=0.0,
-                   help="thickness of the clothes over the trunk, upper arms, legs and feet in cm, how far their outside "
-                        "stands off the skin on average (default 0: none or tight-fitting; the default model "
-                        "is trained on 0-1.5)")
+    p.add_argument("--clothes", default=None, choices=tuple(CLOTHES), metavar="NAME",
+                   help="the clothes worn, a layer with its own uncertainty (widens the interval): "
+                        + clothes_help() + "; not given (nor --clothing-cm): taken as none, flagged clothes_unstated")
+    p.add_argument("--clothing-cm", type=number_in(0, 5), default=None,
+                   help="or the clothes as an explicit thickness over the trunk, upper arms, legs and feet in cm, how "
+                        "far their outside stands off the skin on average (0: none or tight-fitting; the default "
+                        "model is trained on 0-1.5)")
+    p.add_argument("--stature-cm", type=number_in(50, 250), default=None,
+                   help="the subject's stature in cm; needed when the feet are not in the frame (cut off or "
+                        "hidden), where it takes the measured stature's place")
     p.add_argument("--level", type=number_in(0, 1, low_open=True, high_open=True), default=0.95,
                    help="prediction interval coverage (default 0.95)")
     p.add_argument("--depth-scale", type=number_in(0, low_open=True), default=None,
@@ -84,7 +91,9 @@ def run_estimate(args: argparse.Namespace) -> int:
     segment = None if args.no_segment else SegmentSettings(min_depth_m=args.min_depth, max_depth_m=args.max_depth,
                                                            pick=args.pick)
     est = estimate(args.depth, args.camera, args.model, args.method, azimuth_deg=args.azimuth,
-                   elevation_deg=args.elevation, clothing_m=args.clothing_cm / 100.0, level=args.level,
+                   elevation_deg=args.elevation, clothing=args.clothes,
+                   clothing_m=None if args.clothing_cm is None else args.clothing_cm / 100.0,
+                   stature_m=None if args.stature_cm is None else args.stature_cm / 100.0, level=args.level,
                    depth_scale=args.depth_scale, segment=segment, body_fit=_body_fit_settings(args))
     _write_outputs(args, est)
     for name, text in est.flags.items():

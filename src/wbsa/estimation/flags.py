@@ -141,6 +141,17 @@ FLAG_RECORDS: dict[str, Flag] = {
         "the camera looks at the body from more than 45° above or below",
         "Put the camera at about chest height, level, and take the picture again.",
         ("body-fit",)),
+    "feet_not_seen": Flag(
+        "the subject's feet are not seen (cut off by the frame or hidden); the stated stature was used",
+        "The feet are not in the picture, so the height typed was used: step the person back, or turn the camera "
+        "down, so that the whole body and the floor under the feet show, and take the picture again.",
+        ("image",)),
+    "clothes_unstated": Flag(
+        "no clothes were stated; they were taken as none or tight-fitting (clothes worn read high, about 9 % per cm "
+        "of layer): state them (--clothes underwear, thin-gown, light or street)",
+        "Say what the person wears (underwear, a thin gown, light clothes or street clothes): clothes make the "
+        "answer read high.",
+        ("image",)),
 }
 #: Flag name -> its meaning (``wbsa.estimation.FLAGS``).
 FLAGS: dict[str, str] = {name: flag.meaning for name, flag in FLAG_RECORDS.items()}

@@ -7,6 +7,7 @@ its flags (:data:`wbsa.estimation.flags.FLAGS`); what cannot be measured raises 
 
 from __future__ import annotations
 
+import dataclasses
 import os
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Callable
@@ -14,6 +15,7 @@ from typing import TYPE_CHECKING, Callable
 import numpy as np
 
 from wbsa.errors import WbsaError
+from wbsa.estimation.clothes import UNSTATED, Clothes
 from wbsa.estimation.methods.view import ViewEstimate
 from wbsa.estimation.subject.segment import SegmentSettings
 from wbsa.typing import Method
@@ -42,7 +44,7 @@ class Estimate:
     flags : dict of str to str
         Named warnings (see :data:`wbsa.estimation.flags.FLAGS`); empty when all checks passed.
     clothing_m : float
-        The stated layer of clothes the estimate allows for (m; 0: none or tight-fitting).
+        The layer of clothes the estimate allows for (m; 0: none or tight-fitting, or nothing stated).
     method, model, camera : str
     mask : (h, w) bool
         The subject's pixels (the segmentation: returns on the floor and walls excluded, the feet down to
@@ -58,6 +60,10 @@ class Estimate:
     routes : dict of str to Prediction
         With ``method="both"``: each route's own prediction (``regression``, ``body-fit``); the estimate's numbers
         are the first's.
+    clothes : wbsa.estimation.clothes.Clothes
+        What was stated of the clothes (a named layer with its uncertainty, an explicit layer, or nothing).
+    stature_stated_m : float or None
+        The stature the user stated, if any (used in place of the measured one where the feet are not seen).
     """
 
     wbsa_m2: float
@@ -80,6 +86,8 @@ class Estimate:
     measured_mask: np.ndarray = field(repr=False, compare=False, default=None)
     body: object = field(repr=False, compare=False, default=None)
     routes: dict = field(repr=False, compare=False, default_factory=dict)
+    clothes: Clothes = UNSTATED
+    stature_stated_m: float | None = None
 
     def __repr__(self) -> str:
         flags = f", flags: {', '.join(self.flags)}" if self.flags else ""
@@ -105,6 +113,8 @@ class Estimate:
         out = {k: (round(v, 5) if isinstance(v, float) else v) for k, v in out.items()}
         out["view"] = self.view.to_dict()
         out["view_used"] = {"azimuth_deg": self.view_used[0], "elevation_deg": self.view_used[1]}
+        out.update(self.clothes.to_dict())
+        out["stature_stated_m"] = self.stature_stated_m
         out["flags"] = dict(self.flags)
         if self.body is not None:
             out["body"] = self.body.to_dict()
@@ -116,13 +126,12 @@ class Estimate:
 
     def method_text(self) -> str:
         """One sentence on how the number was obtained (FHIR ``Observation.method.text``)."""
-        clothes = ("clothes stated as none or tight-fitting (unstated clothes read high)" if self.clothing_m == 0
-                   else f"clothes stated as a {100 * self.clothing_m:.1f} cm layer over the trunk, upper arms, legs "
-                        "and feet")
+        stature = (f"stature {self.stature_m:.2f} m stated (the feet were not seen)" if "feet_not_seen" in self.flags
+                   else f"stature {self.stature_m:.2f} m")
         return (f"wbsa {self.method}: one depth image ({self.camera}), visible body surface area "
-                f"{self.vbsa_m2:.3f} m2 and stature {self.stature_m:.2f} m measured on the point cloud, view "
+                f"{self.vbsa_m2:.3f} m2 and {stature} measured on the point cloud, view "
                 f"azimuth {self.view_used[0]:.0f} deg / elevation {self.view_used[1]:.0f} deg, model {self.model}; "
-                f"{clothes}")
+                f"{self.clothes.text()}")
 
 
 def _depth_array(depth, depth_scale: float | None) -> np.ndarray:
@@ -146,7 +155,8 @@ def _depth_array(depth, depth_scale: float | None) -> np.ndarray:
 
 
 def estimate(depth, camera, model=None, method: Method = "regression", *, azimuth_deg: float | None = None,
-             elevation_deg: float | None = None, clothing_m: float = 0.0, level: float = 0.95,
+             elevation_deg: float | None = None, clothing: str | None = None, clothing_m: float | None = None,
+             stature_m: float | None = None, level: float = 0.95,
              depth_scale: float | None = None, segment: SegmentSettings | None = SegmentSettings(),
              body_fit: BodyFitSettings | None = None, show_progress: bool | None = None,
              progress: Callable[[str, int, int], None] | None = None) -> Estimate:
@@ -168,11 +178,19 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
         side (the regression's number leads; ``routes`` holds both).
     azimuth_deg, elevation_deg : float, optional
         A stated view; it is used for the prediction and checked against the estimated one.
-    clothing_m : float
-        The thickness of the clothes over the trunk, upper arms, legs and feet (m): how far their outside
-        stands off the skin, on average. 0 (the default): none or tight-fitting, as the paper's subjects. The
-        camera sees the clothes' outside, which encloses more area than the skin (a 1 cm layer read +8.6 %
-        when not stated); the default model was trained on layers of 0–1.5 cm.
+    clothing : str, optional
+        The clothes by name (:data:`wbsa.estimation.clothes.CLOTHES`: ``underwear``, ``thin-gown``, ``light``,
+        ``street``): a layer with its own uncertainty, which widens the interval. The camera sees the clothes'
+        outside, which encloses more area than the skin (a 1 cm layer read +8.6 % when not stated).
+    clothing_m : float, optional
+        Or the clothes as an explicit thickness over the trunk, upper arms, legs and feet (m): how far their
+        outside stands off the skin, on average (0: none or tight-fitting); the default model was trained on
+        layers of 0–1.5 cm. Neither given: taken as 0, ``clothing_stated`` false and flagged
+        ``clothes_unstated``.
+    stature_m : float, optional
+        The subject's stature (m), stated. A subject whose feet are not seen (its lowest returns end at the
+        frame's bottom or over a band without returns, or stand over a seen floor) is refused
+        (``feet_not_seen``) unless it is given; then it takes the measured stature's place, flagged.
     level : float
         Coverage of the prediction interval, in (0, 1).
     depth_scale : float, optional
@@ -195,8 +213,9 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     ------
     WbsaError
         Unreadable input, an image that is not the camera's size, no or several people without a pick,
-        a height that is not human (wrong depth scale), a broken model, an unknown method, a stated layer of
-        clothes that is not 0–0.05 m, or one stated to a ``wbsa fit`` model.
+        a height that is not human (wrong depth scale), a broken model, an unknown method, unknown clothes or
+        a stated layer that is not 0–0.05 m (or one stated to a ``wbsa fit`` model), a stated stature that is
+        not a human height, or feet not seen without a stated stature.
     """
     from wbsa.camera.presets import AUTO_CAMERA, resolve_camera
     from wbsa.camera.views import check_angle
@@ -207,7 +226,10 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     from wbsa.estimation.methods.dispatch import check_method, predictors_for
     from wbsa.estimation.methods.view import view_flags
     from wbsa.estimation.subject.mixed_pixels import repair_mixed_pixels
+    from wbsa.estimation.clothes import stated_clothes
+    from wbsa.estimation.subject.people import feet_unseen, open_feet
     from wbsa.estimation.subject.segment import segment_subject
+    from wbsa.sensor.technology import envelope_model
 
     check_method(method)
     if not (checks.is_real_number(level) and 0 < level < 1):
@@ -218,8 +240,10 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
         azimuth_deg = check_angle(azimuth_deg, "azimuth", "azimuth_deg")
     if elevation_deg is not None:
         elevation_deg = check_angle(elevation_deg, "elevation", "elevation_deg")
-    checks.check_clothing(clothing_m)
-    request = Request(azimuth_deg, elevation_deg, float(clothing_m), level,
+    clothes = stated_clothes(clothing, clothing_m)
+    if stature_m is not None:
+        stature_m = checks.check_stated_stature(stature_m)
+    request = Request(azimuth_deg, elevation_deg, clothes.layer_m, level,
                       progress=None if progress is None else lambda step, steps: progress("body-fit", step, steps))
     auto = isinstance(camera, str) and camera == AUTO_CAMERA
     intrinsics = None if auto else resolve_camera(camera)  # a bad camera is refused before the image is read
@@ -229,7 +253,7 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
         intrinsics = resolve_camera(camera, depth_m.shape)
     checks.check_image_size(depth_m, intrinsics)
     predictors = list(predictors_for(method, model, body_fit))  # a model is read (and refused) before any measure
-    depth_m, mixed = repair_mixed_pixels(depth_m, intrinsics.fx)
+    depth_m, mixed = repair_mixed_pixels(depth_m, intrinsics.fx, envelope_model(intrinsics))
     flags: dict[str, str] = {}
     for k, predictor in enumerate(predictors):
         try:
@@ -245,13 +269,23 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
         mask, floor = np.isfinite(depth_m) & (depth_m > 0), None
         if not mask.any():
             raise WbsaError("the depth image has no returns; check the depth scale and the file")
+        feet = open_feet(mask)
     else:
         seg = segment_subject(depth_m, intrinsics, segment)
         mask, floor = seg.mask, seg.floor
         if seg.others:
             flags["several_people"] = (f"picked {seg.subject.describe()} ({segment.pick}); others: "
                                        + "; ".join(c.describe() for c in seg.others))
+        feet = feet_unseen(seg.subject, floor)
+    if feet is not None and stature_m is None:
+        raise WbsaError(f"feet not seen: {feet}; without the feet the WBSA is not measured (a cut-off adult would "
+                        "read as a child): capture the whole person, feet on the floor, or state the stature "
+                        "(--stature-cm, stature_m)")
     m = measure_subject(depth_m, mask, intrinsics, floor, mixed)
+    if feet is not None:
+        flags["feet_not_seen"] = (f"{feet}; the stated stature {stature_m:.2f} m is used (measured "
+                                  f"{m.stature_m:.2f} m); the legs' area is not seen, so the estimate may read low")
+        m = dataclasses.replace(m, stature_m=stature_m)
     checks.check_height(m.stature_m)
     flags.update(checks.person_shape_flags(m.stature_m, m.width_m, m.silhouette_m2))
     flags.update(checks.mixed_pixel_flags(m.mixed_share))
@@ -279,6 +313,10 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
         if not all(np.isfinite(v) for v in (route.wbsa_m2, route.wbsa_lo_m2, route.wbsa_hi_m2)):
             raise WbsaError(f"the {route.model_name} model gave no finite estimate ({route.wbsa_m2}); check the "
                             "model file, or rebuild it")
+    if clothes.sd_m > 0:  # the layer's own uncertainty widens every route's interval that can take it
+        prediction, routes = _clothes_widened(prediction, routes, predictors, subject, request, clothes)
+    if not clothes.stated:
+        flags["clothes_unstated"] = FLAGS["clothes_unstated"]
     view = prediction.view
     flags.update(view_flags((azimuth_deg, elevation_deg), view))
     for name, text in prediction.flags.items():  # the image's own checks keep their wording
@@ -291,10 +329,30 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     return Estimate(wbsa_m2=prediction.wbsa_m2, wbsa_lo_m2=prediction.wbsa_lo_m2, wbsa_hi_m2=prediction.wbsa_hi_m2,
                     level=level, vbsa_m2=m.vbsa_m2, stature_m=m.stature_m, distance_m=m.distance_m, n_pixels=m.n_pixels,
                     view=view, view_used=prediction.view_used, flags=flags, method=method, model=prediction.model_name,
-                    camera=intrinsics.name, clothing_m=float(clothing_m),
+                    camera=intrinsics.name, clothing_m=clothes.layer_m, clothes=clothes, stature_stated_m=stature_m,
                     mask=mask & np.isfinite(depth_m) & (depth_m > 0), surface=m.surface, measured_mask=m.mask,
                     body=next((p.body for p in (prediction, *routes.values()) if p.body is not None), None),
                     routes=routes)
+
+
+def _clothes_widened(prediction, routes: dict, predictors: list, subject, request, clothes: Clothes):
+    """The lead prediction and the routes with their intervals widened by the clothes' uncertainty
+    (:func:`wbsa.estimation.clothes.widened`): each predictor predicts again with the layer thicker by it; a
+    route that takes no layer that thick (the body fit takes none) keeps its interval."""
+    from wbsa.estimation.clothes import widened
+
+    thicker = dataclasses.replace(request, clothing_m=clothes.layer_m + clothes.sd_m)
+    by_name = {p.name: p for p in predictors if p is not None}
+    out = {}
+    for name, route in ({predictors[0].name: prediction} | routes).items():
+        try:
+            by_name[name].check_request(thicker)
+        except WbsaError:
+            out[name] = route
+            continue
+        lo, hi = widened(route.wbsa_lo_m2, route.wbsa_hi_m2, route.wbsa_m2, by_name[name].predict(subject, thicker).wbsa_m2)
+        out[name] = dataclasses.replace(route, wbsa_lo_m2=lo, wbsa_hi_m2=hi)
+    return out[predictors[0].name], ({k: out[k] for k in routes} if routes else {})
 
 
 def _agreement_flags(routes: dict) -> dict[str, str]:

@@ -1,6 +1,7 @@
 """sensor stage: what a real depth camera does to an ideal ray-cast view.
 
-Nguyen et al. 2012 Kinect v1 noise, disparity quantisation, range limits and holes (the paper's
+Depth noise per camera technology (:mod:`wbsa.sensor.technology`: one table of constants, one formula for
+numpy and torch; Nguyen et al. 2012 Kinect v1 noise the paper's), disparity quantisation, range limits and holes (the paper's
 dropped triangles, random pixel dropout, grazing-angle dropout), all seeded and optional
 (:class:`SensorSettings`, :func:`apply_sensor`); what a camera returns at depth edges, on depth images
 (:func:`edge_pixels`: time-of-flight mixed pixels, or none); depth PNG I/O lives in
@@ -22,6 +23,10 @@ _EXPORTS = {
     "axial_sigma_m": "wbsa.sensor.nguyen2012",
     "lateral_sigma_m": "wbsa.sensor.nguyen2012",
     "lateral_sigma_px": "wbsa.sensor.nguyen2012",
+    "TECHNOLOGIES": "wbsa.sensor.technology",
+    "SensorModel": "wbsa.sensor.technology",
+    "camera_model": "wbsa.sensor.technology",
+    "envelope_m": "wbsa.sensor.technology",
     "add_sensor_arguments": "wbsa.sensor.cli",
     "sensor_settings_from_args": "wbsa.sensor.cli",
     "view_rng": "wbsa.sensor.measure",

@@ -9,7 +9,7 @@ from scipy import ndimage
 
 from wbsa.core.frame import DepthFrame
 from wbsa.errors import WbsaError
-from wbsa.sensor import nguyen2012
+from wbsa.sensor import technology
 from wbsa.sensor.settings import SensorSettings
 from wbsa.core.backproject import ray_directions
 
@@ -27,12 +27,15 @@ def apply_sensor(frame: DepthFrame, sensor: SensorSettings, rng: np.random.Gener
 
     1. holes: drop ``holes_fraction`` of the visible triangles (exactly ``round(f · n_visible)`` of
        them, chosen without replacement) and every pixel that hit them (the paper, section 2.4);
-    2. grazing dropout: drop returns with angle θ between normal and ray above 90° − ``grazing_dropout_deg``;
-    3. lateral noise (``nguyen2012``): each pixel samples the surface at a position moved by
+    2. grazing dropout: drop returns with angle θ between normal and ray above 90° − ``grazing_dropout_deg``
+       (None: the noise model's);
+    3. lateral noise (the noise model's, :meth:`SensorSettings.model_for`: ``nguyen2012`` or the camera's
+       technology, :mod:`wbsa.sensor.technology`): each pixel samples the surface at a position moved by
        N(0, ``noise_scale`` · σL(θ)) pixels along each image axis (bilinear depth on one surface, nearest pixel across
        depth jumps and at the silhouette, which therefore both grows and shrinks);
-    4. axial noise (``nguyen2012``): z += N(0, ``noise_scale`` · σz(z, θ));
-    5. disparity quantisation: z = f·b / (round(f·b / (z·q)) · q) with q = ``disparity_step_px``;
+    4. axial noise (the noise model's): z += N(0, ``noise_scale`` · σz(z, θ));
+    5. disparity quantisation: z = f·b / (round(f·b / (z·q)) · q) with q = ``disparity_step_px`` (the camera
+       preset's b and q with noise ``camera``; none for a camera without a disparity);
     6. range limits: drop z outside the camera's ``[min_range_m, max_range_m]``;
     7. pixel dropout: drop each remaining return with probability ``pixel_dropout``.
 
@@ -57,9 +60,11 @@ def apply_sensor(frame: DepthFrame, sensor: SensorSettings, rng: np.random.Gener
     Raises
     ------
     WbsaError
-        If triangle holes are asked for on a frame without triangle IDs.
+        If triangle holes are asked for on a frame without triangle IDs, or noise ``camera`` without a
+        technology on a camera that is no preset.
     """
     settings = {**frame.settings, "sensor": sensor.to_dict()}
+    model, disparity = sensor.model_for(frame.intrinsics)
     holes_stream, lateral_stream, axial_stream, dropout_stream = rng.spawn(4)
     if sensor.is_ideal:
         return dataclasses.replace(frame, settings=settings)
@@ -97,13 +102,16 @@ def apply_sensor(frame: DepthFrame, sensor: SensorSettings, rng: np.random.Gener
     # 2. grazing-angle dropout
     theta = _incidence_rad(normals, rays, valid)
     grazing_deg = sensor.effective_grazing_dropout_deg
+    if grazing_deg is None:
+        grazing_deg = model.noise.grazing_dropout_deg
     if grazing_deg > 0:
         valid &= theta <= np.deg2rad(90.0 - grazing_deg)
 
-    if sensor.noise == "nguyen2012":
+    if model is not None:
         # 3. lateral noise: resample the image at jittered positions
         if sensor.lateral_noise and min(depth.shape) >= 2:
-            sigma_px = np.where(valid, sensor.noise_scale * nguyen2012.lateral_sigma_px(np.where(valid, theta, 0.0)), 0.0)
+            sigma_px = np.where(valid, sensor.noise_scale * technology.lateral_sigma_px(model, np.where(valid, theta, 0.0)),
+                                0.0)
             reach = 2 * _LATERAL_REACH_PX + 1
             sigma_px = np.where(valid, sigma_px, ndimage.grey_dilation(sigma_px, size=(reach, reach)))
             dv = lateral_stream.standard_normal(depth.shape) * sigma_px
@@ -111,16 +119,17 @@ def apply_sensor(frame: DepthFrame, sensor: SensorSettings, rng: np.random.Gener
             depth, valid, normals, tri = _resample(depth, valid, normals, tri, dv, du)
             theta = _incidence_rad(normals, rays, valid)
         # 4. axial noise
-        sigma_z = sensor.noise_scale * nguyen2012.axial_sigma_m(np.where(valid, depth, 1.0), np.where(valid, theta, 0.0))
+        sigma_z = sensor.noise_scale * technology.axial_sigma_m(model, np.where(valid, depth, 1.0),
+                                                                np.where(valid, theta, 0.0))
         depth = depth + axial_stream.standard_normal(depth.shape) * np.where(valid, sigma_z, 0.0)
         valid &= depth > 0
         depth_changed = True
 
     # 5. disparity quantisation
-    if sensor.quantise:
-        fb = float(frame.intrinsics.fx) * sensor.baseline_m
+    if sensor.quantise and disparity is not None:
+        baseline_m, q = disparity
+        fb = float(frame.intrinsics.fx) * baseline_m
         with np.errstate(divide="ignore", invalid="ignore"):
-            q = sensor.disparity_step_px
             disparity = np.round(fb / np.where(valid, depth, np.inf) / q) * q
             depth = np.where(disparity > 0, fb / disparity, 0.0)
         valid &= depth > 0

@@ -17,25 +17,35 @@ _noise_scale = number_in(0.0, 10.0, what="a factor")
 def add_sensor_arguments(parser: argparse.ArgumentParser, *, seed: bool = False) -> None:
     """Add the sensor flags (an argument group "sensor") to ``parser``.
 
-    ``--noise {none,nguyen2012}``, ``--holes FRACTION``, ``--pixel-dropout FRACTION``,
+    ``--noise {none,nguyen2012,camera}``, ``--holes FRACTION``, ``--pixel-dropout FRACTION``,
     ``--grazing-dropout DEG``, ``--quantise``, ``--noise-scale FACTOR``, ``--no-lateral-noise``, ``--range-limits`` and, with
     ``seed=True``, ``--sensor-seed N`` (commands that have their own ``--seed`` pass that instead).
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The command's parser; changed in place.
+    seed : bool
+        Also add ``--sensor-seed``.
     """
     g = parser.add_argument_group("sensor (simulated depth camera; all off by default)")
     g.add_argument("--noise", choices=NOISE_MODELS, default="none",
-                   help="depth noise model: nguyen2012 = Kinect v1 axial and lateral noise (default: none)")
+                   help="depth noise model: nguyen2012 = Kinect v1 axial and lateral noise (the paper's, whatever the "
+                        "camera); camera = the camera preset's own technology (structured light, time of flight, "
+                        "active stereo, LiDAR; docs/sensor_and_surface.md) (default: none)")
     g.add_argument("--holes", type=_fraction, default=0.0, metavar="FRACTION",
                    help="drop this fraction of the visible triangles and their pixels, as in the paper (default: 0)")
     g.add_argument("--pixel-dropout", type=_fraction, default=0.0, metavar="FRACTION",
                    help="lose each returned pixel with this probability (default: 0)")
     g.add_argument("--grazing-dropout", type=_grazing_deg, default=None, metavar="DEG",
-                   help="drop returns within DEG of grazing incidence (default: 8 with --noise nguyen2012, else 0)")
+                   help="drop returns within DEG of grazing incidence (default: the noise model's, 8; 0 without)")
     g.add_argument("--quantise", action="store_true",
-                   help="quantise disparity to 1/8 pixel with a 0.075 m baseline (Kinect v1)")
+                   help="quantise disparity: 1/8 pixel with a 0.075 m baseline (Kinect v1); with --noise camera, the "
+                        "preset's own disparity (none for time of flight and LiDAR)")
     g.add_argument("--noise-scale", type=_noise_scale, default=1.0, metavar="FACTOR",
-                   help="with --noise nguyen2012: multiply its sigma by this (default 1 = Kinect v1)")
+                   help="with a noise model: multiply its sigma by this (default 1 = the model's level)")
     g.add_argument("--no-lateral-noise", dest="lateral_noise", action="store_false",
-                   help="with --noise nguyen2012: axial noise only")
+                   help="with a noise model: axial noise only")
     g.add_argument("--range-limits", action="store_true",
                    help="drop returns outside the camera preset's depth range (Kinect v1: 0.8-4.0 m)")
     if seed:

@@ -15,6 +15,19 @@ def view_rng(seed: int, subject_id: int, view) -> np.random.Generator:
     (micro-degrees) and distance (micrometres): it depends only on (seed, subject, view), never on
     chunking, on the workers or on which other views are scanned, so ``wbsa view`` and ``wbsa scan``
     give the same noisy image.
+
+    Parameters
+    ----------
+    seed : int
+        The sensor seed (non-negative; checked by :func:`wbsa.core.limits.check_seed`).
+    subject_id : int
+        The subject's id.
+    view : wbsa.camera.View
+        The view; its ``azimuth_deg``, ``elevation_deg`` and ``distance_m`` key the stream.
+
+    Returns
+    -------
+    numpy.random.Generator
     """
     key = (round(view.azimuth_deg * 1e6), round((view.elevation_deg + 90.0) * 1e6), round(view.distance_m * 1e6))
     check_seed(seed, "the sensor seed")
@@ -26,6 +39,17 @@ def sense_view(frame: DepthFrame, scene, sensor, rng: np.random.Generator) -> tu
 
     The hit area counts only triangles that still return; the visible area is the per-pixel estimate
     of the returns, without the mesh, so returns the sensor dropped are not counted back.
+
+    Parameters
+    ----------
+    frame : DepthFrame
+        The ideal frame of the view (with triangle ids).
+    scene : MeshScene
+        The scene the frame was rendered from (for the triangle areas).
+    sensor : SensorSettings
+        The sensor's effects (:func:`wbsa.sensor.apply.apply_sensor`).
+    rng : numpy.random.Generator
+        The view's stream (:func:`view_rng`).
 
     Returns
     -------

@@ -1,4 +1,5 @@
-"""Kinect v1 depth noise as measured by Nguyen, Izadi & Lovell (3DIMPVT 2012).
+"""Kinect v1 depth noise as measured by Nguyen, Izadi & Lovell (3DIMPVT 2012): the structured-light record of
+:data:`wbsa.sensor.technology.TECHNOLOGIES`, as functions of depth and angle alone.
 
 θ is the angle between the surface normal and the viewing ray; z is the depth in metres.
 
@@ -14,8 +15,10 @@ from __future__ import annotations
 
 import numpy as np
 
-#: Above this angle between normal and ray the axial noise grows with θ (Nguyen et al. 2012).
-AXIAL_ANGLE_KNEE_RAD = np.deg2rad(60.0)
+from wbsa.sensor import technology
+
+#: The model (structured light; no disparity term: Nguyen's σz was measured with the quantisation in it).
+MODEL = technology.SensorModel(technology.TECHNOLOGIES["structured-light"])
 
 
 def axial_sigma_m(depth_m: np.ndarray | float, theta_rad: np.ndarray | float) -> np.ndarray:
@@ -33,12 +36,7 @@ def axial_sigma_m(depth_m: np.ndarray | float, theta_rad: np.ndarray | float) ->
     (...) float64
         σz in metres; ``inf`` at θ = π/2.
     """
-    z = np.asarray(depth_m, dtype=np.float64)
-    theta = np.asarray(theta_rad, dtype=np.float64)
-    base = 0.0012 + 0.0019 * (z - 0.4) ** 2
-    with np.errstate(divide="ignore", invalid="ignore"):
-        steep = 0.0001 / np.sqrt(z) * theta**2 / (np.pi / 2 - theta) ** 2
-    return np.where(theta > AXIAL_ANGLE_KNEE_RAD, base + steep, base)
+    return technology.axial_sigma_m(MODEL, depth_m, theta_rad)
 
 
 def lateral_sigma_px(theta_rad: np.ndarray | float) -> np.ndarray:
@@ -54,11 +52,24 @@ def lateral_sigma_px(theta_rad: np.ndarray | float) -> np.ndarray:
     (...) float64
         σL in pixels (independent of depth); ``inf`` at θ = π/2.
     """
-    theta = np.asarray(theta_rad, dtype=np.float64)
-    with np.errstate(divide="ignore"):
-        return 0.8 + 0.035 * theta / (np.pi / 2 - theta)
+    return technology.lateral_sigma_px(MODEL, theta_rad)
 
 
 def lateral_sigma_m(depth_m: np.ndarray | float, theta_rad: np.ndarray | float, fx: float) -> np.ndarray:
-    """Lateral σL in metres at depth ``depth_m``: σL[px] · z / fx."""
+    """Lateral σL in metres at depth ``depth_m``: σL[px] · z / fx.
+
+    Parameters
+    ----------
+    depth_m : (...) float
+        z-depth in metres.
+    theta_rad : (...) float
+        Angle between surface normal and viewing ray, radians.
+    fx : float
+        Focal length in pixels.
+
+    Returns
+    -------
+    (...) float64
+        σL in metres.
+    """
     return lateral_sigma_px(theta_rad) * np.asarray(depth_m, dtype=np.float64) / fx

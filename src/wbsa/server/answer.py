@@ -34,7 +34,9 @@ def run_estimate(depth_m: np.ndarray, camera, model, options, progress=None):
     body_fit = None if options.method == "regression" else options.body_fit
     return wbsa.estimate(depth_m, camera, model, method=options.method, body_fit=body_fit,
                          azimuth_deg=options.azimuth_deg, elevation_deg=options.elevation_deg,
-                         clothing_m=options.clothing_m, segment=SegmentSettings(pick=options.pick), progress=progress)
+                         clothing=options.clothes, clothing_m=options.clothing_m,
+                         stature_m=None if options.height_cm is None else options.height_cm / 100.0,
+                         segment=SegmentSettings(pick=options.pick), progress=progress)
 
 
 def _stem(name: str) -> str:

@@ -4,7 +4,7 @@
 ``GET /``                              the page (``static/index.html``; JS and CSS under ``/static``)
 ``GET /api/info``                      camera presets, methods, limits (for the page's form)
 ``POST /api/estimate``                 one depth file (form: ``depth``, optional ``intrinsics``,
-                                       ``camera``, ``clothing_cm``, ``method``, ``height_cm``,
+                                       ``camera``, ``clothes``, ``clothing_cm``, ``method``, ``height_cm``,
                                        ``mass_kg``, ``sex``, ``pick``, ``azimuth_deg``,
                                        ``elevation_deg``) -> the answer
 ``POST /api/result/{id}/pick?pick=x,y`` the same image, the person at pixel (x, y) -> a new answer
@@ -32,7 +32,8 @@ from wbsa.server.uploads import MAX_UPLOAD_BYTES, UploadError, check_depth_uploa
 
 STATIC = Path(__file__).parent / "static"
 #: Text fields of ``POST /api/estimate`` and ``POST /api/batch``.
-FIELDS = {"camera", "clothing_cm", "method", "height_cm", "mass_kg", "sex", "pick", "azimuth_deg", "elevation_deg"}
+FIELDS = {"camera", "clothes", "clothing_cm", "method", "height_cm", "mass_kg", "sex", "pick", "azimuth_deg",
+          "elevation_deg"}
 #: File fields.
 FILES = {"depth", "intrinsics"}
 #: Headers on every response: no script, style or image from anywhere but this server.
@@ -80,6 +81,7 @@ def options_from_form(form, presets, methods, body_fit=None) -> "Options":
     """The page's choices as :class:`~wbsa.server.jobs.Options`, every field checked (``body_fit``: the server's
     settings of the body fit)."""
     from wbsa.cli_types import pick as parse_pick
+    from wbsa.estimation.clothes import CLOTHES, clothes_help
     from wbsa.server.jobs import Options, camera_from_upload
 
     check_fields(form, FIELDS, FILES)
@@ -104,8 +106,12 @@ def options_from_form(form, presets, methods, body_fit=None) -> "Options":
         except argparse.ArgumentTypeError as exc:
             raise UploadError(f"pick: {exc}") from None
     clothing_cm = _number(f, "clothing_cm", 0, 5, "a thickness of clothes in cm")
+    clothes = f.get("clothes", "").strip() or None
+    if clothes is not None and clothes not in CLOTHES:
+        raise UploadError(f"clothes {clothes!r} is unknown; choose one of {clothes_help()}")
     return Options(camera=camera, intrinsics=camera_from_upload(intrinsics[0]) if intrinsics else None,
-                   intrinsics_name=intrinsics[0].name if intrinsics else "", clothing_m=(clothing_cm or 0.0) / 100.0,
+                   intrinsics_name=intrinsics[0].name if intrinsics else "", clothes=clothes,
+                   clothing_m=None if clothing_cm is None else clothing_cm / 100.0,
                    pick=pick, method=method, height_cm=_number(f, "height_cm", 1, 300, "a height in cm"),
                    mass_kg=_number(f, "mass_kg", 0.1, 700, "a mass in kg"), sex=sex,
                    azimuth_deg=_number(f, "azimuth_deg", -360, 360, "an azimuth in degrees"),

@@ -14,7 +14,8 @@ from dataclasses import dataclass, field
 from wbsa.server.uploads import Upload, UploadError, check_depth_upload
 
 #: The CSV's columns, in order.
-CSV_COLUMNS = ("file", "wbsa_m2", "wbsa_lo_m2", "wbsa_hi_m2", "level", "method", "camera", "flags", "error")
+CSV_COLUMNS = ("file", "wbsa_m2", "wbsa_lo_m2", "wbsa_hi_m2", "level", "method", "camera", "clothes", "clothing_m",
+               "clothing_sd_m", "clothing_stated", "stature_stated_m", "flags", "error")
 
 
 @dataclass
@@ -46,8 +47,10 @@ def row_of(result) -> dict:
     a = result.answer
     if "error" in a:
         return {"file": result.name, "error": a["error"], "flags": [], "result": result.id}
+    stated = {k: a["estimate"][k] for k in ("clothes", "clothing_m", "clothing_sd_m", "clothing_stated",
+                                            "stature_stated_m")}  # what was stated, or that nothing was
     return {"file": result.name, "wbsa_m2": a["wbsa_m2"], "wbsa_lo_m2": a["wbsa_lo_m2"], "wbsa_hi_m2": a["wbsa_hi_m2"],
-            "level": a["level"], "method": a["method"], "camera": a["camera"],
+            "level": a["level"], "method": a["method"], "camera": a["camera"], **stated,
             "flags": [f["name"] for f in a["flags"]], "error": "", "result": result.id}
 
 

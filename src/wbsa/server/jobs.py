@@ -38,11 +38,15 @@ class Options:
     intrinsics : dict or None
         An uploaded Open3D intrinsics JSON, parsed.
     intrinsics_name : str
-    clothing_m : float
+    clothes : str or None
+        The clothes by name (:data:`wbsa.estimation.clothes.CLOTHES`), or None.
+    clothing_m : float or None
+        Or an explicit layer of clothes (m); neither: nothing stated (flagged ``clothes_unstated``).
     pick : tuple of (int, int) or str or None
     method : str
     height_cm, mass_kg : float or None
-        Typed by the operator for the BSA formulae.
+        Typed by the operator for the BSA formulae; the height is also the stated stature of the estimate
+        (used where the subject's feet are not seen).
     sex : str or None
     azimuth_deg, elevation_deg : float or None
         A stated view (optional; it is estimated, and checked when given).
@@ -53,7 +57,8 @@ class Options:
     camera: str = "auto"
     intrinsics: dict | None = None
     intrinsics_name: str = ""
-    clothing_m: float = 0.0
+    clothes: str | None = None
+    clothing_m: float | None = None
     pick: object = None
     method: str = "regression"
     height_cm: float | None = None

@@ -56,7 +56,7 @@ class RoomTestSettings:
         bare, beside its centre), a few millimetres from where it stands around the bare one.
     clothing_stated : bool
         The estimator is told the layer, as a user states it (``clothing_m`` of :func:`~wbsa.estimation.estimate`);
-        False: it is told "none", what a layer nobody states reads.
+        False: it is told nothing (taken as none and flagged ``clothes_unstated``), what a layer nobody states reads.
     seed : int
     """
 
@@ -241,7 +241,7 @@ def room_capture_chunk(population: pd.DataFrame, others: pd.DataFrame, first: in
             t0 = time.perf_counter()
             try:
                 est = estimate(depth, cap.camera, model, segment=SegmentSettings(pick=settings.pick),
-                               clothing_m=settings.clothing_m if settings.clothing_stated else 0.0)
+                               clothing_m=settings.clothing_m if settings.clothing_stated else None)
             except WbsaError as exc:
                 row.update(error=str(exc), seconds=time.perf_counter() - t0)
                 rows.append(row)

@@ -15,7 +15,7 @@ import numpy as np
 
 from wbsa.camera.presets import TRAINED_CAMERAS, CameraRecord, camera_record
 from wbsa.errors import WbsaError
-from wbsa.sensor.settings import SensorSettings
+from wbsa.sensor.settings import KINECT_V1_BASELINE_M, KINECT_V1_DISPARITY_STEP_PX, SensorSettings
 from wbsa.typing import EDGE_PIXELS, EdgePixels
 
 #: Camera-to-subject distances (m) a training world may span: nearer, a standing adult does not fit the frame
@@ -108,7 +108,8 @@ def sensor_for(camera: CameraRecord, rng: np.random.Generator, settings: Capture
         return SensorSettings()
     baseline, step = camera.disparity or (None, None)
     return SensorSettings(noise="nguyen2012", quantise=baseline is not None,
-                       baseline_m=baseline or 0.075, disparity_step_px=step or 0.125,
+                       baseline_m=baseline or KINECT_V1_BASELINE_M,
+                       disparity_step_px=step or KINECT_V1_DISPARITY_STEP_PX,
                        holes_fraction=float(rng.uniform(0, settings.max_holes_fraction)),
                        pixel_dropout=float(rng.uniform(0, settings.max_pixel_dropout)), range_limits=True)
 

@@ -17,6 +17,7 @@ import numpy as np
 import pandas as pd
 
 from wbsa.estimation.subject.cloud import Plane
+from wbsa.sensor.technology import envelope_model
 from wbsa.training.capture import as_scan_render, sample_capture
 from wbsa.training.samples import Samples
 from wbsa.training.settings import RenderSettings
@@ -26,13 +27,14 @@ from wbsa.training.store import RenderStore
 TRUTH_COLUMNS = ("subject_id", "sex", "age_years", "stature_m", "mass_kg", "wbsa_m2")
 
 
-def render_floor(pose, rng: np.random.Generator, error_m: float, tilt_deg: float) -> Plane:
-    """The floor z = 0 of a render in its camera frame, with a small random error (as if detected)."""
+def render_floor(pose, rng: np.random.Generator, error_m: float, tilt_deg: float, sensor=None) -> Plane:
+    """The floor z = 0 of a render in its camera frame, with a small random error (as if detected), with the
+    depth-noise envelope ``sensor`` (:func:`wbsa.sensor.technology.envelope_model` of the camera)."""
     n = pose.R @ np.array([0.0, 0.0, 1.0])
     d = float(n @ pose.T)
     tilt = rng.normal(0.0, np.radians(tilt_deg), size=3)
     n = n + np.cross(tilt, n)
-    return Plane(n / np.linalg.norm(n), d + float(rng.normal(0.0, error_m)))
+    return Plane(n / np.linalg.norm(n), d + float(rng.normal(0.0, error_m)), sensor=sensor)
 
 
 def render_chunk(population: pd.DataFrame, first_sample: int, settings: RenderSettings, seed: int = 0,
@@ -93,11 +95,12 @@ def render_chunk(population: pd.DataFrame, first_sample: int, settings: RenderSe
                     sim = simulate_view(scene, cap.camera, cap.view, sensor=cap.sensor, seed=seed,
                                         subject_id=sample, reconstruct=("grid",), keep_frame=True)
                     floor = render_floor(pose_from_view(cap.view, scene.center), floor_rng, settings.floor_error_m,
-                                         settings.floor_tilt_deg)
+                                         settings.floor_tilt_deg, envelope_model(cap.camera))
                     row.update(vbsa_visible_m2=sim.row["vbsa_visible_m2"],
                                vbsa_recon_grid_m2=sim.row["vbsa_recon_grid_m2"])
                     depth, mixed = repair_mixed_pixels(
-                        with_edge_pixels(sim.frame.depth_m, cap.edge_pixels, cap.edge_share, edge_rng), cap.camera.fx)
+                        with_edge_pixels(sim.frame.depth_m, cap.edge_pixels, cap.edge_share, edge_rng), cap.camera.fx,
+                        envelope_model(cap.camera))
                     mask = depth > 0 if np.count_nonzero(depth) >= 200 else None
                 if mask is None:
                     row.update(m_ok=False)
@@ -132,7 +135,7 @@ def _room_capture(mesh, cap, alone: bool, rng: np.random.Generator, edge_rng: np
         room = compose_room(mesh, cap.view.azimuth_deg, wall_behind_m=float(rng.uniform(*settings.wall_behind_m)))
     _, depth = capture_room(room, cap, seed=seed, subject_id=sample)
     depth, mixed = repair_mixed_pixels(with_edge_pixels(depth, cap.edge_pixels, cap.edge_share, edge_rng),
-                                        cap.camera.fx)
+                                        cap.camera.fx, envelope_model(cap.camera))
     try:
         seg = segment_subject(depth, cap.camera, SegmentSettings(pick="center"))
     except WbsaError:

@@ -1,7 +1,7 @@
 """NVIDIA Warp kernels of the Warp back end: every view of one body in a few compiled passes (CPU or CUDA).
 
-(About 540 lines, above the project's ~400: the passes, their shared structs and device functions stay one
-Warp module, compiled and cached as one unit.)
+(About 950 lines, above the project's ~400: the passes, their shared structs and device functions stay one
+Warp module, compiled and cached as one unit; about 400 of the lines are the functions' Parameters sections.)
 
 One ray per pixel centre through ``K⁻¹ [u, v, 1]`` finds the nearest triangle whose projection holds
 that centre, so for a view with the whole mesh in front of the camera the pixel rays are answered by
@@ -74,14 +74,44 @@ class Camera:
 
 @wp.func
 def to_pixel(cam: Camera, X: wp.vec3d):
-    """Image coordinates (u, v) of a camera-frame point with X[2] > 0."""
+    """Image coordinates (u, v) of a camera-frame point with X[2] > 0.
+
+    Parameters
+    ----------
+    cam : Camera
+        The batch's intrinsics and grazing settings.
+    X : wp.vec3d
+        Camera-frame point, metres.
+
+    Returns
+    -------
+    (wp.float64, wp.float64)
+        u, v in pixels.
+    """
     y = X[1] / X[2]
     return cam.fx * X[0] / X[2] + cam.skew * y + cam.cx, cam.fy * y + cam.cy
 
 
 @wp.func
 def ray_depth(cam: Camera, n: wp.vec3d, w: wp.float64, px: wp.float64, py: wp.float64):
-    """z-depth at which the ray of pixel (px, py) meets the plane n · X = w."""
+    """z-depth at which the ray of pixel (px, py) meets the plane n · X = w.
+
+    Parameters
+    ----------
+    cam : Camera
+        The batch's intrinsics and grazing settings.
+    n : wp.vec3d
+        Normal of the plane (any length), camera frame.
+    w : wp.float64
+        n · X of any point X of the plane.
+    px, py : wp.float64
+        Pixel coordinates (u, v).
+
+    Returns
+    -------
+    wp.float64
+        z in metres (not finite where the ray is parallel to the plane).
+    """
     yn = (py - cam.cy) / cam.fy
     xn = (px - cam.cx - cam.skew * yn) / cam.fx
     return w / (n[0] * xn + n[1] * yn + n[2])
@@ -89,19 +119,58 @@ def ray_depth(cam: Camera, n: wp.vec3d, w: wp.float64, px: wp.float64, py: wp.fl
 
 @wp.func
 def depth_key(z: wp.float64, tri: int):
+    """Key of a hit of triangle ``tri`` at depth z: the depth quantized to z · 2^24 (clamped to [0, 2^32 − 1])
+    in the high 32 bits, the triangle in the low 32, so the smallest key is the nearest hit (ties: the lowest id).
+
+    Parameters
+    ----------
+    z : wp.float64
+        z-depth, metres.
+    tri : int
+        Triangle index (< 2^32).
+
+    Returns
+    -------
+    wp.uint64
+    """
     q = wp.min(wp.max(z * DEPTH_SCALE, f64(0.0)), DEPTH_KEY_MAX)
     return (wp.uint64(q) << wp.uint64(32)) | wp.uint64(tri)
 
 
 @wp.func
 def key_triangle(key: wp.uint64):
+    """The triangle index of a key (its low 32 bits; :func:`depth_key`).
+
+    Parameters
+    ----------
+    key : wp.uint64
+        A key other than ``EMPTY_KEY``.
+
+    Returns
+    -------
+    int
+    """
     return int(key & wp.uint64(0xFFFFFFFF))
 
 
 @wp.func
 def inside_triangle(ax: wp.float64, ay: wp.float64, bx: wp.float64, by: wp.float64, cx: wp.float64,
                     cy: wp.float64, area: wp.float64, px: wp.float64, py: wp.float64):
-    """Whether (px, py) lies in the projected triangle (edges included), either orientation."""
+    """Whether (px, py) lies in the projected triangle (edges included), either orientation.
+
+    Parameters
+    ----------
+    ax, ay, bx, by, cx, cy : wp.float64
+        The projected vertices a, b, c, pixels.
+    area : wp.float64
+        (b − a) × (c − a): twice the signed projected area, pixels²; its sign gives the orientation.
+    px, py : wp.float64
+        The pixel centre, pixels.
+
+    Returns
+    -------
+    bool
+    """
     e0 = (cx - bx) * (py - by) - (cy - by) * (px - bx)
     e1 = (ax - cx) * (py - cy) - (ay - cy) * (px - cx)
     e2 = (bx - ax) * (py - ay) - (by - ay) * (px - ax)
@@ -119,7 +188,25 @@ N_VIEW_TERMS = 19
 @wp.func
 def facing_height(vt: wp.array2d(dtype=wp.float32), b: int, soa: wp.array2d(dtype=wp.float32), tri: int):
     """h = n · (C − c) of a triangle, float32, operation for operation as
-    :func:`wbsa.camera.area.triangle_view_terms` (``soa``: the scene's per-triangle float32 columns)."""
+    :func:`wbsa.camera.area.triangle_view_terms` (``soa``: the scene's per-triangle float32 columns).
+
+    Parameters
+    ----------
+    vt : (B, 19) wp.array2d(dtype=wp.float32)
+        Per-view terms (columns: :data:`N_VIEW_TERMS`).
+    b : int
+        View index.
+    soa : (8, m) wp.array2d(dtype=wp.float32)
+        Per-triangle columns, relative to the scene centre: outward normal n (0–2), centroid c (3–5), n · c (6),
+        |c|² (7).
+    tri : int
+        Triangle index.
+
+    Returns
+    -------
+    wp.float32
+        h in metres (n unit, outward; C the camera centre).
+    """
     h = vt[b, 0] * soa[0, tri]
     h = h + vt[b, 1] * soa[1, tri]
     h = h + vt[b, 2] * soa[2, tri]
@@ -129,7 +216,18 @@ def facing_height(vt: wp.array2d(dtype=wp.float32), b: int, soa: wp.array2d(dtyp
 @wp.func
 def facing_dist2(vt: wp.array2d(dtype=wp.float32), b: int, soa: wp.array2d(dtype=wp.float32), tri: int):
     """d = max(|C − c|², 1e-30) of a triangle, float32, as :func:`wbsa.camera.area.triangle_view_terms`;
-    the triangle's cos θ is h / √d (:func:`below_grazing`)."""
+    the triangle's cos θ is h / √d (:func:`below_grazing`).
+
+    Parameters
+    ----------
+    vt, b, soa, tri
+        As in :func:`facing_height`.
+
+    Returns
+    -------
+    wp.float32
+        d in m².
+    """
     d = vt[b, 3] * soa[3, tri]
     d = d + vt[b, 4] * soa[4, tri]
     d = d + vt[b, 5] * soa[5, tri]
@@ -140,14 +238,38 @@ def facing_dist2(vt: wp.array2d(dtype=wp.float32), b: int, soa: wp.array2d(dtype
 
 @wp.func
 def facing(vt: wp.array2d(dtype=wp.float32), b: int, soa: wp.array2d(dtype=wp.float32), tri: int):
-    """(h, d) of a triangle (:func:`facing_height`, :func:`facing_dist2`)."""
+    """(h, d) of a triangle (:func:`facing_height`, :func:`facing_dist2`).
+
+    Parameters
+    ----------
+    vt, b, soa, tri
+        As in :func:`facing_height`.
+
+    Returns
+    -------
+    (wp.float32, wp.float32)
+    """
     return facing_height(vt, b, soa, tri), facing_dist2(vt, b, soa, tri)
 
 
 @wp.func
 def below_grazing(cam: Camera, h: wp.float32, d: wp.float32):
     """|cos θ| < g for cos θ = h / √d rounded in float32 as the reference does; the root and the division
-    are taken only within 2 % of the threshold (elsewhere h² against g² d decides: the same answer)."""
+    are taken only within 2 % of the threshold (elsewhere h² against g² d decides: the same answer).
+
+    Parameters
+    ----------
+    cam : Camera
+        Its ``grazing_cos`` is g.
+    h : wp.float32
+        n · (C − c) of the triangle (:func:`facing_height`).
+    d : wp.float32
+        max(|C − c|², 1e-30) of the triangle (:func:`facing_dist2`).
+
+    Returns
+    -------
+    bool
+    """
     hh = f64(h) * f64(h)
     gg = f64(cam.grazing_cos) * f64(cam.grazing_cos) * f64(d)
     if hh < f64(0.98) * gg:
@@ -159,7 +281,21 @@ def below_grazing(cam: Camera, h: wp.float32, d: wp.float32):
 
 @wp.func
 def is_grazing(cam: Camera, h: wp.float32, d: wp.float32):
-    """One-sided scene: 0 < cos θ < g; otherwise |cos θ| < g (as :func:`wbsa.camera.grazing.grazing_area_m2`)."""
+    """One-sided scene: 0 < cos θ < g; otherwise |cos θ| < g (as :func:`wbsa.camera.grazing.grazing_area_m2`).
+
+    Parameters
+    ----------
+    cam : Camera
+        Its ``one_sided`` and ``grazing_cos`` (g).
+    h : wp.float32
+        n · (C − c) of the triangle (:func:`facing_height`).
+    d : wp.float32
+        max(|C − c|², 1e-30) of the triangle (:func:`facing_dist2`).
+
+    Returns
+    -------
+    bool
+    """
     if cam.one_sided != 0:
         return h > wp.float32(0.0) and below_grazing(cam, h, d)
     return below_grazing(cam, h, d)
@@ -167,7 +303,22 @@ def is_grazing(cam: Camera, h: wp.float32, d: wp.float32):
 
 @wp.func
 def project32(vt: wp.array2d(dtype=wp.float32), b: int, P: wp.vec3):
-    """(u, v, z) float32 of a point relative to the scene centre, as :func:`wbsa.camera.roi.homogeneous_pixels`."""
+    """(u, v, z) float32 of a point relative to the scene centre, as :func:`wbsa.camera.roi.homogeneous_pixels`.
+
+    Parameters
+    ----------
+    vt : (B, 19) wp.array2d(dtype=wp.float32)
+        Per-view terms (columns: :data:`N_VIEW_TERMS`).
+    b : int
+        View index.
+    P : wp.vec3
+        Point relative to the scene centre, metres, float32.
+
+    Returns
+    -------
+    (wp.float32, wp.float32, wp.float32)
+        u, v in pixels, z in metres.
+    """
     uz = vt[b, 7] * P[0]
     uz = uz + vt[b, 8] * P[1]
     uz = uz + vt[b, 9] * P[2]
@@ -189,7 +340,33 @@ def project_vertices(verts: wp.array(dtype=wp.vec3f), rot: wp.array(dtype=wp.mat
                      lo: wp.array2d(dtype=wp.float64), hi: wp.array2d(dtype=wp.float64),
                      behind: wp.array(dtype=int), chunk: int):
     """Camera coordinates and pixel coordinates of every vertex in every view (``chunk`` vertices per
-    thread); per-view pixel bounds (atomic minimum and maximum of each chunk's)."""
+    thread); per-view pixel bounds (atomic minimum and maximum of each chunk's). Launched over
+    (B, ⌈n / chunk⌉).
+
+    Parameters
+    ----------
+    verts : (n,) wp.array(dtype=wp.vec3f)
+        Vertices relative to the scene centre, metres, float32.
+    rot : (B,) wp.array(dtype=wp.mat33d)
+        World-to-camera rotation R of each view.
+    trans : (B,) wp.array(dtype=wp.vec3d)
+        R · centre + T of each view, metres: R · p + trans is the camera-frame point of a point p relative to
+        the scene centre.
+    cam : Camera
+        The batch's intrinsics and grazing settings.
+    xyz : (B, n) wp.array2d(dtype=wp.vec3d)
+        Out: camera-frame vertices, metres.
+    uv : (B, n) wp.array2d(dtype=wp.vec2d)
+        Out: pixel coordinates (u, v); (0, 0) for a vertex with z ≤ 1e-6 m.
+    lo : (B, 2) wp.array2d(dtype=wp.float64)
+        In/out: smallest (u, v) of the view's vertices in front of the camera (start at +inf).
+    hi : (B, 2) wp.array2d(dtype=wp.float64)
+        In/out: largest (u, v) (start at −inf).
+    behind : (B,) wp.array(dtype=int)
+        In/out: set to 1 for a view with a vertex at z ≤ 1e-6 m (start at 0).
+    chunk : int
+        Vertices per thread.
+    """
     b, k = wp.tid()
     n = verts.shape[0]
     inf = f64(wp.inf)
@@ -224,7 +401,29 @@ def hole_boxes(hole_vertices: wp.array(dtype=int), hole_start: wp.array(dtype=in
                hole_centroids: wp.array(dtype=wp.vec3d), uv: wp.array2d(dtype=wp.vec2d), rot: wp.array(dtype=wp.mat33d),
                trans: wp.array(dtype=wp.vec3d), cam: Camera, boxes: wp.array2d(dtype=wp.vec4d)):
     """Pixel box (u_min, u_max, v_min, v_max) of each hole's cap in each view: its boundary vertices and the
-    centroid of the fan that closes it (the whole image if the centroid is behind the camera)."""
+    centroid of the fan that closes it (the whole image if the centroid is behind the camera). Launched over
+    (B, n_holes).
+
+    Parameters
+    ----------
+    hole_vertices : (n_boundary,) wp.array(dtype=int)
+        Indices of the boundary vertices of every hole, one hole after another.
+    hole_start : (n_holes + 1,) wp.array(dtype=int)
+        Where each hole's vertices start in ``hole_vertices`` (and the end).
+    hole_centroids : (n_holes,) wp.array(dtype=wp.vec3d)
+        Mean of each hole's boundary vertices, relative to the scene centre, metres.
+    uv : (B, n) wp.array2d(dtype=wp.vec2d)
+        Pixel coordinates (u, v) of the vertices (:func:`project_vertices`).
+    rot : (B,) wp.array(dtype=wp.mat33d)
+        World-to-camera rotation R of each view.
+    trans : (B,) wp.array(dtype=wp.vec3d)
+        R · centre + T of each view, metres: R · p + trans is the camera-frame point of a point p relative to
+        the scene centre.
+    cam : Camera
+        The batch's intrinsics and grazing settings.
+    boxes : (B, n_holes) wp.array2d(dtype=wp.vec4d)
+        Out: the boxes, pixels.
+    """
     b, h = wp.tid()
     X = rot[b] * hole_centroids[h] + trans[b]
     if X[2] <= f64(1.0e-6):
@@ -244,7 +443,17 @@ def raster_triangle(faces: wp.array(dtype=wp.vec3i), xyz: wp.array2d(dtype=wp.ve
                      vt: wp.array2d(dtype=wp.float32), cam: Camera, grids: wp.array(dtype=wp.vec4i),
                      offsets: wp.array(dtype=int), boxes: wp.array2d(dtype=wp.vec4d), keys: wp.array(dtype=wp.uint64),
                      split: wp.array2d(dtype=int), n_points: wp.array(dtype=wp.int64), b: int, tri: int):
-    """Triangle ``tri`` of view ``b`` (:func:`raster_triangles`)."""
+    """Triangle ``tri`` of view ``b`` (:func:`raster_triangles`).
+
+    Parameters
+    ----------
+    faces, xyz, uv, soa, edges, vt, cam, grids, offsets, boxes, keys, split, n_points
+        As in :func:`raster_triangles`.
+    b : int
+        View index.
+    tri : int
+        Triangle index.
+    """
     height = facing_height(vt, b, soa, tri)
     s = int(0)
     # (in a one-sided scene a back face is never grazing: its distance need not be computed)
@@ -319,6 +528,39 @@ def raster_triangles(faces: wp.array(dtype=wp.vec3i), xyz: wp.array2d(dtype=wp.v
     ``grids[b]`` = (v0, u0, stride, n_rows) of view b's pixel grid (an empty border of one cell on each side).
     In a one-sided scene (closed, outward surface) a back face can be the first hit only of a ray that
     enters through a hole, so back faces outside every hole's cap box (``boxes``) are not rasterized.
+
+    Parameters
+    ----------
+    faces : (m,) wp.array(dtype=wp.vec3i)
+        Vertex indices of each triangle.
+    xyz : (B, n) wp.array2d(dtype=wp.vec3d)
+        Camera-frame vertices, metres (:func:`project_vertices`).
+    uv : (B, n) wp.array2d(dtype=wp.vec2d)
+        Pixel coordinates (u, v) of the vertices (:func:`project_vertices`).
+    soa : (8, m) wp.array2d(dtype=wp.float32)
+        Per-triangle columns, relative to the scene centre: outward normal n (0–2), centroid c (3–5), n · c (6),
+        |c|² (7).
+    edges : (m,) wp.array(dtype=wp.float64)
+        Longest edge of each triangle, metres.
+    vt : (B, 19) wp.array2d(dtype=wp.float32)
+        Per-view terms (columns: :data:`N_VIEW_TERMS`).
+    cam : Camera
+        The batch's intrinsics and grazing settings.
+    grids : (B,) wp.array(dtype=wp.vec4i)
+        (v0, u0, stride, n_rows) of each view's pixel grid.
+    offsets : (B,) wp.array(dtype=int)
+        First cell of each view's grid in the flat cell arrays (``keys``, ``depth``).
+    boxes : (B, n_holes) wp.array2d(dtype=wp.vec4d)
+        Pixel box of each hole's cap (:func:`hole_boxes`); no column without holes.
+    keys : (n_cells,) wp.array(dtype=wp.uint64)
+        Depth key per grid cell of all views (:func:`depth_key`; ``EMPTY_KEY`` where no triangle).
+        In/out: atomic minimum of each covered cell.
+    split : (B, m) wp.array2d(dtype=int)
+        Out: sub-triangles per side s of each grazing triangle, 0 for the others.
+    n_points : (B · m,) wp.array(dtype=wp.int64)
+        Out: s² points per (view, triangle), flat (index b · m + tri).
+    chunk : int
+        Triangles per thread; launched over (B, ⌈m / chunk⌉).
     """
     b, k = wp.tid()
     m = faces.shape[0]
@@ -335,7 +577,38 @@ def resolve_pixels(soa: wp.array2d(dtype=wp.float32), vt: wp.array2d(dtype=wp.fl
     """Per grid row of a view: z-depth of each hit pixel (from its key, 6e-8 m steps), pixel count,
     Σ z³ · w over the pixels (w = 1 / |n · (C − c)| in float32 on non-grazing triangles, 0 on grazing ones,
     as :func:`wbsa.camera.area.visible_area_m2`), whether a pixel on the image border is hit; marks the
-    triangles hit."""
+    triangles hit.
+
+    Launched over (B, max n_rows); the grid's first and last rows (its empty border) and rows past a view's
+    ``n_rows`` are not written (the host zeroes them).
+
+    Parameters
+    ----------
+    soa : (8, m) wp.array2d(dtype=wp.float32)
+        Per-triangle columns, relative to the scene centre: outward normal n (0–2), centroid c (3–5), n · c (6),
+        |c|² (7).
+    vt : (B, 19) wp.array2d(dtype=wp.float32)
+        Per-view terms (columns: :data:`N_VIEW_TERMS`).
+    cam : Camera
+        The batch's intrinsics and grazing settings.
+    grids : (B,) wp.array(dtype=wp.vec4i)
+        (v0, u0, stride, n_rows) of each view's pixel grid.
+    offsets : (B,) wp.array(dtype=int)
+        First cell of each view's grid in the flat cell arrays (``keys``, ``depth``).
+    keys : (n_cells,) wp.array(dtype=wp.uint64)
+        Depth key per grid cell of all views (:func:`depth_key`; ``EMPTY_KEY`` where no triangle).
+    depth : (n_cells,) wp.array(dtype=wp.float32)
+        Out: z-depth of each hit cell, metres (other cells are left as they are).
+    seen : (B, m) wp.array2d(dtype=wp.uint8)
+        Out: set to 1 for each triangle hit (other entries are left as they are).
+    n_pixels : (B, max n_rows) wp.array2d(dtype=int)
+        Out: hit pixels per grid row.
+    footprint : (B, max n_rows) wp.array2d(dtype=wp.float64)
+        Out: Σ z³ · w per grid row (the host sums a view's rows and divides by fx · fy:
+        the non-grazing part of the visible area, m²).
+    border : (B, max n_rows) wp.array2d(dtype=int)
+        Out: 1 for a grid row with a hit pixel on the image border.
+    """
     b, r = wp.tid()
     g = grids[b]
     if r < 1 or r >= g[3] - 1:
@@ -369,7 +642,24 @@ def resolve_pixels(soa: wp.array2d(dtype=wp.float32), vt: wp.array2d(dtype=wp.fl
 
 @wp.func
 def lookup(depth: wp.array(dtype=wp.float32), base: int, g: wp.vec4i, row: int, col: int):
-    """Depth at image pixel (row, col) of a view's grid; inf outside the grid."""
+    """Depth at image pixel (row, col) of a view's grid; inf outside the grid.
+
+    Parameters
+    ----------
+    depth : (n_cells,) wp.array(dtype=wp.float32)
+        z-depth per grid cell, metres.
+    base : int
+        First cell of the view's grid in ``depth``.
+    g : wp.vec4i
+        (v0, u0, stride, n_rows) of the view's grid.
+    row, col : int
+        Image pixel.
+
+    Returns
+    -------
+    wp.float32
+        Metres.
+    """
     r = row - g[0]
     c = col - g[1]
     if r < 0 or r >= g[3] or c < 0 or c >= g[2]:
@@ -381,7 +671,28 @@ def lookup(depth: wp.array(dtype=wp.float32), base: int, g: wp.vec4i, row: int, 
 def grazing_point(vt: wp.array2d(dtype=wp.float32), cam: Camera, g: wp.vec4i, base: int,
                   depth: wp.array(dtype=wp.float32), origins: wp.array(dtype=wp.vec3), C: wp.vec3, front: bool,
                   state: wp.array(dtype=int), rays: wp.array2d(dtype=wp.float32), b: int, P: wp.vec3, slot: int):
-    """Decide one point P (relative to the scene centre) of a grazing triangle of view b (:func:`grazing_points`)."""
+    """Decide one point P (relative to the scene centre) of a grazing triangle of view b (:func:`grazing_points`).
+
+    Parameters
+    ----------
+    vt, cam, depth, origins, state, rays
+        As in :func:`grazing_points`.
+    g : wp.vec4i
+        (v0, u0, stride, n_rows) of the view's grid.
+    base : int
+        First cell of the view's grid in ``depth``.
+    C : wp.vec3
+        The view's camera centre relative to the scene centre, metres, float32.
+    front : bool
+        The triangle faces the camera (always in a one-sided scene): only then can the depth buffer alone
+        make the point visible.
+    b : int
+        View index.
+    P : wp.vec3
+        The point, relative to the scene centre, metres, float32.
+    slot : int
+        The point's index in ``state`` and ``rays``.
+    """
     u, v, z = project32(vt, b, P)
     result = int(0)
     inside = z > wp.float32(0.0)
@@ -421,7 +732,19 @@ def grazing_triangle(split: wp.array2d(dtype=int), slots: wp.array(dtype=wp.int6
                      b: int, tri: int, s: int):
     """The points of one grazing triangle of view b (:func:`grazing_points`): its centroid (s = 1), or the
     centroids of its s × s equal sub-triangles (as :func:`wbsa.camera.grazing.subtriangle_centroids` and
-    :func:`wbsa.camera.grazing.split_area_m2`, in float64), in slot order."""
+    :func:`wbsa.camera.grazing.split_area_m2`, in float64), in slot order.
+
+    Parameters
+    ----------
+    split, slots, faces, verts, soa, vt, cam, grids, offsets, depth, origins, centers, state, rays
+        As in :func:`grazing_points`.
+    b : int
+        View index.
+    tri : int
+        Triangle index.
+    s : int
+        Sub-triangles per side (``split[b, tri]``, > 0).
+    """
     slot = int(slots[b * split.shape[1] + tri])
     g = grids[b]
     base = offsets[b]
@@ -468,6 +791,40 @@ def grazing_points(split: wp.array2d(dtype=int), slots: wp.array(dtype=wp.int64)
     ``hidden_px`` in front, otherwise a query (2) whose any-hit ray is written to ``rays`` as the reference
     casts it: origin the camera centre in world coordinates (``origins``, float32), direction
     (point − centre) − (C − centre) in float32. Points outside the image are 0.
+
+    Parameters
+    ----------
+    split : (B, m) wp.array2d(dtype=int)
+        Sub-triangles per side s of each grazing triangle, 0 for the others (:func:`raster_triangles`).
+    slots : (B · m,) wp.array(dtype=wp.int64)
+        First slot of each (view, triangle)'s points: the exclusive scan of ``n_points``.
+    faces : (m,) wp.array(dtype=wp.vec3i)
+        Vertex indices of each triangle.
+    verts : (n,) wp.array(dtype=wp.vec3f)
+        Vertices relative to the scene centre, metres, float32.
+    soa : (8, m) wp.array2d(dtype=wp.float32)
+        Per-triangle columns, relative to the scene centre: outward normal n (0–2), centroid c (3–5), n · c (6),
+        |c|² (7).
+    vt : (B, 19) wp.array2d(dtype=wp.float32)
+        Per-view terms (columns: :data:`N_VIEW_TERMS`).
+    cam : Camera
+        The batch's intrinsics and grazing settings.
+    grids : (B,) wp.array(dtype=wp.vec4i)
+        (v0, u0, stride, n_rows) of each view's pixel grid.
+    offsets : (B,) wp.array(dtype=int)
+        First cell of each view's grid in the flat cell arrays (``keys``, ``depth``).
+    depth : (n_cells,) wp.array(dtype=wp.float32)
+        z-depth per grid cell, metres; inf where no triangle (:func:`resolve_pixels`).
+    origins : (B,) wp.array(dtype=wp.vec3)
+        Camera centre of each view in world coordinates, metres, float32 (the rays' origins).
+    centers : (B,) wp.array(dtype=wp.vec3d)
+        Camera centre of each view relative to the scene centre, metres.
+    state : (n_slots,) wp.array(dtype=int)
+        Out: per point slot, 1 visible, 0 hidden or outside the image, 2 undecided (an any-hit query).
+    rays : (n_slots, 6) wp.array2d(dtype=wp.float32)
+        Out: the query points' rays, origin (0–2) and direction (3–5); written only for state 2.
+    chunk : int
+        Triangles per thread; launched over (B, ⌈m / chunk⌉).
     """
     b, k = wp.tid()
     m = split.shape[1]
@@ -485,6 +842,17 @@ def anyhit_queries(mesh: wp.uint64, rays: wp.array2d(dtype=wp.float32), cam: Cam
 
     The rays are the reference's (:func:`wbsa.camera.grazing.points_visible`, written by
     :func:`grazing_points`), against the mesh's float32 world coordinates (``mesh``), as Embree sees them.
+
+    Parameters
+    ----------
+    mesh : wp.uint64
+        Id of the Warp mesh (BVH) of the scene's float32 world-coordinate vertices, metres.
+    rays : (n_slots, 6) wp.array2d(dtype=wp.float32)
+        Origin (0–2) and direction (3–5) of each point's ray, world coordinates (:func:`grazing_points`).
+    cam : Camera
+        Its ``t_tol``: a hit counts before 1 − t_tol of the way to the point.
+    state : (n_slots,) wp.array(dtype=int)
+        In/out: each 2 becomes 1 (visible) or 0 (hidden); launched over the n_slots slots.
     """
     k = wp.tid()
     if state[k] != 2:
@@ -503,7 +871,30 @@ def reduce_triangles(areas: wp.array(dtype=wp.float64), seen: wp.array2d(dtype=w
                      hit_area: wp.array2d(dtype=wp.float64), n_hit: wp.array2d(dtype=int),
                      graze: wp.array2d(dtype=wp.float64)):
     """Per view and chunk of triangles, in order: area of the triangles hit, their number, and the visible
-    area of the grazing ones (area × share of visible points, ``state`` 1; ``split`` all 0 when there are none)."""
+    area of the grazing ones (area × share of visible points, ``state`` 1; ``split`` all 0 when there are none).
+    Launched over (B, ⌈m / chunk⌉).
+
+    Parameters
+    ----------
+    areas : (m,) wp.array(dtype=wp.float64)
+        Area of each triangle, m².
+    seen : (B, m) wp.array2d(dtype=wp.uint8)
+        1 for the triangles hit in each view (:func:`resolve_pixels`).
+    chunk : int
+        Triangles per thread.
+    split : (B, m) wp.array2d(dtype=int)
+        Sub-triangles per side s of each grazing triangle, 0 for the others (:func:`raster_triangles`).
+    slots : (B · m,) wp.array(dtype=wp.int64)
+        First slot of each (view, triangle)'s points: the exclusive scan of ``n_points``.
+    state : (n_slots,) wp.array(dtype=int)
+        1 for a visible point (:func:`grazing_points`, :func:`anyhit_queries`).
+    hit_area : (B, ⌈m / chunk⌉) wp.array2d(dtype=wp.float64)
+        Out: area of the triangles hit, per chunk, m².
+    n_hit : (B, ⌈m / chunk⌉) wp.array2d(dtype=int)
+        Out: number of triangles hit, per chunk.
+    graze : (B, ⌈m / chunk⌉) wp.array2d(dtype=wp.float64)
+        Out: visible area of the grazing triangles, per chunk, m².
+    """
     b, k = wp.tid()
     m = areas.shape[0]
     start = k * chunk
@@ -532,7 +923,20 @@ def reduce_triangles(areas: wp.array(dtype=wp.float64), seen: wp.array2d(dtype=w
 @wp.kernel
 def cast_rays(mesh: wp.uint64, rays: wp.array2d(dtype=wp.float32), t_hit: wp.array(dtype=wp.float32),
               face: wp.array(dtype=int)):
-    """Bare closest-hit ray casting with Warp's BVH (origin, direction per row): the Warp ray-casting floor."""
+    """Bare closest-hit ray casting with Warp's BVH (origin, direction per row): the Warp ray-casting floor.
+    Launched over the k rays.
+
+    Parameters
+    ----------
+    mesh : wp.uint64
+        Id of the Warp mesh (BVH) of the scene's float32 world-coordinate vertices, metres.
+    rays : (k, 6) wp.array2d(dtype=wp.float32)
+        Origin (0–2) and direction (3–5) of each ray, world coordinates, metres.
+    t_hit : (k,) wp.array(dtype=wp.float32)
+        Out: ray parameter of the closest hit (metres for a unit direction), inf for a miss.
+    face : (k,) wp.array(dtype=int)
+        Out: the triangle hit, −1 for a miss.
+    """
     i = wp.tid()
     o = wp.vec3(rays[i, 0], rays[i, 1], rays[i, 2])
     d = wp.vec3(rays[i, 3], rays[i, 4], rays[i, 5])

@@ -109,6 +109,25 @@ def is_real_number(value: object) -> bool:
     return (isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_)))
 
 
+def check_stated_stature(stature_m: float) -> float:
+    """A stated stature (m) as a float, or a one-line error if it is not a human height (:data:`HUMAN_HEIGHT_M`).
+
+    Parameters
+    ----------
+    stature_m : float
+        The stature the user stated (m).
+
+    Returns
+    -------
+    float
+    """
+    lo, hi = HUMAN_HEIGHT_M
+    if not (is_real_number(stature_m) and math.isfinite(float(stature_m)) and lo <= float(stature_m) <= hi):
+        raise WbsaError(f"the stated stature {stature_m!r} m must be a height of {lo:g} to {hi:g} m, e.g. 1.72 "
+                        "(on the command line --stature-cm 172)")
+    return float(stature_m)
+
+
 def check_clothing(clothing_m: float) -> None:
     """Raise if a stated layer of clothes is not a thickness of 0 to :data:`MAX_CLOTHING_M` metres.
 

@@ -252,3 +252,97 @@ def merge_occluding(pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarray
     ok = out >= 0
     out[ok] = np.array([lut[int(c)] for c in out[ok]])
     return out
+
+
+#: Cell of the height map over the floor that people standing in one object are told apart on (m).
+HEIGHT_CELL_M = 0.05
+#: Two tops of an object are two people's heads when each stands this far (m) above the highest pass
+#: between them: a head is 0.2–0.25 m tall over the shoulders; the tops of one head lie within noise.
+HEAD_PROMINENCE_M = 0.15
+#: Tops closer than this (m, across the floor) are one head.
+HEAD_RADIUS_M = 0.15
+
+
+def split_people(points: np.ndarray, floor: Plane, min_top_m: float) -> np.ndarray:
+    """People standing side by side or close, touching in 3-D, told apart by their heads.
+
+    Seen from above (the floor's normal), every cell of :data:`HEIGHT_CELL_M` holds the height of the
+    highest return over it. Its local tops (within :data:`HEAD_RADIUS_M`) at least ``min_top_m`` over the
+    floor flood the map downhill (a watershed: every cell joins the top it is reached from over the
+    highest passes); two tops whose floods meet at a pass less than :data:`HEAD_PROMINENCE_M` below the
+    lower of them are one (a head's tops, a shoulder). What touches between two people (an arm, a
+    shoulder) lies below both heads, so the floods meet there.
+
+    Parameters
+    ----------
+    points : (k, 3) float64
+        Camera-frame points of one object (m).
+    floor : Plane
+    min_top_m : float
+        Lowest head over the floor (m).
+
+    Returns
+    -------
+    (k,) int
+        The person of every point, 0 to n − 1 (all 0 when the object has one head).
+    """
+    from scipy import ndimage
+
+    up = floor.normal
+    height = floor.height(points)
+    e1 = np.array([1.0, 0.0, 0.0]) - up[0] * up
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(up, e1)
+    cell = np.floor(np.stack([points @ e1, points @ e2], axis=1) / HEIGHT_CELL_M).astype(np.int64)
+    cell -= cell.min(axis=0)
+    shape = tuple(cell.max(axis=0) + 1)
+    top = np.full(shape, -np.inf)
+    np.maximum.at(top, (cell[:, 0], cell[:, 1]), height)
+    seen = np.isfinite(top)
+    radius = max(int(round(HEAD_RADIUS_M / HEIGHT_CELL_M)), 1)
+    peaks = seen & (top >= ndimage.maximum_filter(np.where(seen, top, -np.inf), size=2 * radius + 1))
+    peaks &= top >= min_top_m
+    markers, n = ndimage.label(peaks, structure=np.ones((3, 3), dtype=int))
+    out = np.zeros(len(points), dtype=np.int64)
+    if n < 2:
+        return out
+    # flood downhill: the cost of a cell is its depth below the highest top, in millimetres
+    cost = np.where(seen, np.round(1000.0 * (np.max(top[seen]) - np.where(seen, top, 0.0))), 65535)
+    region = ndimage.watershed_ift(np.clip(cost, 0, 65535).astype(np.uint16), markers,
+                                   structure=np.ones((3, 3), dtype=int))
+    peak_m = np.array([np.max(top[markers == i]) for i in range(1, n + 1)])
+    # the highest pass between every two touching regions (over seen cells)
+    parent = list(range(n))
+
+    def root(i: int) -> int:
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    passes: dict[tuple[int, int], float] = {}
+    rows, cols = shape
+    for dr, dc in ((0, 1), (1, 0), (1, 1), (1, -1)):  # every pair of neighbouring cells once
+        here = (slice(0, rows - dr), slice(max(0, -dc), cols - max(0, dc)))
+        there = (slice(dr, rows), slice(max(0, dc), cols - max(0, -dc)))
+        a, b, ta, tb = region[here], region[there], top[here], top[there]
+        sel = (a != b) & np.isfinite(ta) & np.isfinite(tb)
+        for i, j, h in zip(a[sel].tolist(), b[sel].tolist(), np.minimum(ta[sel], tb[sel]).tolist()):
+            key = (min(i, j) - 1, max(i, j) - 1)
+            passes[key] = max(passes.get(key, -np.inf), h)
+    for (i, j), h in sorted(passes.items(), key=lambda kv: -kv[1]):
+        ri, rj = root(i), root(j)
+        if ri != rj and h > min(peak_m[ri], peak_m[rj]) - HEAD_PROMINENCE_M:
+            keep, gone = (ri, rj) if peak_m[ri] >= peak_m[rj] else (rj, ri)
+            parent[gone] = keep
+    person = np.array([root(i) for i in range(n)])
+    heads = np.unique(person)
+    if len(heads) < 2:
+        return np.zeros(len(points), dtype=np.int64)
+    # every return belongs to the nearest head's vertical axis: the middle of the returns within
+    # HEAD_PROMINENCE_M of that head's top (above every pass to the others), across the floor
+    flat = np.stack([points @ e1, points @ e2], axis=1)
+    region_of = person[region[cell[:, 0], cell[:, 1]] - 1]
+    axes = np.array([np.median(flat[(region_of == k) & (height > peak_m[k] - HEAD_PROMINENCE_M)], axis=0)
+                     for k in heads])
+    return np.argmin(((flat[:, None, :] - axes[None]) ** 2).sum(axis=2), axis=1)

@@ -117,7 +117,7 @@ def sole_pixels(mask: np.ndarray, pix: np.ndarray, points: np.ndarray, floor: Pl
     range_m = np.linalg.norm(points, axis=1)
     ray_down = -(points @ floor.normal) / np.maximum(range_m, 1e-9)  # cosine between the ray and the floor's normal
     floor_range_m = np.where(ray_down > 1e-6, -floor.offset / np.maximum(ray_down, 1e-6), np.inf)
-    sigma_m = Plane.unit_noise(points) * floor.noise_scale
+    sigma_m = floor.unit_noise(points) * floor.noise_scale
     low = height_m < FEET_BAND_M
     looked, feet = walk_columns(cols, rows, subject, low, free & low, (range_m, floor_range_m, sigma_m))
     feet &= height_m > 0.0

@@ -24,6 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 from wbsa.estimation.subject.cloud import depth_noise_m
+from wbsa.sensor.technology import SensorModel
 
 #: Fewer agreeing neighbours than this (of eight) can make a return mixed.
 MIN_AGREEING = 4
@@ -50,7 +51,7 @@ def _returns(depth_m: np.ndarray) -> np.ndarray:
     return np.where(np.isfinite(z) & (z > 0), z, 0.0)
 
 
-def mixed_pixels(depth_m: np.ndarray, fx: float) -> np.ndarray:
+def mixed_pixels(depth_m: np.ndarray, fx: float, sensor: SensorModel | None = None) -> np.ndarray:
     """Which returns are mixed (see the module doc).
 
     Parameters
@@ -59,6 +60,9 @@ def mixed_pixels(depth_m: np.ndarray, fx: float) -> np.ndarray:
         z-depth in metres, 0 (or NaN) = no return.
     fx : float
         Focal length in pixels (the pixel pitch is z / fx).
+    sensor : SensorModel, optional
+        The camera's depth-noise envelope (:func:`wbsa.sensor.technology.envelope_model`); None: that of a camera
+        without a preset.
 
     Returns
     -------
@@ -67,7 +71,7 @@ def mixed_pixels(depth_m: np.ndarray, fx: float) -> np.ndarray:
         return in an image corner is never found mixed).
     """
     z = _returns(depth_m)
-    tol = np.maximum(NOISE_MULTIPLE * depth_noise_m(z), np.tan(np.deg2rad(MAX_SLOPE_DEG)) * z / float(fx))
+    tol = np.maximum(NOISE_MULTIPLE * depth_noise_m(z, sensor), np.tan(np.deg2rad(MAX_SLOPE_DEG)) * z / float(fx))
     agreeing = np.zeros(z.shape, np.int8)
     nearer = np.zeros(z.shape, bool)
     farther = np.zeros(z.shape, bool)
@@ -81,7 +85,8 @@ def mixed_pixels(depth_m: np.ndarray, fx: float) -> np.ndarray:
     return (z > 0) & (agreeing < MIN_AGREEING) & nearer & farther
 
 
-def repair_mixed_pixels(depth_m: np.ndarray, fx: float) -> tuple[np.ndarray, np.ndarray]:
+def repair_mixed_pixels(depth_m: np.ndarray, fx: float,
+                        sensor: SensorModel | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Snap mixed returns to the depth of the surface they mostly saw (see the module doc).
 
     Parameters
@@ -90,6 +95,9 @@ def repair_mixed_pixels(depth_m: np.ndarray, fx: float) -> tuple[np.ndarray, np.
         z-depth in metres, 0 (or NaN) = no return.
     fx : float
         Focal length in pixels.
+    sensor : SensorModel, optional
+        The camera's depth-noise envelope (:func:`wbsa.sensor.technology.envelope_model`); None: that of a camera
+        without a preset.
 
     Returns
     -------
@@ -108,7 +116,7 @@ def repair_mixed_pixels(depth_m: np.ndarray, fx: float) -> tuple[np.ndarray, np.
     (1, 4.0)
     """
     z = _returns(depth_m)
-    mixed = mixed_pixels(z, fx)
+    mixed = mixed_pixels(z, fx, sensor)
     if not mixed.any():
         return z, mixed
     good = np.where((z > 0) & ~mixed, z, np.nan)

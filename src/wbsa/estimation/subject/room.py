@@ -1,7 +1,8 @@
 """The room around the subject: its floor and walls among the largest planes of the image's cloud.
 
 A room surface is a large plane (RANSAC, inliers within the depth noise along the normal) with (almost) nothing
-behind it as seen from the camera that runs out of the image (reaches its border); the floor is the one whose
+behind it as seen from the camera that runs out of the image (reaches its frame's border,
+:mod:`wbsa.estimation.subject.frame`); the floor is the one whose
 normal is nearest the image's up (:func:`find_room`, used by :func:`wbsa.estimation.subject.segment.segment_subject`).
 """
 
@@ -10,10 +11,10 @@ from __future__ import annotations
 import numpy as np
 
 from wbsa.estimation.subject.cloud import Plane, ransac_plane
+from wbsa.estimation.subject.frame import Frame
 from wbsa.estimation.subject.settings import SegmentSettings
+from wbsa.sensor.technology import envelope_model
 
-#: A room surface reaches this close to the image's border (pixels).
-BORDER_PX = 3
 #: The floor's normal lies within this angle of the image's up. A camera looking down by ε sees it ε away,
 #: a wall behind the subject 90° + ε and a side wall 90° (plus the camera's roll); at 50° a camera 2 m up
 #: and 1.5 m from a child lost the floor.
@@ -21,8 +22,9 @@ FLOOR_MAX_TILT_DEG = 75.0
 
 
 def find_room(cloud: np.ndarray, settings: SegmentSettings, intrinsics,
-              shape: tuple[int, int]) -> tuple[Plane | None, list[Plane]]:
-    """Floor and walls among the largest planes of a thinned (v, 3) cloud of an (h, w) image (see the module doc).
+              frame: Frame) -> tuple[Plane | None, list[Plane]]:
+    """Floor and walls among the largest planes of a thinned (v, 3) cloud of an image with this frame (see the
+    module doc).
 
     Parameters
     ----------
@@ -30,17 +32,24 @@ def find_room(cloud: np.ndarray, settings: SegmentSettings, intrinsics,
         The thinned cloud (camera frame, m).
     settings : SegmentSettings
     intrinsics : Intrinsics
-    shape : (int, int)
-        The image's (h, w).
+    frame : Frame
+        The image's frame (:func:`wbsa.estimation.subject.frame.image_frame`): its border moved in past bands
+        without returns.
+
+    Returns
+    -------
+    floor : Plane or None
+    walls : list of Plane
     """
     rng = np.random.default_rng(settings.seed)
+    sensor = envelope_model(intrinsics)
     free = np.ones(len(cloud), dtype=bool)
     surfaces: list[Plane] = []
     for _ in range(settings.max_planes):
         idx = np.flatnonzero(free)
         if len(idx) < max(50, settings.min_plane_fraction * len(cloud)):
             break
-        found = ransac_plane(cloud[idx], rng)
+        found = ransac_plane(cloud[idx], rng, sensor=sensor)
         if found is None:
             break
         plane, inliers = found
@@ -49,7 +58,7 @@ def find_room(cloud: np.ndarray, settings: SegmentSettings, intrinsics,
         free[idx[inliers]] = False
         h = plane.height(cloud)
         behind = np.count_nonzero(h < -plane.tolerance(cloud) - 0.05)
-        if behind <= settings.behind_fraction * len(cloud) and _meets_border(cloud[idx[inliers]], intrinsics, shape):
+        if behind <= settings.behind_fraction * len(cloud) and _meets_border(cloud[idx[inliers]], intrinsics, frame):
             surfaces.append(plane)
     up = np.array([0.0, -1.0, 0.0])
     floor = None
@@ -60,10 +69,10 @@ def find_room(cloud: np.ndarray, settings: SegmentSettings, intrinsics,
     return floor, walls
 
 
-def _meets_border(points: np.ndarray, intrinsics, shape: tuple[int, int]) -> bool:
-    """Whether (k, 3) camera-frame points reach within :data:`BORDER_PX` pixels of the image's border."""
-    h, w = shape
+def _meets_border(points: np.ndarray, intrinsics, frame: Frame) -> bool:
+    """Whether (k, 3) camera-frame points reach within :data:`~wbsa.estimation.subject.frame.BORDER_PX` pixels of the
+    frame's border (:mod:`wbsa.estimation.subject.frame`)."""
     z = np.maximum(points[:, 2], 1e-9)
     u = float(intrinsics.fx) * points[:, 0] / z + float(intrinsics.cx)
     v = float(intrinsics.fy) * points[:, 1] / z + float(intrinsics.cy)
-    return bool(np.any((u < BORDER_PX) | (u > w - 1 - BORDER_PX) | (v < BORDER_PX) | (v > h - 1 - BORDER_PX)))
+    return bool(np.any(frame.at_border(v, u)))

@@ -26,14 +26,16 @@ class SegmentSettings:
         A room surface holds at least this fraction of the thinned returns.
     behind_fraction : float
         A plane is a room surface if at most this fraction of the other returns lies behind it ...
-        It must also run out of the image (reach its border, :data:`~wbsa.estimation.subject.room.BORDER_PX`): a floor or a wall
-        does, a body alone in the image (no room), which a plane fits loosely, does not.
+        It must also run out of the image (reach its frame's border, :mod:`wbsa.estimation.subject.frame`): a floor
+        or a wall does, a body alone in the image (no room), which a plane fits loosely, does not.
     cluster_gap_m : float
         Points closer than this (or three pixel pitches, if more) belong to one object.
     min_person_height_m, max_person_height_m, max_person_width_m : float
         What counts as a person-sized cluster.
     pick : {'nearest', 'largest', 'center'} or (int, int) or None
-        Which person-sized cluster to take when there are several; None = refuse and list them.
+        Which person to take when there are several (None: refuse and list them); an ``(x, y)`` pixel is
+        always used: the person under it or within 5 pixels, else refused
+        (:func:`~wbsa.estimation.subject.pick.choose`).
     seed : int
         Seed of the RANSAC plane search (same seed, same mask).
     """

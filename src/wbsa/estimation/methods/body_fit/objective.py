@@ -26,15 +26,15 @@ from __future__ import annotations
 import numpy as np
 
 from wbsa.estimation.methods.body_fit.observation import Observation
+from wbsa.sensor.technology import envelope_m, envelope_model
 
 #: Scale (m) of the silhouette and free-space residuals; depth tolerance of the free-space term (m), to which
 #: :data:`FREE_SPACE_NOISE_K` times the depth-noise envelope at the vertex's depth is added
-#: (:func:`wbsa.estimation.subject.cloud.depth_noise_m`, the noisiest supported camera: 2 cm at 3.5 m), so that noise
-#: does not push the body back.
+#: (:func:`wbsa.sensor.technology.envelope_m` of the observation's sensor, in torch; 2 cm at 3.5 m for Kinect v1),
+#: so that noise does not push the body back.
 SURFACE_SCALE_M = 0.01
 FREE_SPACE_TOLERANCE_M = 0.01
 FREE_SPACE_NOISE_K = 2.0
-_Q_STEP = 0.125 / (575.8 * 0.075)
 #: The point-to-surface scale is at least this many times the depth noise measured on the subject.
 NOISE_SCALE_K = 1.5
 #: A model vertex is on the body's outline when the cosine between its normal and its viewing ray is below this.
@@ -66,6 +66,7 @@ class Objective:
         self.torch = torch
         f32 = torch.float32
         self.obs = obs
+        self.sensor = envelope_model(None) if obs.sensor is None else obs.sensor
         self.points = torch.as_tensor(obs.points, dtype=f32)
         self.basis = torch.as_tensor(obs.basis, dtype=f32)
         self.origin = torch.as_tensor(obs.origin, dtype=f32)
@@ -165,9 +166,7 @@ class Objective:
         c = col.detach().round().long().clamp(0, w - 1)
         seen = self.depth[r, c]
         ok = facing & torch.isfinite(seen)
-        z0 = z.detach()
-        noise = ((0.0012 + 0.0019 * (z0 - 0.4).square()).square()  # depth_noise_m, in torch
-                 + (_Q_STEP * z0.square()).square() / 12.0).sqrt()
+        noise = envelope_m(self.sensor, z.detach())
         tol = FREE_SPACE_TOLERANCE_M + FREE_SPACE_NOISE_K * noise
         ahead = torch.where(ok, (seen - z - tol).clamp(min=0.0), torch.zeros_like(z))
         return _huber(ahead / SURFACE_SCALE_M).sum(1) / facing.sum(1).clamp(min=1)

@@ -58,6 +58,9 @@ class Observation:
         not the image border), a seeded subsample of at most :data:`MAX_CONTOUR`.
     contour_depth : (c,) float64
         Their depth (m).
+    sensor : SensorModel or None
+        The camera's depth-noise envelope (:func:`wbsa.sensor.technology.envelope_model`); None: that of a camera
+        without a preset.
     """
 
     points: np.ndarray
@@ -75,6 +78,7 @@ class Observation:
     noise_m: float = 0.0
     contour_px: np.ndarray = None
     contour_depth: np.ndarray = None
+    sensor: object = None
 
     def to_camera(self, points_f: np.ndarray) -> np.ndarray:
         """(k, 3) view-frame points in camera coordinates."""
@@ -142,6 +146,7 @@ def observe(depth_m: np.ndarray, mask: np.ndarray, camera, floor, n_points: int,
     from wbsa.core.backproject import ray_directions
     from wbsa.estimation.subject.cloud import above_floor
     from wbsa.estimation.subject.measure import measured_depth_noise
+    from wbsa.sensor.technology import envelope_model
 
     valid = mask & (depth_m > 0)
     rows, cols = np.nonzero(valid)
@@ -171,7 +176,7 @@ def observe(depth_m: np.ndarray, mask: np.ndarray, camera, floor, n_points: int,
                        skew=float(getattr(camera, "skew", 0.0) or 0.0), outside_px=outside, depth=depth,
                        crop=(int(r0), int(c0)), top_m=top, floor_seen=floor is not None, n_returns=n_returns,
                        noise_m=measured_depth_noise(depth_m, valid), contour_px=contour_px,
-                       contour_depth=contour_depth)
+                       contour_depth=contour_depth, sensor=envelope_model(camera))
 
 
 def outline(depth: np.ndarray, sub: np.ndarray, corner: tuple[int, int], shape: tuple[int, int],

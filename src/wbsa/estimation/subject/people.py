@@ -1,0 +1,356 @@
+"""Which objects of a depth image are people, and which person a pick chooses.
+
+An object (a 3-D cluster, :mod:`wbsa.estimation.subject.segment`) is a person when it is person-sized (0.45–2.6 m
+tall, at most 2.6 m wide and 0.9 m at the hips) and, with a floor seen:
+
+* its top stands at most 2.6 m over the floor, and the frame's top does not cut it (a head is seen);
+* its lower half is seen: its lowest return is at most half its top's height over the floor (a head or a
+  lamp seen over other people is not a person to measure);
+* it has a head: its top :data:`HEAD_BAND_M` spans at most :data:`HEAD_MAX_WIDTH_M` across the floor;
+* it is not flat: its returns lie off their best plane by at least :data:`FLAT_MIN_M` (RMS, its depth
+  noise taken out in quadrature: the noise measured on it,
+  :func:`~wbsa.estimation.subject.measure.measured_depth_noise`, or where quantised depth reads none, the
+  noise envelope at its distance, :func:`~wbsa.estimation.subject.cloud.depth_noise_m`): a board, a door or a
+  piece of wall is flat.
+
+Measured on PCL's ``five_people.pcd`` (tests/fixtures): the five people are 2.0–2.8 m away, heads 0.21–0.32 m
+wide, 4.3–13 times the noise off their plane; the room's pieces that passed the size test stand 2.6–3.8 m
+tall over the floor, or show only their top, or span 0.4–1.6 m at the top, or lie within 1.0 times the noise
+of a plane.
+
+People standing side by side who touch form one object; :func:`split_touching` splits it at the valleys
+between their heads (:func:`~wbsa.estimation.subject.clusters.split_people`) when every part is a person.
+Which person a pick chooses is :mod:`~wbsa.estimation.subject.pick`.
+
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from wbsa.estimation.subject.cloud import Plane, depth_noise_m
+from wbsa.estimation.subject.clusters import MAX_FOOTPRINT_M, footprint_m, split_people
+from wbsa.estimation.subject.frame import Frame, image_frame
+from wbsa.estimation.subject.measure import measured_depth_noise
+
+#: Top of an object (m, along the floor's normal; at most this share of its height) where its head is ...
+HEAD_BAND_M = 0.2
+HEAD_BAND_SHARE = 0.12
+#: ... which spans at most this across the floor (m): a head 0.16 m wide, with hair and mixed returns.
+HEAD_MAX_WIDTH_M = 0.5
+#: A person's returns lie off their best plane (RMS, less its depth noise) by at least this (m): rendered
+#: people 2.5–6.8 cm (adults of 1.71–2.04 m and a child of 0.82 m, front, side and back views, Kinect v2 with
+#: Kinect v1's noise; the child 2.5 cm from the front), PCL's five people 4.5–9.2 cm; a board 0 cm, the
+#: cabinet and a panel of five_people 0 cm.
+FLAT_MIN_M = 0.018
+#: The lowest return of a person is at most this share of its top's height over the floor.
+LOWER_HALF = 0.5
+#: A person standing on a seen floor has returns this close to it (m): the feet.
+FLOOR_CONTACT_M = 0.15
+#: An object inside a nearer one's bounding box in the image and this much farther (m) is seen past it.
+#: The wall stands 0.5 m or more behind a subject's back; a body's own parts join it within 0.8 m of depth
+#: when they touch in the image (:func:`~wbsa.estimation.subject.clusters.merge_occluding`) and are larger.
+SEEN_PAST_M = 0.4
+
+
+@dataclass(frozen=True)
+class Cluster:
+    """One object found in the image (a candidate subject).
+
+    Attributes
+    ----------
+    label : int
+        The object's label among the image's returns.
+    n_pixels : int
+    pixel_xy : (int, int)
+        Its middle pixel (median column and row).
+    distance_m : float
+        Median range of its returns.
+    height_m, width_m : float
+        Extent along the floor's normal (or its long axis) and across it.
+    footprint_m : float
+        Width at the hips (:func:`~wbsa.estimation.subject.clusters.footprint_m`).
+    bbox_px : (int, int, int, int)
+        Bounding box in the image, ``(x0, y0, x1, y1)``, inclusive.
+    top_m, bottom_m : float
+        Its highest and lowest returns over the floor (NaN without a floor).
+    head_width_m : float
+        Width of its top :data:`HEAD_BAND_M` across the floor (NaN without a floor).
+    off_plane_m, noise_m : float
+        RMS distance of its returns from their best plane, and its depth noise (measured on it, or the
+        envelope at its distance where quantised depth reads none) (m).
+    top_cut, bottom_cut : bool
+        Its top reaches the frame's top border; its lowest returns reach the frame's bottom border (the
+        image's, or a band without returns along it: :mod:`~wbsa.estimation.subject.frame`).
+    """
+
+    label: int
+    n_pixels: int
+    pixel_xy: tuple[int, int]
+    distance_m: float
+    height_m: float
+    width_m: float
+    footprint_m: float
+    bbox_px: tuple[int, int, int, int]
+    top_m: float = math.nan
+    bottom_m: float = math.nan
+    head_width_m: float = math.nan
+    off_plane_m: float = math.nan
+    noise_m: float = math.nan
+    top_cut: bool = False
+    bottom_cut: bool = False
+
+    def describe(self) -> str:
+        """``1.72 m tall at pixel (312, 240), 2.9 m away`` for messages."""
+        return (f"{self.height_m:.2f} m tall at pixel ({self.pixel_xy[0]}, {self.pixel_xy[1]}), "
+                f"{self.distance_m:.1f} m away")
+
+
+def describe_clusters(pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarray, shape: tuple[int, int],
+                      floor: Plane | None, frame: Frame, labels: np.ndarray | None = None) -> list[Cluster]:
+    """Size, place, distance and person cues of every cluster (of those ``labels``) with at least 50 pixels.
+
+    Parameters
+    ----------
+    pixel_label : (k,) int
+        Cluster of every return (−1: none); ``pix`` (k,) int its flat pixel index in an image of ``shape``
+        (h, w), ``points`` (k, 3) float64 its camera-frame point.
+    floor : Plane or None
+    frame : Frame
+        The image's frame (:func:`~wbsa.estimation.subject.frame.image_frame`).
+    labels : (n,) int, optional
+        The clusters to describe (default: all).
+
+    Returns
+    -------
+    list of Cluster
+    """
+    h, w = shape
+    if labels is None:
+        labels = np.unique(pixel_label[pixel_label >= 0])
+    out = []
+    for lab in labels:
+        sel = pixel_label == lab
+        n = int(np.count_nonzero(sel))
+        if n < 50:
+            continue
+        p = points[sel]
+        if floor is not None:
+            up = floor.normal
+        else:
+            q = p[:: max(1, len(p) // 2000)] - p.mean(axis=0)
+            up = np.linalg.svd(q, full_matrices=False)[2][0]
+        along = p @ up
+        height = float(np.quantile(along, 0.999) - np.quantile(along, 0.001))
+        flat = p - np.outer(along, up)
+        centre = np.median(flat, axis=0)
+        width_m = 2.0 * float(np.quantile(np.linalg.norm(flat - centre, axis=1), 0.995))
+        rows, cols = np.divmod(pix[sel], w)
+        distance = float(np.median(np.linalg.norm(p, axis=1)))
+        cues = {}
+        if floor is not None:
+            over = floor.height(p)
+            top, bottom = float(np.quantile(over, 0.998)), float(np.quantile(over, 0.002))
+            cues = dict(top_m=top, bottom_m=bottom,
+                        head_width_m=_across(p[over > top - min(HEAD_BAND_M, HEAD_BAND_SHARE * (top - bottom))], up))
+        sub = p[:: max(1, len(p) // 3000)]
+        cues["off_plane_m"] = float(np.linalg.svd(sub - sub.mean(axis=0), compute_uv=False)[2] / math.sqrt(len(sub)))
+        cues["noise_m"] = _own_noise_m(rows, cols, p[:, 2]) or float(depth_noise_m(np.median(p[:, 2])))
+        out.append(Cluster(int(lab), n, (int(np.median(cols)), int(np.median(rows))), distance, height, width_m,
+                           footprint_m(p, up if up @ np.array([0.0, -1.0, 0.0]) >= 0 else -up),
+                           (int(cols.min()), int(rows.min()), int(cols.max()), int(rows.max())),
+                           top_cut=bool(frame.at_top(rows.min())),
+                           bottom_cut=bool(frame.at_bottom(rows.max())), **cues))
+    return out
+
+
+def _own_noise_m(rows: np.ndarray, cols: np.ndarray, z: np.ndarray) -> float:
+    """Depth noise (m) measured on an object's pixels (rows, cols: (n,) int; z: (n,) float64 their depth)."""
+    r0, c0 = rows.min(), cols.min()
+    depth = np.zeros((rows.max() - r0 + 1, cols.max() - c0 + 1))
+    depth[rows - r0, cols - c0] = z
+    return measured_depth_noise(depth, depth > 0)
+
+
+def _across(points: np.ndarray, up: np.ndarray) -> float:
+    """Horizontal extent (m, bounding-box diagonal of the 2–98 % quantiles) of (k, 3) points across ``up``."""
+    if len(points) < 3:
+        return 0.0
+    e1 = np.array([1.0, 0.0, 0.0]) - up[0] * up
+    e1 /= np.linalg.norm(e1)
+    q = np.stack([points @ e1, points @ np.cross(up, e1)], axis=1)
+    return float(np.hypot(*(np.quantile(q, 0.98, axis=0) - np.quantile(q, 0.02, axis=0))))
+
+
+def why_not_a_person(c: Cluster, min_height_m: float, max_height_m: float, max_width_m: float) -> str | None:
+    """Why an object is not a person (a clause for messages), or None when it is one (see the module doc).
+
+    Parameters
+    ----------
+    c : Cluster
+    min_height_m, max_height_m, max_width_m : float
+        Least and greatest height and greatest width of a person (m).
+
+    Returns
+    -------
+    str or None
+    """
+    if not min_height_m <= c.height_m <= max_height_m:
+        return f"it is {c.height_m:.2f} m tall, a person {min_height_m:g}–{max_height_m:g} m"
+    if c.width_m > max_width_m:
+        return f"it is {c.width_m:.1f} m wide, a person at most {max_width_m:g} m"
+    if c.footprint_m > MAX_FOOTPRINT_M:
+        return f"it is {c.footprint_m:.1f} m wide at the hips, a person at most {MAX_FOOTPRINT_M:g} m"
+    if c.top_cut:
+        return "the top of the frame cuts it off (no head seen)"
+    if math.isnan(c.top_m):
+        return None
+    if c.top_m > max_height_m:
+        return f"its top is {c.top_m:.1f} m over the floor"
+    if c.bottom_m > LOWER_HALF * c.top_m:
+        return f"only its top is seen ({c.bottom_m:.1f}–{c.top_m:.1f} m over the floor)"
+    if c.head_width_m > HEAD_MAX_WIDTH_M:
+        return f"it has no head: its top is {c.head_width_m:.1f} m wide"
+    shape_m = math.sqrt(max(c.off_plane_m ** 2 - c.noise_m ** 2, 0.0))
+    if shape_m < FLAT_MIN_M:
+        return (f"it is flat ({100 * shape_m:.1f} cm off a plane beyond its depth noise, a person at least "
+                f"{100 * FLAT_MIN_M:g} cm): a board, a door or a wall")
+    return None
+
+
+def feet_unseen(c: Cluster, floor: Plane | None) -> str | None:
+    """Why a person's feet are not seen (a clause), or None when they stand on the seen floor.
+
+    The feet are not seen when the lowest returns end at the frame's bottom (the image's, or a band without
+    returns along it: ``bottom_cut``), or stand more than :data:`FLOOR_CONTACT_M` over a seen floor
+    (hidden), unless they touch the floor. Without a floor and with the feet inside the frame nothing is
+    known; a body alone in the image (no room) passes.
+
+    Parameters
+    ----------
+    c : Cluster
+        The subject.
+    floor : Plane or None
+
+    Returns
+    -------
+    str or None
+    """
+    if floor is not None and c.bottom_m <= FLOOR_CONTACT_M:
+        return None
+    if c.bottom_cut:
+        return ("its lowest returns end at the bottom of the frame (the image's, or a band without returns)"
+                + (f", {c.bottom_m:.2f} m over the floor" if floor is not None else ", with no floor seen"))
+    if floor is not None:
+        return f"its lowest returns are {c.bottom_m:.2f} m over the floor (the feet are hidden)"
+    return None
+
+
+def open_feet(mask: np.ndarray) -> str | None:
+    """:func:`feet_unseen` of a subject that is every return of the image (no segmentation, no floor): its
+    lowest returns reach the image's bottom border (a clause), or None.
+
+    Parameters
+    ----------
+    mask : (h, w) bool
+        The subject's pixels.
+
+    Returns
+    -------
+    str or None
+    """
+    rows = np.flatnonzero(mask.any(axis=1))
+    if len(rows) and image_frame(mask).at_bottom(rows[-1]):
+        return "its lowest returns end at the bottom of the frame, with no floor seen"
+    return None
+
+
+def seen_past(clusters: list[Cluster]) -> set[int]:
+    """Labels of the clusters seen past a nearer, larger object: inside its bounding box in the image and at
+    least :data:`SEEN_PAST_M` farther away (the wall between a subject's legs or inside a bent arm).
+
+    Such a piece can be person-sized, and lie under the image's centre, where the operator aimed at the
+    subject; it is never the subject. Any larger object may hide one, person-sized or not: two people
+    touching form one object too wide at the hips, and the wall between their legs must not then be
+    taken for a person.
+
+    Parameters
+    ----------
+    clusters : list of Cluster
+        Every object in the image.
+
+    Returns
+    -------
+    set of int
+        The labels of the clusters seen past another.
+    """
+    return {c.label for c in clusters if seen_past_object(c, clusters) is not None}
+
+
+def seen_past_object(c: Cluster, clusters: list[Cluster]) -> Cluster | None:
+    """The first nearer, larger object ``c`` is seen past (see :func:`seen_past`), or None.
+
+    Parameters
+    ----------
+    c : Cluster
+    clusters : list of Cluster
+        Every object in the image.
+
+    Returns
+    -------
+    Cluster or None
+    """
+    x0, y0, x1, y1 = c.bbox_px
+    for o in clusters:
+        ox0, oy0, ox1, oy1 = o.bbox_px
+        if (o.n_pixels > c.n_pixels and c.distance_m > o.distance_m + SEEN_PAST_M
+                and ox0 <= x0 and x1 <= ox1 and oy0 <= y0 and y1 <= oy1):
+            return o
+    return None
+
+
+def split_touching(clusters: list[Cluster], pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarray,
+                   shape: tuple[int, int], floor: Plane, frame: Frame,
+                   limits: tuple[float, float, float]) -> tuple[np.ndarray, list[Cluster]]:
+    """Objects that are not one person, split into the people they hold
+    (:func:`~wbsa.estimation.subject.clusters.split_people`) when every part is a person
+    (:func:`why_not_a_person` with ``limits``: least and greatest height, greatest width, m).
+
+    Parameters
+    ----------
+    clusters : list of Cluster
+        Every object described (:func:`describe_clusters`).
+    pixel_label : (k,) int
+        The object of every return; ``pix`` (k,) int its flat pixel index in an image of ``shape`` (h, w),
+        ``points`` (k, 3) float64 its camera-frame point.
+    floor : Plane
+    frame : Frame
+    limits : (float, float, float)
+
+    Returns
+    -------
+    (k,) int, list of Cluster
+        The labels of every return and the clusters, the parts under new labels.
+    """
+    out, kept = pixel_label, []
+    for c in clusters:
+        if c.height_m < limits[0] or why_not_a_person(c, *limits) is None:
+            kept.append(c)
+            continue
+        sel = np.flatnonzero(out == c.label)
+        person = split_people(points[sel], floor, limits[0])
+        if person.max() == 0:
+            kept.append(c)
+            continue
+        trial = out.copy()
+        trial[sel] = out.max() + 1 + person
+        parts = describe_clusters(trial, pix, points, shape, floor, frame, labels=np.unique(trial[sel]))
+        if len(parts) > 1 and all(why_not_a_person(p, *limits) is None for p in parts):
+            out = trial
+            kept.extend(parts)
+        else:
+            kept.append(c)
+    return out, kept

@@ -1,0 +1,211 @@
+"""A real frame (PCL's five_people.pcd, tests/fixtures/pcl): every person found and selectable, a pick on
+anything else refused in one line."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from helpers.frames import FIVE_PEOPLE_BOXES, pcd_depth
+from wbsa.errors import WbsaError
+
+
+@pytest.fixture(scope="module")
+def five_people():
+    """The frame's depth, its camera (the tum preset: its points fit fx = 525, c = (319.5, 239.5)) and its
+    people (:func:`wbsa.estimation.subject.segment.find_people`)."""
+    from wbsa.camera.presets import resolve_camera
+    from wbsa.estimation.subject.segment import find_people
+
+    depth, camera = pcd_depth(), resolve_camera("tum")
+    return depth, camera, find_people(depth, camera)
+
+
+def _box_error_px(a, b) -> int:
+    return max(abs(int(u) - int(v)) for u, v in zip(a, b))
+
+
+def test_the_five_people_are_found_apart_with_their_boxes(five_people):
+    """Five people, two of them one object in 3-D (an arm on an arm), each found within 15 pixels of the box
+    read off the image by eye; the frame's bands without returns are its border, so the floor is found."""
+    from wbsa.estimation.subject.frame import Frame
+
+    _, _, scene = five_people
+    assert scene.floor is not None and scene.frame == Frame(top=27, bottom=476, left=20, right=612)
+    found = sorted(scene.people, key=lambda c: c.bbox_px[0])
+    assert len(found) == 5
+    for person, (box, feet) in zip(found, FIVE_PEOPLE_BOXES):
+        assert _box_error_px(person.bbox_px, box) <= 15, (person.bbox_px, box)
+        assert 1.6 < person.top_m < 1.85  # adults' heads over the floor
+        assert (person.bottom_m < 0.15) == feet  # the floor contact seen, or the legs cut by the frame
+
+
+def test_every_person_is_picked_by_a_pixel_on_them_or_within_five_pixels(five_people):
+    from wbsa.estimation.subject.pick import choose
+
+    _, _, scene = five_people
+    picked = set()
+    for box, _ in FIVE_PEOPLE_BOXES:
+        x, y = (box[0] + box[2]) // 2, box[1] + (box[3] - box[1]) // 3  # the chest
+        person = choose(scene.people, scene.clusters, (x, y), scene.image_label, scene.limits)
+        assert _box_error_px(person.bbox_px, box) <= 15 and person.label not in picked
+        picked.add(person.label)
+    # a pixel without a return 3 pixels left of the first person's outline, at her chest's row
+    row = FIVE_PEOPLE_BOXES[0][0][1] + 150
+    first = np.flatnonzero(scene.image_label[row] == choose(scene.people, scene.clusters, (86, 270),
+                                                            scene.image_label, scene.limits).label)[0]
+    assert scene.image_label[row, first - 3] < 0
+    near = choose(scene.people, scene.clusters, (int(first) - 3, row), scene.image_label, scene.limits)
+    assert _box_error_px(near.bbox_px, FIVE_PEOPLE_BOXES[0][0]) <= 15
+
+
+@pytest.mark.parametrize("pixel, message", [
+    ((260, 150), r"not a person \(.*6\.\d m away"),  # the corridor's far end, 6 m away
+    ((590, 400), r"not a person \(.*flat"),  # the cabinet by the right wall
+    ((262, 420), r"no person at pick pixel \(262, 420\) or within 5 pixels"),  # the floor between people
+    ((5, 5), r"no person at pick pixel"),  # the band without returns
+])
+def test_a_pick_on_no_person_is_refused_in_one_line(five_people, pixel, message):
+    from wbsa.estimation.subject.pick import choose
+
+    _, _, scene = five_people
+    with pytest.raises(WbsaError, match=message) as err:
+        choose(scene.people, scene.clusters, pixel, scene.image_label, scene.limits)
+    assert "\n" not in str(err.value) and "people found: " in str(err.value)
+
+
+# ------------------------------------------------- the estimate on the real frame and on renders of its cases
+def test_the_person_cut_at_the_knees_is_refused_and_answered_with_a_stature(five_people, tmp_path):
+    """The nearest person of the real frame (dark shirt, 2 m) is cut by the frame at the knees: refused in one
+    line (exit 2); with a stated stature, answered at that stature and flagged ``feet_not_seen``."""
+    from helpers.cli import assert_one_line_error, run_cli
+
+    import json
+
+    depth, _, _ = five_people
+    path = tmp_path / "five_people.npy"
+    np.save(path, depth)
+    base = ["estimate", path, "--camera", "tum", "--pick", "530,250"]
+    assert_one_line_error(*run_cli(*base)[::2], "feet not seen", "--stature-cm")
+    code, out, err = run_cli(*base, "--stature-cm", "180", "--json")
+    est = json.loads(out)
+    assert code == 0 and est["stature_m"] == 1.8 and est["stature_stated_m"] == 1.8
+    assert "feet_not_seen" in est["flags"] and "clothes_unstated" in est["flags"] and not est["clothing_stated"]
+    assert est["wbsa_lo_m2"] < est["wbsa_m2"] < est["wbsa_hi_m2"] and est["wbsa_m2"] > 1.6  # an adult's, not a child's
+    assert_one_line_error(*run_cli("estimate", path, "--camera", "tum", "--pick", "260,150")[::2],
+                          "pick pixel (260, 150) lies on an object that is not a person")
+    assert_one_line_error(*run_cli(*base, "--clothes", "coat")[::2], "--clothes", "coat")
+    assert_one_line_error(*run_cli(*base, "--clothes", "light", "--clothing-cm", "1")[::2], "not both")
+
+
+@pytest.fixture(scope="module")
+def side_by_side(body_model):
+    """Two people side by side in a room (:func:`wbsa.testing.frames.side_by_side`): the depth, the man's
+    pixels, both people's."""
+    from wbsa.testing.frames import side_by_side as render
+
+    return render(body_model)
+
+
+def _pick(truth) -> tuple[int, int]:
+    ys, xs = np.nonzero(truth)
+    return int(np.median(xs)), int(np.median(ys))
+
+
+def test_a_render_cut_at_the_knees_is_refused_unless_its_stature_is_stated(side_by_side):
+    """The render's rows below the man's knees blanked (a frame cut there): refused, not read as a child;
+    stated, his stature is used. The legs' area stays unseen: the answer reads low (measured: 20 % below
+    the whole frame's)."""
+    import wbsa
+    from wbsa.estimation import SegmentSettings
+
+    depth, man, _ = side_by_side
+    rows = np.flatnonzero(man.any(axis=1))
+    cut = depth.copy()
+    cut[int(rows[-1] - 0.27 * (rows[-1] - rows[0])):] = 0.0  # the knees: 27 % of the stature up
+    settings = SegmentSettings(pick=_pick(man))
+    whole = wbsa.estimate(depth, "kinect-v2", segment=settings)
+    assert "feet_not_seen" not in whole.flags and 1.8 < whole.stature_m < 1.95
+    with pytest.raises(WbsaError, match=r"feet not seen: its lowest returns end at the bottom of the frame") as err:
+        wbsa.estimate(cut, "kinect-v2", segment=settings)
+    assert "\n" not in str(err.value)
+    stated = wbsa.estimate(cut, "kinect-v2", segment=settings, stature_m=whole.stature_m)
+    assert "feet_not_seen" in stated.flags and stated.stature_m == whole.stature_m
+    assert 0.7 * whole.wbsa_m2 < stated.wbsa_m2 < whole.wbsa_m2
+    with pytest.raises(WbsaError, match=r"stated stature .* must be a height of 0.5 to 2.5 m"):
+        wbsa.estimate(cut, "kinect-v2", segment=settings, stature_m=18.0)
+
+
+def test_only_legs_nobody_or_a_pick_on_no_person_is_one_line(side_by_side):
+    from wbsa.estimation.subject.segment import SegmentSettings, segment_subject
+    from wbsa.camera import preset
+
+    depth, man, everyone = side_by_side
+    camera = preset("kinect-v2")
+    rows = np.flatnonzero(man.any(axis=1))
+    legs = depth.copy()
+    legs[:int(rows[-1] - 0.45 * (rows[-1] - rows[0]))] = 0.0  # the frame's top at the hips
+    with pytest.raises(WbsaError, match=r"no person in the depth image.*the top of the frame cuts it off"):
+        segment_subject(legs, camera, SegmentSettings(pick="nearest"))
+    nobody = np.where(everyone, 0.0, depth)
+    with pytest.raises(WbsaError, match=r"no person in the depth image|holds only floor and walls"):
+        segment_subject(nobody, camera, SegmentSettings(pick="nearest"))
+    with pytest.raises(WbsaError, match=r"no person at pick pixel \(40, 100\) or within 5 pixels"):
+        segment_subject(depth, camera, SegmentSettings(pick=(40, 100)))
+    for truth in (man, everyone & ~man):  # each picked by a pixel on them
+        seg = segment_subject(depth, camera, SegmentSettings(pick=_pick(truth)))
+        assert (seg.mask & truth).sum() > 0.97 * truth.sum() and len(seg.others) == 1
+
+
+def test_named_clothes_widen_the_interval_and_unstated_clothes_are_flagged(side_by_side):
+    """A named layer predicts as its thickness stated explicitly, with an interval wider on each side by the
+    change of the estimate over the layer's uncertainty; nothing stated answers as 0 cm, flagged, and the
+    FHIR method says so."""
+    import wbsa
+    from wbsa.estimation import SegmentSettings
+    from wbsa.estimation.clothes import CLOTHES
+    from wbsa.estimation.fhir import fhir_observation
+
+    depth, man, _ = side_by_side
+    kw = dict(segment=SegmentSettings(pick=_pick(man)))
+    light = CLOTHES["light"]
+    named = wbsa.estimate(depth, "kinect-v2", clothing="light", **kw)
+    explicit = wbsa.estimate(depth, "kinect-v2", clothing_m=light.layer_m, **kw)
+    thicker = wbsa.estimate(depth, "kinect-v2", clothing_m=light.layer_m + light.sd_m, **kw)
+    delta = explicit.wbsa_m2 - thicker.wbsa_m2
+    assert named.wbsa_m2 == explicit.wbsa_m2 and delta > 0.01
+    assert named.wbsa_lo_m2 == pytest.approx(explicit.wbsa_lo_m2 - delta, abs=1e-12)
+    assert named.wbsa_hi_m2 == pytest.approx(explicit.wbsa_hi_m2 + delta, abs=1e-12)
+    unstated = wbsa.estimate(depth, "kinect-v2", **kw)
+    zero = wbsa.estimate(depth, "kinect-v2", clothing_m=0.0, **kw)
+    assert (unstated.wbsa_m2, unstated.wbsa_lo_m2, unstated.wbsa_hi_m2) == (zero.wbsa_m2, zero.wbsa_lo_m2,
+                                                                            zero.wbsa_hi_m2)
+    assert "clothes_unstated" in unstated.flags and "clothes_unstated" not in zero.flags
+    assert unstated.to_dict()["clothing_stated"] is False and named.to_dict()["clothes"] == "light"
+    assert "clothes not stated" in fhir_observation(unstated)["method"]["text"]
+    assert "clothes stated: light clothes" in fhir_observation(named)["method"]["text"]
+    assert "0.0 cm layer" in fhir_observation(zero)["method"]["text"]
+    for bad, message in ((dict(clothing="coat"), "unknown clothes 'coat'"),
+                         (dict(clothing="light", clothing_m=0.01), "not both")):
+        with pytest.raises(WbsaError, match=message):
+            wbsa.estimate(depth, "kinect-v2", **bad, **kw)
+
+
+def test_the_frame_moves_in_past_bands_without_returns_but_not_past_a_head_or_a_body_alone():
+    """A band without returns along an edge, next to rows seen across, is the frame's edge (a registered
+    camera's band, a blanked bottom); the empty space over a wall with a head in it, or around a body alone
+    in the image, is not."""
+    from wbsa.estimation.subject.frame import Frame, image_frame
+
+    room = np.zeros((100, 200), dtype=bool)
+    room[30:, :] = True  # a wall and floor under an empty top
+    assert image_frame(room) == Frame(30, 99, 0, 199)
+    blanked = room.copy()
+    blanked[80:] = False  # the bottom blanked
+    assert image_frame(blanked) == Frame(30, 79, 0, 199)
+    head = room.copy()
+    head[18:30, 95:105] = True  # a head 12 rows over the wall's top
+    assert image_frame(head).top == 0
+    alone = np.zeros((100, 200), dtype=bool)
+    alone[10:90, 90:110] = True  # a body alone: narrow rows, empty around
+    assert image_frame(alone) == Frame(0, 99, 0, 199)

@@ -90,6 +90,7 @@ def _estimate(path, model, pick=None, **kw):
     import wbsa
     from wbsa.estimation import SegmentSettings
 
+    kw.setdefault("clothing", "underwear")  # what the page's tests choose
     return wbsa.estimate(str(path), "kinect-v2", str(model), segment=SegmentSettings(pick=pick), **kw)
 
 
@@ -101,7 +102,7 @@ def _wait(driver, script: str, timeout: float = 60):
 
 
 def _upload(driver, url: str, *paths, camera: str = "kinect-v2", height_cm: str = "", mass_kg: str = "",
-            method: str = "regression"):
+            method: str = "regression", clothes: str = "underwear"):
     """Open the page, fill the form and choose ``paths`` (the page sends them on choosing; none: only fill it)."""
     from selenium.webdriver.common.by import By
     from selenium.webdriver.support.ui import Select
@@ -112,6 +113,8 @@ def _upload(driver, url: str, *paths, camera: str = "kinect-v2", height_cm: str 
     driver.find_element(By.ID, "height").send_keys(height_cm)
     driver.find_element(By.ID, "mass").send_keys(mass_kg)
     Select(driver.find_element(By.ID, "method")).select_by_value(method)
+    if clothes:
+        Select(driver.find_element(By.ID, "clothes")).select_by_value(clothes)
     if paths:
         driver.find_element(By.ID, "depth-file").send_keys("\n".join(str(p) for p in paths))
 
@@ -165,8 +168,8 @@ def test_the_page_shows_the_answer_of_wbsa_estimate_for_a_rendered_body(server, 
     from wbsa.estimation.flags import FLAGS
 
     url, app = server
-    # the page states its clothes field (0 cm unless changed) and the height typed, as the stature
-    est = _estimate(frames["one"]["path"], small_estimator_model, clothing_m=0.0, stature_m=1.86)
+    # the page states the clothes chosen and the height typed, as the stature
+    est = _estimate(frames["one"]["path"], small_estimator_model, stature_m=1.86)
     _upload(browser, url, frames["one"]["path"], height_cm="186", mass_kg="84")
     _wait(browser, "document.body.dataset.answer && document.getElementById('viewer').dataset.triangles > 0")
     shown = _answer(browser)
@@ -296,7 +299,7 @@ def test_method_both_shows_each_route_which_leads_and_the_progress_of_the_fit(se
     totals = {p["total"] for p in log if p["stage"] == "body-fit" and p["total"] > 1}
     assert steps and steps == sorted(steps) and 0 < steps[-1] <= FIT_STEPS and totals == {FIT_STEPS}  # in order
     est = wbsa.estimate(str(frames["one"]["path"]), "kinect-v2", str(small_estimator_model), method="both",
-                        segment=SegmentSettings(), body_fit=_fit_settings())
+                        clothing="underwear", segment=SegmentSettings(), body_fit=_fit_settings())
     routes = browser.execute_script("""return [...document.querySelectorAll('#route-list .route')].map(b => ({
         name: b.dataset.route, leads: b.classList.contains('leads'), text: b.innerText,
         flags: [...b.querySelectorAll('li')].map(li => li.dataset.flag)}))""")
@@ -329,7 +332,7 @@ def test_the_readme_picture_is_the_shipped_default_models_answer(browser, frames
     try:
         _upload(browser, url, frames["one"]["path"], height_cm="186", mass_kg="84")
         _wait(browser, "document.body.dataset.answer && document.getElementById('viewer').dataset.triangles > 0")
-        est = wbsa.estimate(str(frames["one"]["path"]), "kinect-v2")
+        est = wbsa.estimate(str(frames["one"]["path"]), "kinect-v2", clothing="underwear")
         shown = _answer(browser)
         assert float(shown["wbsa"]) == pytest.approx(est.wbsa_m2, abs=5e-4) and shown["flagNames"] == list(est.flags)
         assert browser.execute_script("return current.model") == est.model  # the default model's name
@@ -339,6 +342,35 @@ def test_the_readme_picture_is_the_shipped_default_models_answer(browser, frames
     finally:
         browser.set_window_size(1280, 1900)
         stop()
+
+
+def test_clothes_are_a_choice_the_page_requires_and_states(server, browser, frames, small_estimator_model):
+    """A file chosen before the clothes is not measured: the page asks for the clothes in plain words; choosing
+    them measures it, stated (clothing_stated, the layer's name), with wbsa.estimate's answer for those clothes."""
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.support.ui import Select
+
+    import wbsa
+    from wbsa.estimation import SegmentSettings
+    from wbsa.estimation.clothes import CLOTHES
+
+    url, _ = server
+    _upload(browser, url, frames["one"]["path"], clothes="")
+    _wait(browser, "!document.getElementById('error').hidden")
+    assert "Choose what the person wears" in _answer(browser)["error"] and not _shown(browser, "result")
+    assert browser.execute_script("return window.progressLog.length") == 0  # nothing was sent
+    options = browser.execute_script("return [...document.getElementById('clothes').options].map(o => o.value)")
+    assert options == ["", *CLOTHES]
+    Select(browser.find_element(By.ID, "clothes")).select_by_value("street")
+    _wait(browser, "document.body.dataset.answer && document.body.dataset.busy === '0'")
+    with urllib.request.urlopen(url + f"api/result/{_answer(browser)['id']}/estimate.json") as r:
+        stated = json.loads(r.read())
+    assert stated["clothes"] == "street" and stated["clothing_stated"] is True
+    assert "clothes_unstated" not in _answer(browser)["flagNames"]
+    est = wbsa.estimate(str(frames["one"]["path"]), "kinect-v2", str(small_estimator_model), clothing="street",
+                        segment=SegmentSettings())
+    assert float(_answer(browser)["wbsa"]) == pytest.approx(est.wbsa_m2, abs=5e-4)
+    assert not COMMAND_LINE_WORDS.search(_page_text(browser))
 
 
 def test_intrinsics_chosen_after_the_depth_file_run_it_again(server, browser, frames, small_estimator_model,
@@ -579,7 +611,7 @@ def test_a_batch_gives_one_row_per_file_and_a_csv(server, frames, small_estimato
     assert batch["done_count"] == 3
     with urllib.request.urlopen(url + batch["csv"]) as r:
         rows = list(csv.DictReader(io.StringIO(r.read().decode())))
-    est = _estimate(frames["one"]["path"], small_estimator_model)
+    est = _estimate(frames["one"]["path"], small_estimator_model, clothing=None)  # a script that states none
     assert [r["file"] for r in rows] == ["a.png", "b.txt", "c.png"]
     assert float(rows[0]["wbsa_m2"]) == pytest.approx(est.wbsa_m2, abs=5e-4) and rows[0]["flags"] == ";".join(est.flags)
     assert rows[1]["wbsa_m2"] == "" and "not a depth file type" in rows[1]["error"]

@@ -159,6 +159,7 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
     from wbsa.typing import METHODS
     from wbsa.server.batch import Batch, run_batch
     from wbsa.server.jobs import BoundedStore, Runner, internal_error, measure, new_id
+    from wbsa.estimation.clothes import CLOTHES
     from wbsa.server.progress import STREAM, stream_answer, wants_stream
     from wbsa.server.wording import page_words
 
@@ -184,6 +185,8 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
         return JSONResponse({
             "presets": [{"name": k, "width": CAMERAS[k].intrinsics.width, "height": CAMERAS[k].intrinsics.height} for k in presets],
             "methods": methods, "max_upload_bytes": max_upload_bytes, "max_clothing_cm": 5,
+            "clothes": [{"name": c.name, "words": c.words, "layer_cm": round(100 * c.layer_m, 2),
+                         "sd_cm": round(100 * c.sd_m, 2)} for c in CLOTHES.values()],
             "model": "default" if model is None else str(getattr(model, "meta", {}).get("name", "given"))})
 
     async def answered(request: Request, prepare) -> Response:

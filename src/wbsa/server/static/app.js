@@ -6,6 +6,7 @@ let current = null;       // the answer shown
 let viewer = null;
 let info = { max_upload_bytes: Infinity };
 let lastFiles = null;     // the depth file last measured alone, sent again when the camera changes
+let waitingForClothes = null;  // a file chosen before the clothes: measured once they are chosen
 let rerunWaiting = "";    // a camera chosen while busy: run again when the current estimate ends
 window.progressLog = [];  // every progress line of the last estimate (the tests read it)
 
@@ -31,13 +32,17 @@ async function loadInfo() {
   info = await (await fetch("api/info")).json();
   for (const p of info.presets) $("camera").append(el("option", { value: p.name }, `${p.name} (${p.width} × ${p.height})`));
   for (const m of info.methods) $("method").append(el("option", { value: m }, m));
+  for (const c of info.clothes) {
+    const words = c.words.charAt(0).toUpperCase() + c.words.slice(1);
+    $("clothes").append(el("option", { value: c.name }, `${words} (${fmt(c.layer_cm, 1)} ± ${fmt(c.sd_cm, 1)} cm)`));
+  }
 }
 
 function formData(files) {
   const fd = new FormData();
   for (const f of files) fd.append("depth", f, f.name);
   fd.append("camera", $("camera").value);
-  fd.append("clothing_cm", $("clothing").value);
+  fd.append("clothes", $("clothes").value);
   fd.append("method", $("method").value);
   fd.append("height_cm", $("height").value);
   fd.append("mass_kg", $("mass").value);
@@ -136,6 +141,15 @@ async function send(files, rerun = "") {
     showError(`the upload is ${(bytes / 2 ** 20).toFixed(1)} MiB, above this server's limit of ${(info.max_upload_bytes / 2 ** 20).toFixed(0)} MiB; send one depth image at a time, or a smaller image`);
     return;
   }
+  if (!$("clothes").value) {  // clothes are stated, never assumed
+    waitingForClothes = files;
+    $("clothes").classList.add("needed");
+    $("clothes").focus();
+    showError("Choose what the person wears (under “What the person wears”): the file is measured as soon as you do.");
+    return;
+  }
+  waitingForClothes = null;
+  $("clothes").classList.remove("needed");
   if (files.length > 1) { lastFiles = null; return sendBatch(files); }
   lastFiles = files;
   const body = formData(files);
@@ -148,8 +162,8 @@ async function send(files, rerun = "") {
   if (rerunWaiting) { const why = rerunWaiting; rerunWaiting = ""; send(lastFiles, why); }
 }
 
-// The camera changed after a depth file was measured: measure it again with the new camera.
-function cameraChanged(what) {
+// The camera or the clothes changed after a depth file was measured: measure it again with them.
+function choiceChanged(what) {
   if (!lastFiles) return;
   if (document.body.dataset.busy === "1") { rerunWaiting = what; return; }
   send(lastFiles, what);
@@ -373,9 +387,13 @@ function init() {
   });
   $("intrinsics").addEventListener("change", () => {
     const f = $("intrinsics").files[0];
-    cameraChanged(f ? `the camera file ${f.name}` : "the camera chosen");
+    choiceChanged(f ? `the camera file ${f.name}` : "the camera chosen");
   });
-  $("camera").addEventListener("change", () => cameraChanged(`the camera ${$("camera").selectedOptions[0].textContent}`));
+  $("clothes").addEventListener("change", () => {
+    if (waitingForClothes) { const files = waitingForClothes; waitingForClothes = null; send(files); return; }
+    choiceChanged(`the clothes: ${$("clothes").selectedOptions[0].textContent}`);
+  });
+  $("camera").addEventListener("change", () => choiceChanged(`the camera ${$("camera").selectedOptions[0].textContent}`));
   $("depth-img").addEventListener("click", (e) => {
     const img = e.currentTarget;
     const x = Math.floor(e.offsetX * Number(img.dataset.width) / img.clientWidth);

@@ -41,7 +41,7 @@ def _models(spacing_m: float):
 
 def fit_body(depth_m: np.ndarray, mask: np.ndarray, camera, floor, *, clothing_m: float = 0.0,
              azimuth_deg: float | None = None, settings: BodyFitSettings = BodyFitSettings(),
-             seed: int = 0) -> BodyFit:
+             seed: int = 0, progress=None) -> BodyFit:
     """Fit anny to one depth view of a standing person and measure the fitted body.
 
     Parameters
@@ -60,6 +60,8 @@ def fit_body(depth_m: np.ndarray, mask: np.ndarray, camera, floor, *, clothing_m
     settings : BodyFitSettings
     seed : int
         Seeds the subsample of the observed points.
+    progress : callable or None
+        Called as ``progress(step, steps)`` after each optimiser step (:func:`optimise`).
 
     Returns
     -------
@@ -86,12 +88,12 @@ def fit_body(depth_m: np.ndarray, mask: np.ndarray, camera, floor, *, clothing_m
     threads = torch.get_num_threads()
     torch.set_num_threads(settings.threads)
     try:
-        return _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fit_model, meter)
+        return _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fit_model, meter, progress)
     finally:
         torch.set_num_threads(threads)
 
 
-def _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fit_model, meter) -> BodyFit:
+def _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fit_model, meter, progress) -> BodyFit:
     """:func:`fit_body` on checked inputs, with anny loaded."""
     import torch
 
@@ -110,7 +112,7 @@ def _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fi
     objective = Objective(obs, settings.robust_loss, settings.robust_scale_m, settings.silhouette_tolerance_px)
     with torch.no_grad():
         starts = first_guesses(fit_model, objective, settings.restarts, azimuth_deg, settings.child_starts)
-    opt = optimise(fit_model, objective, starts, settings, deadline)
+    opt = optimise(fit_model, objective, starts, settings, deadline, progress)
 
     body = measure_body(meter, opt.params, settings.composition)
     rest = body["rest"]

@@ -72,7 +72,7 @@ def _limits(torch):
     return torch.as_tensor(lo, dtype=torch.float32), torch.as_tensor(hi, dtype=torch.float32)
 
 
-def optimise(fit_body, objective, starts, settings: BodyFitSettings, deadline: float) -> Optimum:
+def optimise(fit_body, objective, starts, settings: BodyFitSettings, deadline: float, progress=None) -> Optimum:
     """Fit every start of ``starts`` (:class:`wbsa.estimation.methods.body_fit.init.Starts`) to ``objective``'s observation.
 
     Parameters
@@ -84,6 +84,8 @@ def optimise(fit_body, objective, starts, settings: BodyFitSettings, deadline: f
     deadline : float
         ``time.perf_counter()`` value after which no further step starts (a safety stop; ``math.inf`` for none).
         The first step always runs, so there is always a best body to return.
+    progress : callable or None
+        Called as ``progress(step, steps)`` after each step (``step`` of ``settings.steps`` done).
     """
     import torch
 
@@ -205,6 +207,8 @@ def optimise(fit_body, objective, starts, settings: BodyFitSettings, deadline: f
             phen[:, -3:].clamp_(min=0.02)
             local.clamp_(-1.0, 1.0)
             angles.copy_(torch.maximum(torch.minimum(angles, hi), lo))
+        if progress is not None:
+            progress(step + 1, settings.steps)
     if not np.isfinite(best_loss).any():  # stopped while the scale annealed: the latest states, at one scale
         best_loss, best = latest_loss, latest
     i = int(np.argmin(best_loss))

@@ -12,6 +12,7 @@ and build, beside Du Bois and Mosteller given the TRUE height and mass.
     python benchmarks/bench_body_fit.py --subjects 20 --seed 1000 [--out fits.csv] [--model MODEL.npz]
     python benchmarks/bench_body_fit.py --subjects 20 --displace   # bodies outside anny's shape space
     python benchmarks/bench_body_fit.py --calibrate --subjects 40 --seed 2000   # rebuild the interval calibration
+    python benchmarks/bench_body_fit.py --drift --subjects 10 --draws 3   # truth-started drift, seed 3000
 
 ``--displace``: each subject's skin gets seeded smooth local displacements of 1–3 cm (3–7 Gaussian bumps of
 6–15 cm along the normals of the trunk and legs, centred between 0.3 and 0.75 of stature; truth: the displaced
@@ -20,6 +21,10 @@ mass, so their figures there are not comparable.
 ``--calibrate``: fit these subjects (give a seed other than the benchmark's 1000 and training's 0, 1) and store
 the split-conformal bounds of the WBSA error (:mod:`wbsa.estimation.methods.body_fit.interval`) in ``src/wbsa/data``.
 ``--model``: also run the regression route (``wbsa.estimate``) on the same images and print it beside.
+``--drift``: fits started at the true body (its shape, posture and placement), per camera × distance band
+(``benchmarks/body_fit_drift.py``): how far the fit's minimum lies from the truth under each camera's noise, apart from the
+start, the segmentation and the floor (the subject's true pixels and floor are given). Fits keep the shipped
+settings unless ``--data-term`` says otherwise (``closest-point``: the former data term).
 """
 
 from __future__ import annotations
@@ -67,20 +72,19 @@ def displaced(vertices: np.ndarray, faces: np.ndarray, skin_faces: np.ndarray, m
 
 
 def fit_chunk(population: pd.DataFrame, others: pd.DataFrame, first: int, seed: int, displace: bool,
-              model_path: str | None, time_budget_s: float) -> pd.DataFrame:
+              model_path: str | None, fit_settings) -> pd.DataFrame:
     """Capture, segment and fit every subject (the captures of :func:`wbsa.testing.testset.room_test_captures`,
     those of ``bench_estimate.py``)."""
     from wbsa.bodies.body_model import BodyModel
     from wbsa.core.mesh import triangle_areas_m2
     from wbsa.errors import WbsaError
-    from wbsa.estimation.methods.body_fit import BodyFitSettings, fit_body
+    from wbsa.estimation.methods.body_fit import fit_body
     from wbsa.estimation.subject.segment import SegmentSettings, segment_subject
     from wbsa.estimation.methods.view import azimuth_error_deg
     from wbsa.testing.testset import RoomTestSettings, room_test_captures
 
     settings = RoomTestSettings(seed=seed)
     body_model = BodyModel()
-    fit_settings = BodyFitSettings(time_budget_s=time_budget_s)
 
     def bumped(vertices: np.ndarray, index: int) -> np.ndarray:
         drng = np.random.default_rng(np.random.SeedSequence([settings.seed, index, DISPLACE_STREAM]))
@@ -211,15 +215,27 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--subjects", type=int, default=20, help="held-out images, one per subject (default 20)")
     ap.add_argument("--survey-share", type=float, default=0.4, help="share of survey-matched subjects (default 0.4)")
-    ap.add_argument("--seed", type=int, default=1000, help="seed of the subjects and captures (as bench_estimate)")
+    ap.add_argument("--seed", type=int, default=None,
+                    help="seed of the subjects and captures (as bench_estimate; default 1000, --drift 3000)")
     ap.add_argument("--first", type=int, default=0, help="fit images first.. only (the population stays the same)")
     ap.add_argument("--count", type=int, default=None, help="fit this many images from --first")
     ap.add_argument("--displace", action="store_true", help="bodies outside anny's shape space (see above)")
     ap.add_argument("--model", default=None, help="also run the regression route with this estimator model (.npz)")
-    ap.add_argument("--time-budget", type=float, default=30.0, help="fit time budget per image, s (default 30)")
+    ap.add_argument("--time-budget", type=float, default=None,
+                    help="the fit's wall-clock safety stop per image, s (default the settings', 300; the budget is steps)")
+    ap.add_argument("--data-term", default=None, help="the fit's data term (default the settings': along-ray)")
+    ap.add_argument("--drift", action="store_true",
+                    help="truth-started drift per camera x distance band instead (subjects of --seed; default 3000)")
+    ap.add_argument("--draws", type=int, default=3, help="--drift: sensor-noise draws per subject and cell (default 3)")
+    ap.add_argument("--cameras", default=None,
+                    help="--drift: the cameras, comma-separated (default all trained presets)")
     ap.add_argument("--out", default=None, help="write the per-image results here (.csv)")
     ap.add_argument("--calibrate", action="store_true", help="store the interval calibration from these fits")
     args = ap.parse_args()
+    if args.seed is None:
+        args.seed = 3000 if args.drift else 1000
+    if args.drift and args.seed in (0, 1, 1000, 2000):
+        ap.error("--drift needs subjects outside the benchmark, the calibration and training: e.g. --seed 3000")
     if args.calibrate and args.seed in (0, 1, 1000):
         ap.error("--calibrate needs subjects outside the benchmark and training: give another --seed, e.g. 2000")
 
@@ -227,26 +243,44 @@ def main() -> None:
 
     from bench_estimate import population
 
+    from wbsa.estimation.methods.body_fit import BodyFitSettings
+
     torch.set_num_threads(1)
     t0 = time.perf_counter()
+    changes = {k: v for k, v in (("time_budget_s", args.time_budget), ("data_term", args.data_term)) if v is not None}
+    fit_settings = BodyFitSettings(**changes)
     pop = population(args.subjects, args.survey_share, args.seed)
+    if args.drift:
+        from body_fit_drift import DRIFT_BANDS_M, DRIFT_CAMERAS, drift_chunk, report_drift
+
+        cameras = tuple(args.cameras.split(",")) if args.cameras else DRIFT_CAMERAS
+        res = drift_chunk(pop, args.seed, args.draws, cameras, DRIFT_BANDS_M, fit_settings)
+        if args.out:
+            res.to_csv(args.out, index=False)
+        print(f"\n{len(pop)} subjects, seed {args.seed}, {args.draws} noise draws each, data term "
+              f"{fit_settings.data_term}, {time.perf_counter() - t0:.0f} s wall")
+        report_drift(res)
+        return
     others = pop.iloc[np.roll(np.arange(len(pop)), 1)].reset_index(drop=True)
     stop = len(pop) if args.count is None else min(len(pop), args.first + args.count)
     part = slice(args.first, stop)
     res = fit_chunk(pop.iloc[part].reset_index(drop=True), others.iloc[part].reset_index(drop=True), args.first,
-                    args.seed, args.displace, args.model, args.time_budget)
+                    args.seed, args.displace, args.model, fit_settings)
     if args.out:
         res.to_csv(args.out, index=False)
     print(f"\n{len(pop)} subjects ({(pop['population'] == 'survey').sum()} survey-matched), seed {args.seed}, images "
           f"{args.first}–{stop - 1}" + (", displaced skin (outside anny's shapes)" if args.displace else ""))
     report(res, time.perf_counter() - t0, args.displace)
     if args.calibrate:
-        from wbsa.estimation.methods.body_fit.interval import calibrate, save
+        from wbsa.estimation.methods.body_fit.interval import calibrate, fit_fingerprint, save
 
         ok = res[res["error"] == ""]
         command = (f"python benchmarks/bench_body_fit.py --calibrate --subjects {args.subjects} --seed {args.seed}"
                    + (f" --survey-share {args.survey_share:g}" if args.survey_share != 0.4 else ""))
-        cal = calibrate((ok["fit_wbsa_m2"] / ok["wbsa_m2"] - 1).to_numpy(), 0.95, command)
+        if changes.keys() - {"time_budget_s"}:
+            ap.error("--calibrate stores the interval of the shipped fit: leave its settings at their defaults")
+        cal = calibrate((ok["fit_wbsa_m2"] / ok["wbsa_m2"] - 1).to_numpy(), 0.95, command,
+                        fit_fingerprint(fit_settings))
         print(f"\ninterval calibration: {cal.n} fits, relative error bounds {100 * cal.error_lo:+.2f} % … "
               f"{100 * cal.error_hi:+.2f} %; written to {save(cal)}")
 

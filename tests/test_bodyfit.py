@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -46,6 +48,37 @@ def render(body_model):
     return depth, mask, camera, floor, truth
 
 
+@pytest.fixture(scope="module")
+def dressed_render(body_model, render):
+    """The woman of ``render`` in a 1.5 cm layer of clothes (trunk, upper arms, legs, feet), the same view.
+
+    Returns (depth, mask, camera, floor Plane, truth measures of the bare body).
+    """
+    from wbsa.bodies.anthropometry import reference_adult
+    from wbsa.bodies.clothing import COVERED_BONES, dressed_vertices
+    from wbsa.bodies.posing import pose_vertices
+    from wbsa.bodies.posture import POSTURES
+    from wbsa.camera import MeshScene, View
+    from wbsa.simulate import simulate_view
+    from wbsa.training.room import compose_room
+
+    _, _, camera, floor, truth = render
+    row = reference_adult(1.0)
+    row["p_weight"] = 0.7
+    rest = body_model.rest_bodies(row)
+    spec = POSTURES["arms-down"]
+    angles = np.array([spec.nominal(m) for m in ("shoulder_abduction", "shoulder_flexion", "shoulder_rotation",
+                                                 "elbow_flexion", "hip_abduction")] * 2)
+    posed = pose_vertices(rest.vertices[0], rest.bone_heads[0], angles, body_model.rig)
+    dressed = dressed_vertices(posed, body_model.skin_faces, body_model.vertices_of_bones(COVERED_BONES), 0.015)
+    room = compose_room(body_model.skin_mesh(dressed), 25.0, wall_behind_m=None)
+    room = dataclasses.replace(room, subject_center=body_model.skin_mesh(posed).bbox_center)  # aimed as at the bare body
+    frame = simulate_view(MeshScene(room.mesh, surroundings=True), camera, View(25.0, 8.0, 2.6), keep_frame=True,
+                          target=room.subject_center).frame
+    depth = frame.depth_m.astype(np.float64)
+    return depth, room.is_subject(frame.triangle_id) & (depth > 0), camera, floor, truth
+
+
 def test_torch_posing_matches_the_project_posing(body_model):
     """The fit's differentiable skinning is :func:`wbsa.bodies.posing.pose_vertices` on its vertex subset."""
     import torch
@@ -88,6 +121,17 @@ def test_fit_recovers_a_known_body_from_a_noise_free_render(render, tmp_path):
     assert np.isfinite(fit.to_dict()["wbsa_m2"])
 
 
+def test_a_stated_layer_of_clothes_is_taken_off_the_fitted_body(dressed_render):
+    """Seen in 1.5 cm of clothes, the body fit reads the bare skin when told the layer, and more when not."""
+    from wbsa.estimation.methods.body_fit import BodyFitSettings, fit_body
+
+    depth, mask, camera, floor, truth = dressed_render
+    stated = fit_body(depth, mask, camera, floor, clothing_m=0.015, settings=BodyFitSettings(**FAST))
+    unstated = fit_body(depth, mask, camera, floor, settings=BodyFitSettings(**FAST))
+    assert abs(stated.wbsa_m2 / truth["wbsa_m2"] - 1) < 0.03, (stated.wbsa_m2, truth["wbsa_m2"])
+    assert unstated.wbsa_m2 > stated.wbsa_m2 * 1.03, (unstated.wbsa_m2, stated.wbsa_m2)
+
+
 def test_a_fit_past_its_safety_stop_returns_its_best_body_flagged(render):
     from wbsa.estimation.methods.body_fit import BodyFitSettings, fit_body
 
@@ -126,13 +170,13 @@ def test_bad_inputs_give_one_line_errors(render):
             fit_body(d, m, camera, floor)
         assert "\n" not in str(info.value)
     with pytest.raises(WbsaError, match="clothes"):
-        fit_body(depth, mask, camera, floor, clothing_m=0.01)
+        fit_body(depth, mask, camera, floor, clothing_m=0.2)
 
 
 def test_settings_refuse_bad_values():
     from wbsa.estimation.methods.body_fit import BodyFitSettings
 
-    for bad in (dict(steps=0), dict(restarts=1.5), dict(robust_loss="l2"), dict(time_budget_s=-1.0),
+    for bad in (dict(steps=0), dict(restarts=1.5), dict(robust_loss="l2"), dict(data_term="closest"), dict(time_budget_s=-1.0),
                 dict(composition="constant"), dict(vertex_spacing_m=1.0)):
         with pytest.raises(SettingsError):
             BodyFitSettings(**bad)
@@ -150,3 +194,52 @@ def test_conformal_bounds_are_the_order_statistics_and_refuse_too_few():
     assert (cal80.error_lo, cal80.error_hi) == (errors[3], errors[35])
     with pytest.raises(WbsaError, match="too few"):
         calibrate(errors[:10], 0.95, "cmd")
+
+
+def test_the_shipped_interval_is_calibrated_on_the_shipped_fit():
+    """The interval's conformal bounds hold for the fit they were measured on: rebuild them (the command stored in
+    the calibration) whenever a setting that shapes the fitted body changes."""
+    from wbsa.estimation.methods.body_fit import BodyFitSettings
+    from wbsa.estimation.methods.body_fit.interval import fit_fingerprint, load
+
+    cal = load()
+    assert cal is not None and cal.n >= 39 and cal.error_lo < 0 < cal.error_hi
+    assert cal.fit == fit_fingerprint(BodyFitSettings()), f"recalibrate: {cal.command}"
+
+
+def test_the_along_ray_residual_is_the_depth_difference_along_each_ray():
+    """A plane seen face-on and obliquely: the residual of each point is its z-depth minus the plane's on its own ray,
+    and the triangle its ray meets is found; a ray past the body misses."""
+    import torch
+
+    from wbsa.estimation.methods.body_fit.rays import RayTerm
+    from wbsa.sensor.technology import camera_model
+
+    # a square in the plane y = 2 - 0.5 x (view frame), seen from the origin looking along +y
+    corners = np.array([[-1.0, 2.5, -1.0], [1.0, 1.5, -1.0], [1.0, 1.5, 1.0], [-1.0, 2.5, 1.0]])
+    faces = np.array([[0, 1, 2], [0, 2, 3]])
+    dirs = np.array([[0.0, 1.0, 0.0], [0.2, 1.0, 0.1], [-0.3, 1.0, -0.2], [3.0, 1.0, 0.0]])
+    dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
+    t_plane = 2.0 / (dirs[:, 1] + 0.5 * dirs[:, 0])  # y + 0.5 x = 2 along t * d
+    observed = dirs * (t_plane + np.array([0.03, -0.02, 0.0, 0.0]))[:, None]
+    term = RayTerm(observed, np.zeros(3), np.array([0.0, 1.0, 0.0]), camera_model("kinect-v2"))
+    tri, hit, sigma = term.correspondences(corners[None], faces)
+    assert hit.numpy()[0].tolist() == [True, True, True, False]
+    r = term.residuals_m(torch.as_tensor(corners[None], dtype=torch.float32), torch.as_tensor(tri))[0].numpy()
+    expected = np.array([0.03, -0.02, 0.0]) * dirs[:3, 1]  # along-ray difference times the cosine to the axis
+    assert np.allclose(r[:3], expected, atol=1e-5)
+    assert (sigma.numpy()[0, :3] > 0).all()
+
+
+def test_the_along_ray_term_weighs_each_reading_by_its_camera_s_sigma():
+    """A structured-light camera returns depth in disparity steps of z²·s/(f·b) (Kinect v1 at 4 m: 4.6 cm), which
+    widen its σ by step/√12; a time-of-flight camera has none; σ grows with depth and towards grazing."""
+    from wbsa.estimation.methods.body_fit.rays import reading_sigma_m
+    from wbsa.sensor.technology import axial_sigma_m, camera_model
+
+    v1, v2 = camera_model("kinect-v1"), camera_model("kinect-v2")
+    step = 16.0 * 0.125 / (575.8157 * 0.075)
+    assert v1.depth_step_per_m * 16.0 == pytest.approx(step) and v2.depth_step_per_m == 0.0
+    assert reading_sigma_m(v1, 4.0, 0.0) == pytest.approx(np.hypot(axial_sigma_m(v1, 4.0, 0.0), step / np.sqrt(12.0)))
+    assert reading_sigma_m(v2, 4.0, 0.0) == pytest.approx(axial_sigma_m(v2, 4.0, 0.0))
+    assert reading_sigma_m(v2, 2.0, 0.0) < reading_sigma_m(v2, 4.0, 0.0) < reading_sigma_m(v2, 4.0, np.radians(80.0))

@@ -91,8 +91,8 @@ def test_what_a_route_cannot_serve_is_refused_before_any_work(person_view, tmp_p
     from wbsa.estimation import estimate
 
     depth, camera, _ = person_view
-    with pytest.raises(WbsaError, match="does not yet allow for clothes"):
-        estimate(depth, camera, method="body-fit", clothing_m=0.01)
+    with pytest.raises(WbsaError, match="calibrated at level 0.95 only"):
+        estimate(depth, camera, method="body-fit", level=0.8)
     np.save(tmp_path / "d.npy", depth)
     assert main(["estimate", str(tmp_path / "d.npy"), "--camera", "kinect-v2", "--out-body",
                  str(tmp_path / "b.ply")]) == 2
@@ -114,13 +114,14 @@ def test_the_body_fit_reads_its_shipped_interval_and_its_level():
 
 
 def test_both_keeps_the_regression_when_the_body_fit_cannot_serve(person_view):
-    """Stated clothes: the body fit refuses, the regression's answer stands, flagged body_fit_failed."""
+    """A level the body fit's interval is not calibrated at: the body fit refuses, the regression's answer stands,
+    flagged body_fit_failed."""
     from wbsa.estimation import estimate
 
     depth, camera, _ = person_view
-    est = estimate(depth, camera, method="both", clothing_m=0.01)
+    est = estimate(depth, camera, method="both", level=0.8)
     assert est.body is None and "regression" in est.routes and "body-fit" not in est.routes
-    assert "does not yet allow for clothes" in est.flags["body_fit_failed"]
+    assert "calibrated at level 0.95 only" in est.flags["body_fit_failed"]
 
 
 def test_every_flag_raised_has_one_record_and_every_record_is_raised():

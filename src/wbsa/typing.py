@@ -63,6 +63,9 @@ PostureChoice = Literal[Literal["a-pose", "mixed"], PostureName]
 PickRule = Literal["nearest", "largest", "center"]
 #: Robust penalty of the body fit's point-to-surface residuals (:mod:`wbsa.estimation.methods.body_fit.objective`).
 RobustLoss = Literal["geman-mcclure", "huber"]
+#: The body fit's data term (:mod:`wbsa.estimation.methods.body_fit.objective`): depth compared along each camera ray,
+#: or each point against its closest model surface point.
+DataTerm = Literal["along-ray", "closest-point"]
 
 POPULATION_KINDS: tuple[str, ...] = get_args(PopulationKind)
 NOISE_MODELS: tuple[str, ...] = get_args(NoiseModel)
@@ -86,4 +89,5 @@ METHODS: tuple[str, ...] = get_args(Method)
 MESH_UNITS: tuple[str, ...] = get_args(MeshUnits)
 MESH_UPS: tuple[str, ...] = get_args(MeshUp)
 ROBUST_LOSSES: tuple[str, ...] = get_args(RobustLoss)
+DATA_TERMS: tuple[str, ...] = get_args(DataTerm)
 PICK_RULES: tuple[str, ...] = get_args(PickRule)

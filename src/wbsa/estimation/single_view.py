@@ -174,7 +174,8 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
         estimator model file (``.npz``, e.g. from ``wbsa train``) or a ``wbsa fit`` model file (``.json``).
     method : {'regression', 'body-fit', 'both'}
         The estimation route (:mod:`wbsa.estimation.methods`): the regression on the image's measures (the
-        default), the whole body fitted to the view (seconds, not milliseconds; no clothes yet), or both side by
+        default), the whole body fitted to the view (seconds, not milliseconds; a stated layer of clothes is taken
+        off the fitted body as an offset), or both side by
         side (the regression's number leads; ``routes`` holds both).
     azimuth_deg, elevation_deg : float, optional
         A stated view; it is used for the prediction and checked against the estimated one.
@@ -338,7 +339,7 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
 def _clothes_widened(prediction, routes: dict, predictors: list, subject, request, clothes: Clothes):
     """The lead prediction and the routes with their intervals widened by the clothes' uncertainty
     (:func:`wbsa.estimation.clothes.widened`): each predictor predicts again with the layer thicker by it; a
-    route that takes no layer that thick (the body fit takes none) keeps its interval."""
+    route that refuses a layer that thick keeps its interval (the body fit takes it: it fits again, dressed thicker)."""
     from wbsa.estimation.clothes import widened
 
     thicker = dataclasses.replace(request, clothing_m=clothes.layer_m + clothes.sd_m)

@@ -41,7 +41,7 @@ def _models(spacing_m: float):
 
 def fit_body(depth_m: np.ndarray, mask: np.ndarray, camera, floor, *, clothing_m: float = 0.0,
              azimuth_deg: float | None = None, settings: BodyFitSettings = BodyFitSettings(),
-             seed: int = 0, progress=None) -> BodyFit:
+             seed: int = 0, start=None, progress=None) -> BodyFit:
     """Fit anny to one depth view of a standing person and measure the fitted body.
 
     Parameters
@@ -54,12 +54,18 @@ def fit_body(depth_m: np.ndarray, mask: np.ndarray, camera, floor, *, clothing_m
     floor : wbsa.estimation.subject.cloud.Plane or None
         The floor in the camera frame (returns within its noise are not fitted; the body stands on it).
     clothing_m : float
-        A stated layer of clothes (m). Only 0 is fitted today: a layer raises.
+        A stated layer of clothes (m) over the trunk, upper arms, legs and feet
+        (:data:`wbsa.bodies.clothing.COVERED_BONES`): the observation is compared with the fitted body dressed in
+        it (an offset of that thickness along the skin's normals there), and the bare body is measured.
     azimuth_deg : float, optional
         A stated view: the starts keep to within 45° of it.
     settings : BodyFitSettings
     seed : int
         Seeds the subsample of the observed points.
+    start : callable, optional
+        ``start(observation, fit_model) -> Starts``: fit from these starts (:class:`wbsa.estimation.methods.body_fit.init.Starts`,
+        in the observation's view frame) instead of the render-and-compare grid; e.g. a known body, to measure
+        how far the fit drifts from it.
     progress : callable or None
         Called as ``progress(step, steps)`` after each optimiser step (:func:`optimise`).
 
@@ -71,16 +77,15 @@ def fit_body(depth_m: np.ndarray, mask: np.ndarray, camera, floor, *, clothing_m
     ------
     WbsaError
         A depth image that is not (h, w) finite metres of the camera's size, an empty mask, fewer than 200
-        returns above the floor, a stated layer of clothes.
+        returns above the floor, a layer of clothes that is not 0 to 5 cm.
     """
     import torch
 
     from wbsa.estimation.methods.body_fit.observation import check_inputs
 
-    if not (isinstance(clothing_m, (int, float)) and math.isfinite(clothing_m) and clothing_m >= 0):
-        raise WbsaError(f"clothing_m must be a layer of 0 m or more, got {clothing_m!r}")
-    if clothing_m > 0:
-        raise WbsaError("the body fit does not yet allow for clothes (clothing_m > 0); use method 'regression'")
+    from wbsa.estimation.subject.checks import check_clothing
+
+    check_clothing(clothing_m)
     if azimuth_deg is not None and not math.isfinite(azimuth_deg):
         raise WbsaError(f"azimuth_deg must be a finite number of degrees, got {azimuth_deg!r}")
     depth, mask = check_inputs(depth_m, mask, camera)
@@ -88,15 +93,18 @@ def fit_body(depth_m: np.ndarray, mask: np.ndarray, camera, floor, *, clothing_m
     threads = torch.get_num_threads()
     torch.set_num_threads(settings.threads)
     try:
-        return _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fit_model, meter, progress)
+        return _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fit_model, meter, start,
+                    float(clothing_m), progress)
     finally:
         torch.set_num_threads(threads)
 
 
-def _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fit_model, meter, progress) -> BodyFit:
+def _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fit_model, meter, start,
+         clothing_m, progress) -> BodyFit:
     """:func:`fit_body` on checked inputs, with anny loaded."""
     import torch
 
+    from wbsa.bodies.clothing import COVERED_BONES
     from wbsa.bodies.posing import pose_vertices
     from wbsa.bodies.posture import ANGLE_COLUMNS
     from wbsa.estimation.methods.body_fit.init import first_guesses
@@ -104,15 +112,20 @@ def _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fi
     from wbsa.estimation.methods.body_fit.objective import Objective
     from wbsa.estimation.methods.body_fit.observation import observe
     from wbsa.estimation.methods.body_fit.optimize import optimise
+    from wbsa.sensor.technology import camera_model, preset_record
 
     t0 = time.perf_counter()
     deadline = t0 + settings.time_budget_s
     rng = np.random.default_rng(np.random.SeedSequence([int(seed), 0xB0D7]))
     obs = observe(depth, mask, camera, floor, settings.n_points, rng)
-    objective = Objective(obs, settings.robust_loss, settings.robust_scale_m, settings.silhouette_tolerance_px)
+    record = preset_record(camera)  # the data term weighs each reading by the camera technology's own noise
+    objective = Objective(obs, settings.robust_loss, settings.robust_scale_m, settings.silhouette_tolerance_px,
+                          camera_model(record if record is not None else "kinect-v1"))
     with torch.no_grad():
-        starts = first_guesses(fit_model, objective, settings.restarts, azimuth_deg, settings.child_starts)
-    opt = optimise(fit_model, objective, starts, settings, deadline, progress)
+        starts = (first_guesses(fit_model, objective, settings.restarts, azimuth_deg, settings.child_starts)
+                  if start is None else start(obs, fit_model))
+    covered = body_model.vertices_of_bones(COVERED_BONES) if clothing_m > 0 else None
+    opt = optimise(fit_model, objective, starts, settings, deadline, clothing_m, covered, progress)
 
     body = measure_body(meter, opt.params, settings.composition)
     rest = body["rest"]

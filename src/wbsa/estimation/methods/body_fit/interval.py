@@ -39,6 +39,8 @@ class IntervalCalibration:
         Calibration fits.
     command : str
         The command that rebuilds it.
+    fit : dict or None
+        The fit's settings it was calibrated with (:func:`fit_fingerprint`); None in a calibration stored without.
     """
 
     level: float
@@ -46,6 +48,7 @@ class IntervalCalibration:
     error_hi: float
     n: int
     command: str
+    fit: dict | None = None
 
     def interval(self, wbsa_m2: float) -> tuple[float, float]:
         """(lo, hi) m² of a fitted WBSA.
@@ -58,7 +61,29 @@ class IntervalCalibration:
         return wbsa_m2 / (1.0 + self.error_hi), wbsa_m2 / (1.0 + self.error_lo)
 
 
-def calibrate(errors: np.ndarray, level: float, command: str) -> IntervalCalibration:
+#: Settings that do not change the fitted body's WBSA (a safety stop, threads, the mass's composition).
+_NOT_FIT = ("time_budget_s", "threads", "composition")
+
+
+def fit_fingerprint(settings) -> dict:
+    """The settings of a :class:`wbsa.estimation.methods.body_fit.BodyFitSettings` that shape the fitted body, as plain values:
+    a calibration holds only for fits made with the same.
+
+    Parameters
+    ----------
+    settings : BodyFitSettings
+
+    Returns
+    -------
+    dict
+        Every field but the safety stop, the threads and the composition (which do not change the WBSA).
+    """
+    from dataclasses import asdict
+
+    return {k: v for k, v in asdict(settings).items() if k not in _NOT_FIT}
+
+
+def calibrate(errors: np.ndarray, level: float, command: str, fit: dict | None = None) -> IntervalCalibration:
     """The split-conformal bounds of relative errors ``errors (n,)`` at ``level``.
 
     Parameters
@@ -83,7 +108,7 @@ def calibrate(errors: np.ndarray, level: float, command: str) -> IntervalCalibra
     if k_lo < 1 or k_hi > n:
         raise WbsaError(f"{n} calibration fits are too few for a {100 * level:g} % interval; need at least "
                         f"{math.ceil(2 / alpha) - 1}")
-    return IntervalCalibration(level, float(e[k_lo - 1]), float(e[k_hi - 1]), n, command)
+    return IntervalCalibration(level, float(e[k_lo - 1]), float(e[k_hi - 1]), n, command, fit)
 
 
 def save(cal: IntervalCalibration, path: Path = CALIBRATION_PATH) -> Path:
@@ -98,7 +123,7 @@ def save(cal: IntervalCalibration, path: Path = CALIBRATION_PATH) -> Path:
     from wbsa.io import write_json
 
     write_json({"level": cal.level, "error_lo": cal.error_lo, "error_hi": cal.error_hi, "n": cal.n,
-                "command": cal.command}, path)
+                "command": cal.command, "fit": cal.fit}, path)
     return path
 
 
@@ -115,7 +140,7 @@ def load(path: Path = CALIBRATION_PATH) -> IntervalCalibration | None:
     try:
         d = json.loads(Path(path).read_text())
         return IntervalCalibration(float(d["level"]), float(d["error_lo"]), float(d["error_hi"]), int(d["n"]),
-                                   str(d["command"]))
+                                   str(d["command"]), d.get("fit"))
     except (OSError, ValueError, KeyError, TypeError) as exc:
         raise WbsaError(f"the body-fit interval calibration {path} is unreadable ({exc}); rebuild it with "
                         "python benchmarks/bench_body_fit.py --calibrate") from None

@@ -1,7 +1,11 @@
-"""The losses of the body fit: point-to-surface, silhouette, free space, priors (torch, batched over restarts).
+"""The losses of the body fit: depth along each ray, point-to-surface, silhouette, free space, priors (torch,
+batched over restarts).
 
 Every term is a mean of robust penalties of residuals in units of a scale, so the weights compare like with like:
 
+* **along the ray** (:mod:`wbsa.estimation.methods.body_fit.rays`, the default data term): each observed depth against
+  the model surface its camera ray meets, over the sensor's σ(z, θ); points whose ray misses the body use
+  the point-to-surface residual;
 * **point-to-surface** (:meth:`Objective.data`): each observed point against its corresponding model vertex
   (the nearest camera-facing one, refreshed every few steps), along that vertex's normal plus a tenth of
   the tangential offset (point-to-plane ICP; the model vertices are ~3 cm apart, so point-to-point would
@@ -17,7 +21,9 @@ Every term is a mean of robust penalties of residuals in units of a scale, so th
   subject, measured across the outline, where the image is sharper (about a pixel, 5 mm at 3.5 m) than the
   depth (2 cm of noise at 3.5 m);
 * **free space** (:meth:`Objective.free_space`): a camera-facing vertex in front of the surface seen at its
-  pixel by more than 1 cm plus twice the depth noise would hide it; Huber with scale 1 cm;
+  pixel by more than 1 cm plus twice the camera's face-on depth noise (:func:`wbsa.sensor.technology.envelope_m`,
+  quantisation included) would hide it;
+  Huber with scale 1 cm;
 * **priors**: the phenotypes stay near their start (weakly), the local changes near 0.
 """
 
@@ -58,10 +64,17 @@ class Objective:
     obs : Observation
     robust_loss : {'geman-mcclure', 'huber'}
     robust_scale_m, silhouette_tolerance_px : float
+    reading : wbsa.sensor.technology.SensorModel, optional
+        The camera technology's noise model, whose σ(z, θ) weighs the along-ray residuals
+        (:func:`wbsa.sensor.technology.camera_model` of the camera's preset; default Kinect v1's).
     """
 
-    def __init__(self, obs: Observation, robust_loss: str, robust_scale_m: float, silhouette_tolerance_px: float):
+    def __init__(self, obs: Observation, robust_loss: str, robust_scale_m: float, silhouette_tolerance_px: float,
+                 reading=None):
         import torch
+
+        from wbsa.estimation.methods.body_fit.rays import RayTerm
+        from wbsa.sensor.technology import camera_model
 
         self.torch = torch
         f32 = torch.float32
@@ -82,6 +95,9 @@ class Objective:
         #: the robust scale: the settings', or 1.5 times the depth noise measured on the subject if more
         self.scale = max(float(robust_scale_m), NOISE_SCALE_K * obs.noise_m)
         self.tolerance_px = float(silhouette_tolerance_px)
+        #: the along-ray term of the observed points
+        self.rays = RayTerm(obs.points, obs.camera_position, obs.basis[:, 2],
+                            camera_model("kinect-v1") if reading is None else reading)
 
     # -- geometry ---------------------------------------------------------------------------
     def project(self, v):
@@ -135,13 +151,27 @@ class Objective:
         ``scale_m`` overrides the robust scale (the fit anneals it from coarse to fine, so that points far from
         a poor start still pull on it).
         """
+        return self.data_points(v_all, tri, bary, scale_m).mean(1)
+
+    def data_points(self, v_all, tri, bary, scale_m: float | None = None):
+        """(b, p) robust point-to-surface cost of each observed point (see :meth:`data`).
+
+        Parameters
+        ----------
+        v_all : (b, m, 3) float32 tensor
+            Vertices of the selection, view frame.
+        tri, bary : (b, p, 3) tensors
+            Each point's triangle (positions in ``v_all``) and barycentric weights.
+        scale_m : float, optional
+            The robust scale (default the objective's).
+        """
         point, n = self.surface_points(v_all, tri, bary)
         d = self.points[None] - point
         along = (d * n).sum(-1)
         tangential = (d * d).sum(-1) - along * along
         scale = self.scale if scale_m is None else scale_m
         r2 = (along * along + TANGENTIAL_WEIGHT * tangential) / scale**2
-        return self.robust(r2).mean(1)
+        return self.robust(r2)
 
     def residuals_m(self, v_all, tri, bary):
         """(b, p) point-to-plane distances (m) of the observed points to their closest surface points."""

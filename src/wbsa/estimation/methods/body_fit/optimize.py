@@ -72,7 +72,36 @@ def _limits(torch):
     return torch.as_tensor(lo, dtype=torch.float32), torch.as_tensor(hi, dtype=torch.float32)
 
 
-def optimise(fit_body, objective, starts, settings: BodyFitSettings, deadline: float, progress=None) -> Optimum:
+def clothes_layer(full: np.ndarray, closed_faces: np.ndarray, covered: np.ndarray, layer_m: float) -> np.ndarray:
+    """Offsets that dress posed bodies in a layer of clothes, the soles kept on the bodies' lowest level (as
+    :func:`wbsa.bodies.clothing.dressed_vertices` does).
+
+    Parameters
+    ----------
+    full : (b, n, 3) float64
+        Every vertex of every posed body.
+    closed_faces : (m, 3) int
+        The closed mesh's triangles (for the vertex normals).
+    covered : (n,) bool
+        Vertices under the clothes.
+    layer_m : float
+        Thickness of the layer (m).
+
+    Returns
+    -------
+    (b, n, 3) float64
+        ``layer_m`` along the vertex normals where covered, 0 elsewhere.
+    """
+    from wbsa.estimation.methods.body_fit.model import vertex_normals
+
+    layer = layer_m * covered[None, :, None] * vertex_normals(full, closed_faces)
+    lowest = full[..., 2].min(axis=1, keepdims=True)
+    layer[..., 2] = np.maximum(layer[..., 2], lowest - full[..., 2])
+    return layer
+
+
+def optimise(fit_body, objective, starts, settings: BodyFitSettings, deadline: float, clothing_m: float = 0.0,
+             covered: np.ndarray | None = None, progress=None) -> Optimum:
     """Fit every start of ``starts`` (:class:`wbsa.estimation.methods.body_fit.init.Starts`) to ``objective``'s observation.
 
     Parameters
@@ -84,6 +113,11 @@ def optimise(fit_body, objective, starts, settings: BodyFitSettings, deadline: f
     deadline : float
         ``time.perf_counter()`` value after which no further step starts (a safety stop; ``math.inf`` for none).
         The first step always runs, so there is always a best body to return.
+    clothing_m : float
+        A stated layer of clothes (m): the observation is compared with the body dressed in it where ``covered``
+        (:func:`clothes_layer`, refreshed with the correspondences), and the bare body is what is fitted.
+    covered : (n,) bool, optional
+        The vertices under the clothes (needed with ``clothing_m`` > 0).
     progress : callable or None
         Called as ``progress(step, steps)`` after each step (``step`` of ``settings.steps`` done).
     """
@@ -119,6 +153,9 @@ def optimise(fit_body, objective, starts, settings: BodyFitSettings, deadline: f
     history: list[float] = []
     converged = timed_out = False
     tri = bary = facing = contour_corr = selection = None
+    ray_tri = ray_hit = ray_sigma = None
+    dressed = None
+    along_ray = settings.data_term == "along-ray"
     step = 0
 
     def body(selection):
@@ -153,13 +190,24 @@ def optimise(fit_body, objective, starts, settings: BodyFitSettings, deadline: f
             with torch.no_grad():
                 full = fit_body.full_posed(torch.cat([phen, local], dim=1), angles.detach().numpy(), yaw.detach().numpy(),
                                            shift.detach().numpy().astype(np.float64))
+                if clothing_m > 0:
+                    layer = clothes_layer(full, model.closed_faces, covered, clothing_m)
+                    full = full + layer
                 tri_full, bary, n, facing = objective.correspondences(full, model.skin_faces, model.closed_faces,
                                                                      fit_body.subset.index)
-                extra = np.setdiff1d(np.unique(tri_full), fit_body.subset.index)
+                touched = [tri_full]
+                if along_ray:
+                    ray_full, ray_hit, ray_sigma = objective.rays.correspondences(full, model.skin_faces)
+                    touched.append(ray_full[ray_hit.numpy()])
+                extra = np.setdiff1d(np.unique(np.concatenate([t.ravel() for t in touched])), fit_body.subset.index)
                 selection = fit_body.select(np.concatenate([fit_body.subset.index, extra]))
                 lookup = np.zeros(len(full[0]), dtype=np.int64)
                 lookup[selection.index] = np.arange(len(selection.index))
                 tri = torch.as_tensor(lookup[tri_full])
+                if along_ray:
+                    ray_tri = torch.as_tensor(lookup[ray_full])
+                if clothing_m > 0:
+                    dressed = torch.as_tensor(layer[:, selection.index], dtype=f32)
                 contour_corr = objective.contour_correspondences(full[:, fit_body.subset.index], n)
             annealed = step >= _ANNEAL_SHARE * settings.steps + 2 * settings.refresh_every
             if annealed and history[-2] - history[-1] < settings.tolerance * abs(history[-2]):
@@ -171,8 +219,14 @@ def optimise(fit_body, objective, starts, settings: BodyFitSettings, deadline: f
         for g, base in zip(opt.param_groups, base_lr):
             g["lr"] = base * (1.0 - 0.8 * step / settings.steps)
         params, v_all = body(selection)
+        if dressed is not None:
+            v_all = v_all + dressed
         v = v_all[:, :k]
-        loss = (objective.data(v_all, tri, bary, scale) * (scale / final) ** 2
+        data = objective.data_points(v_all, tri, bary, scale) * (scale / final) ** 2
+        if along_ray:  # points whose ray misses the body keep the closest-point cost
+            data = torch.where(ray_hit, objective.rays.cost(v_all, ray_tri, ray_hit, ray_sigma, scale, objective.robust),
+                               data)
+        loss = (data.mean(1)
                 + settings.silhouette_weight * objective.silhouette(v)
                 + settings.contour_weight * objective.contour(v, contour_corr)
                 + settings.free_space_weight * objective.free_space(v, facing)

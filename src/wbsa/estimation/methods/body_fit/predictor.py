@@ -26,8 +26,7 @@ class BodyFitPredictor:
         self.settings = settings or BodyFitSettings()
 
     def check_request(self, request: Request) -> None:
-        """Refuse stated clothes (the body fit does not yet allow for them) and an interval level other than the
-        one its interval was calibrated at.
+        """Refuse an interval level other than the one its interval was calibrated at.
 
         Parameters
         ----------
@@ -36,8 +35,6 @@ class BodyFitPredictor:
         """
         from wbsa.estimation.methods.body_fit.interval import load
 
-        if request.clothing_m > 0:
-            raise WbsaError("the body fit does not yet allow for clothes (--clothing-cm > 0); use --method regression")
         calibration = load()
         if calibration is not None and abs(request.level - calibration.level) > 1e-9:
             raise WbsaError(f"the body fit's interval is calibrated at level {calibration.level:g} only; give "

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 from wbsa.bodies.composition import CompositionSettings
 from wbsa.errors import SettingsError
-from wbsa.typing import ROBUST_LOSSES, RobustLoss
+from wbsa.typing import DATA_TERMS, ROBUST_LOSSES, DataTerm, RobustLoss
 
 #: Box of each posture motion (degrees, change from anny's rest A-pose; :data:`wbsa.bodies.posing.JOINT_MOTIONS`
 #: order): wide enough for every named standing posture with its jitter (:data:`wbsa.bodies.posture.POSTURES`)
@@ -39,6 +39,11 @@ class BodyFitSettings:
         Steps between updates of the point-to-vertex correspondences and the model normals.
     learning_rate : float
         Adam's step for the phenotypes (the others scale from it).
+    data_term : {'along-ray', 'closest-point'}
+        How the observed points are compared with the body: each depth against the model surface its camera
+        ray meets, over the camera's σ(z, θ) (:mod:`wbsa.estimation.methods.body_fit.rays`; points whose ray misses the
+        body fall back to the closest point), or each point against its closest model surface point (biased
+        inward by depth noise).
     robust_loss : {'geman-mcclure', 'huber'}
     robust_scale_m : float
         Scale of the robust penalty of the point-to-surface residuals.
@@ -79,6 +84,7 @@ class BodyFitSettings:
     steps: int = 200
     refresh_every: int = 10
     learning_rate: float = 0.05
+    data_term: DataTerm = "along-ray"
     robust_loss: RobustLoss = "geman-mcclure"
     robust_scale_m: float = 0.015
     silhouette_tolerance_px: float = 1.0
@@ -115,6 +121,8 @@ class BodyFitSettings:
             raise SettingsError("vertex_spacing_m", f"must be 0.005–0.2 m, got {self.vertex_spacing_m}")
         if not 0.0 <= self.prune_at <= 1.0:
             raise SettingsError("prune_at", f"must be a share of the steps in [0, 1], got {self.prune_at}")
+        if self.data_term not in DATA_TERMS:
+            raise SettingsError("data_term", f"{self.data_term!r} is unknown; use one of {', '.join(DATA_TERMS)}")
         if self.robust_loss not in ROBUST_LOSSES:
             raise SettingsError("robust_loss", f"{self.robust_loss!r} is unknown; use one of {', '.join(ROBUST_LOSSES)}")
         if not isinstance(self.composition, CompositionSettings):

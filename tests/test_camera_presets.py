@@ -43,8 +43,9 @@ def test_the_docs_preset_table_is_the_camera_table():
 
 
 def test_the_training_sensor_reads_the_record():
-    """A structured-light or stereo camera's depth is quantised in disparity with its own baseline and step;
-    time of flight is not."""
+    """Each camera gets its own technology's noise model; a structured-light or stereo camera's depth is
+    quantised in disparity with its own baseline and step; time of flight is not. Kinect v1's noise for every
+    camera stays a choice."""
     from wbsa.camera.presets import CAMERAS
     from wbsa.training.capture import CaptureSettings, sensor_for
 
@@ -52,6 +53,8 @@ def test_the_training_sensor_reads_the_record():
     for name in ("kinect-v1", "realsense-d455", "kinect-v2"):
         record = CAMERAS[name]
         sensor = sensor_for(record, np.random.default_rng(0), settings)
+        assert sensor.noise == "camera" and sensor.technology == record.technology
+        assert sensor_for(record, np.random.default_rng(0), CaptureSettings(noise_model="nguyen2012")).noise == "nguyen2012"
         if record.disparity is None:
             assert not sensor.quantise
         else:

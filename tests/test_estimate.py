@@ -883,7 +883,10 @@ def test_capture_noise_is_scaled_or_ideal_after_every_other_draw():
     box = np.array([[-0.2, -0.1, 0.0], [0.2, 0.1, 1.7]])
     fixed = CaptureSettings(noise_scale=(1.0, 1.0), ideal_share=0.0)
     drawn = [sample_capture(box, np.random.default_rng(s), fixed) for s in range(80)]
-    assert all(c.sensor.noise == "nguyen2012" and c.sensor.noise_scale == 1.0 for c in drawn)
+    from wbsa.camera.presets import CAMERAS
+
+    assert all(c.sensor.noise == "camera" and c.sensor.technology == CAMERAS[c.camera.name].technology
+               and c.sensor.noise_scale == 1.0 for c in drawn)
     varied = [sample_capture(box, np.random.default_rng(s), CaptureSettings(noise_scale=(0.2, 1.5), ideal_share=0.25))
               for s in range(80)]
     def drawn_before(c):  # everything but the noise level

@@ -313,6 +313,16 @@ def test_noise_camera_reads_the_presets_technology_or_the_one_given():
         SensorSettings(noise="nguyen2012", technology="lidar")
 
 
+def test_the_estimators_envelope_is_the_cameras_own():
+    from wbsa.camera import Intrinsics
+    from wbsa.camera.presets import CAMERAS
+    from wbsa.sensor.technology import camera_model, envelope_model
+
+    for name, record in CAMERAS.items():
+        assert envelope_model(record.intrinsics) == camera_model(name)
+    assert envelope_model(Intrinsics(64, 48, 50, 50, 31.5, 23.5)) == envelope_model(None) == camera_model("kinect-v1")
+
+
 def test_numpy_and_torch_give_the_same_noise_from_one_definition():
     """Every technology's σz, σL and envelope, on every preset, from numpy (float64) and torch (float64 equal to
     the last bits, float32 to its precision; differentiable)."""

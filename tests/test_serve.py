@@ -56,13 +56,13 @@ def frames(body_model, tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def server(small_estimator_model, tmp_path_factory):
-    """The app on a free loopback port (upload limit 8 MiB, so the limit is cheap to test); its temporary
-    folder is checked to be gone after the server stops."""
+    """The app on a free loopback port (upload limit 8 MiB, so the limit is cheap to test; body fits of
+    :data:`FIT_STEPS` steps); its temporary folder is checked to be gone after the server stops."""
     from wbsa.server.app import create_app
     from wbsa.server.command import start_in_thread
 
     app = create_app(small_estimator_model, temp_dir=str(tmp_path_factory.mktemp("serve")),
-                     max_upload_bytes=8 * 2**20, max_pending=24)
+                     max_upload_bytes=8 * 2**20, max_pending=24, body_fit=_fit_settings())
     url, stop = start_in_thread(app)
     yield url, app
     stop()
@@ -76,10 +76,21 @@ def browser():
         yield driver
 
 
+#: Steps of the tests' body fits: few, so a fit takes a second or two (the page's behaviour, not the fit's quality).
+FIT_STEPS = 30
+
+
+def _fit_settings():
+    from wbsa.estimation.methods.body_fit.settings import BodyFitSettings
+
+    return BodyFitSettings(steps=FIT_STEPS)
+
+
 def _estimate(path, model, pick=None, **kw):
     import wbsa
     from wbsa.estimation import SegmentSettings
 
+    kw.setdefault("clothing", "underwear")  # what the page's tests choose
     return wbsa.estimate(str(path), "kinect-v2", str(model), segment=SegmentSettings(pick=pick), **kw)
 
 
@@ -90,8 +101,9 @@ def _wait(driver, script: str, timeout: float = 60):
     WebDriverWait(driver, timeout, poll_frequency=0.1).until(lambda d: d.execute_script(f"return {script}"))
 
 
-def _upload(driver, url: str, *paths, camera: str = "kinect-v2", height_cm: str = "", mass_kg: str = ""):
-    """Open the page, fill the form and choose ``paths`` (the page sends them on choosing)."""
+def _upload(driver, url: str, *paths, camera: str = "kinect-v2", height_cm: str = "", mass_kg: str = "",
+            method: str = "regression", clothes: str = "underwear"):
+    """Open the page, fill the form and choose ``paths`` (the page sends them on choosing; none: only fill it)."""
     from selenium.webdriver.common.by import By
     from selenium.webdriver.support.ui import Select
 
@@ -100,7 +112,11 @@ def _upload(driver, url: str, *paths, camera: str = "kinect-v2", height_cm: str 
     Select(driver.find_element(By.ID, "camera")).select_by_value(camera)
     driver.find_element(By.ID, "height").send_keys(height_cm)
     driver.find_element(By.ID, "mass").send_keys(mass_kg)
-    driver.find_element(By.ID, "depth-file").send_keys("\n".join(str(p) for p in paths))
+    Select(driver.find_element(By.ID, "method")).select_by_value(method)
+    if clothes:
+        Select(driver.find_element(By.ID, "clothes")).select_by_value(clothes)
+    if paths:
+        driver.find_element(By.ID, "depth-file").send_keys("\n".join(str(p) for p in paths))
 
 
 def _answer(driver) -> dict:
@@ -111,9 +127,36 @@ def _answer(driver) -> dict:
                 error: document.getElementById('error').hidden ? '' : document.getElementById('error').textContent,
                 triangles: document.getElementById('viewer').dataset.triangles || '',
                 flags: [...document.querySelectorAll('#flag-list li')].map(li => li.textContent),
+                flagNames: [...document.querySelectorAll('#flag-list li')].map(li => li.dataset.flag),
                 formulae: document.querySelectorAll('#formulae-table tbody tr').length,
                 depthWidth: document.getElementById('depth-img').naturalWidth,
                 downloads: [...document.querySelectorAll('#downloads a')].map(a => a.getAttribute('href'))};""")
+
+
+#: Command-line words that must not reach the page (the page says what to do on the page).
+COMMAND_LINE_WORDS = re.compile(r"--[a-z]|\bp_[a-z]+ = |\bis an? [A-Z0-9;]+ (image|TIFF)\b|choose one with pick|"
+                                r"\bpick pixel\b|PRESET")
+
+
+def _page_text(driver) -> str:
+    """The words the page shows (visible text only)."""
+    return driver.execute_script("return document.body.innerText")
+
+
+def _shown(driver, element_id: str) -> bool:
+    """Whether the element is laid out with a size (not hidden, nor inside something hidden)."""
+    return driver.execute_script("const r = document.getElementById(arguments[0]).getBoundingClientRect(); "
+                                 "return r.width > 0 && r.height > 0", element_id)
+
+
+def _screenshot(driver, name: str) -> Path:
+    """Save the page as ``test-artefacts/<name>`` (PNG) and return its path."""
+    ARTEFACTS.mkdir(parents=True, exist_ok=True)
+    shot = ARTEFACTS / name
+    driver.save_screenshot(str(shot))
+    print(f"screenshot: {shot}")
+    assert shot.stat().st_size > 20_000
+    return shot
 
 
 # ---------------------------------------------------------------- in the browser
@@ -125,8 +168,8 @@ def test_the_page_shows_the_answer_of_wbsa_estimate_for_a_rendered_body(server, 
     from wbsa.estimation.flags import FLAGS
 
     url, app = server
-    # the page states its clothes field (0 cm unless changed) and the height typed, as the stature
-    est = _estimate(frames["one"]["path"], small_estimator_model, clothing_m=0.0, stature_m=1.86)
+    # the page states the clothes chosen and the height typed, as the stature
+    est = _estimate(frames["one"]["path"], small_estimator_model, stature_m=1.86)
     _upload(browser, url, frames["one"]["path"], height_cm="186", mass_kg="84")
     _wait(browser, "document.body.dataset.answer && document.getElementById('viewer').dataset.triangles > 0")
     shown = _answer(browser)
@@ -137,20 +180,30 @@ def test_the_page_shows_the_answer_of_wbsa_estimate_for_a_rendered_body(server, 
     assert lo == pytest.approx(est.wbsa_lo_m2, abs=0.006) and hi == pytest.approx(est.wbsa_hi_m2, abs=0.006)
     assert "95 % interval" in interval
     assert "regression" in browser.find_element("id", "method-line").text
-    assert len(shown["flags"]) == len(est.flags) and est.flags
+    assert shown["flagNames"] == list(est.flags) and est.flags
     for name, text in zip(est.flags, shown["flags"]):
-        assert FLAGS[name][1:] in text and name in text
+        assert FLAGS[name][1:] in text
+    assert not COMMAND_LINE_WORDS.search(_page_text(browser)), _page_text(browser)
+    assert not _shown(browser, "routes") and not _shown(browser, "pick-card")  # one method: one number
+    assert browser.execute_script("return [...document.querySelectorAll('#viewer-legend li')].map(li => li.dataset.mesh)"
+                                  ) == ["visible surface"]
     assert int(shown["triangles"]) == len(est.surface.faces) and shown["depthWidth"] == 512
     assert browser.execute_script("return document.querySelectorAll('#sketch *').length") > 5
     assert shown["formulae"] == 14 and shown["error"] == ""  # wbsa's row and the 13 formulae (Schlich twice)
     assert [Path(h).name for h in shown["downloads"]] == ["estimate.json", "fhir.json", "mask.png", "surface.ply"]
     with urllib.request.urlopen(url + shown["downloads"][1]) as r:
         assert json.loads(r.read())["valueQuantity"]["value"] == round(est.wbsa_m2, 4)
-    ARTEFACTS.mkdir(parents=True, exist_ok=True)
-    shot = ARTEFACTS / "serve-answer.png"
-    browser.save_screenshot(str(shot))
-    print(f"screenshot of the answer page: {shot}")
-    assert shot.stat().st_size > 20_000
+    _screenshot(browser, "serve-answer.png")
+    # the side view draws the whole range of elevations, -90° (camera below) to 90° (above), inside the sketch
+    for elevation in (-90, -60, 0, 60, 90):
+        inside = browser.execute_script("""
+            showView({...current.view, elevation_used_deg: arguments[0]});
+            const box = document.getElementById('sketch').getBoundingClientRect();
+            const cam = document.getElementById('side-camera').getBoundingClientRect();
+            return [cam.left >= box.left, cam.right <= box.right, cam.top >= box.top, cam.bottom <= box.bottom,
+                    cam.top + cam.height / 2 - (box.top + box.height / 2)];""", elevation)
+        assert inside[:4] == [True] * 4, (elevation, inside)
+        assert np.sign(round(inside[4])) == -np.sign(elevation)  # above the middle for a camera above
 
 
 def test_a_click_on_the_second_person_measures_that_person(server, browser, frames, small_estimator_model):
@@ -160,9 +213,23 @@ def test_a_click_on_the_second_person_measures_that_person(server, browser, fram
 
     url, _ = server
     two = frames["two"]
-    _upload(browser, url, two["path"])
-    _wait(browser, "!document.getElementById('error').hidden && document.getElementById('depth-img').naturalWidth > 0")
-    assert "2 people in the depth image" in _answer(browser)["error"]
+    browser.set_window_size(1280, 800)  # a laptop's window: the picture must fit in it
+    try:
+        _upload(browser, url, two["path"])
+        _wait(browser, "!document.getElementById('pick-card').hidden && document.getElementById('depth-img').naturalWidth"
+                       " > 0 && document.getElementById('depth-img').getBoundingClientRect().top >= 0")
+        title = browser.find_element("id", "pick-title").text
+        assert "2 people in the depth image" in title and "click on the person to measure" in title
+        assert not COMMAND_LINE_WORDS.search(_page_text(browser)), _page_text(browser)
+        # no answer: no number, sketch, 3-D view or downloads; the picture large and wholly in the window
+        for card in ("answer", "sketch-card", "viewer-card", "downloads-card", "depth-card", "flags", "no-flags"):
+            assert not _shown(browser, card), card
+        box = browser.execute_script("const r = document.getElementById('depth-img').getBoundingClientRect(); "
+                                     "return [r.top, r.bottom, r.width, window.innerHeight]")
+        assert 0 <= box[0] and box[1] <= box[3] and box[2] >= 560, box  # above the fold, wider than the file's 512 px
+        _screenshot(browser, "serve-several-people.png")
+    finally:
+        browser.set_window_size(1280, 1900)
     img = browser.find_element("id", "depth-img")
     results = {}
     for who in ("woman", "man"):
@@ -208,6 +275,199 @@ def test_a_bad_file_shows_its_error_and_the_server_still_answers(server, browser
                                   ".map(tr => [...tr.children].map(td => td.textContent))")
     assert len(rows) == 2 and rows[0][0] == "one.png" and float(rows[0][1]) > 1.0 and "is not a .png" in rows[1][4]
     assert browser.find_element("id", "batch-count").text == "2 of 2 done"
+
+
+def test_method_both_shows_each_route_which_leads_and_the_progress_of_the_fit(server, browser, frames,
+                                                                             small_estimator_model):
+    """Method both: each route's own number, interval and flags beside the leading number, which leads and why,
+    the 3-D view's two bodies with a legend; while it runs, the stages and the body fit's steps are shown."""
+    import wbsa
+    from selenium.webdriver.common.by import By
+
+    from wbsa.estimation import SegmentSettings
+
+    url, _ = server
+    _upload(browser, url, camera="kinect-v2", method="both")
+    browser.find_element(By.ID, "depth-file").send_keys(str(frames["one"]["path"]))
+    _wait(browser, "document.body.dataset.answer && document.body.dataset.busy === '0' "
+                   "&& document.getElementById('viewer').dataset.triangles > 0", timeout=300)
+    log = browser.execute_script("return window.progressLog")
+    stages = [p["stage"] for p in log]
+    assert [s for i, s in enumerate(stages) if i == 0 or stages[i - 1] != s] == \
+        ["reading", "subject", "regression", "body-fit", "answer"], stages
+    steps = [p["done"] for p in log if p["stage"] == "body-fit" and p["total"] > 1]
+    totals = {p["total"] for p in log if p["stage"] == "body-fit" and p["total"] > 1}
+    assert steps and steps == sorted(steps) and 0 < steps[-1] <= FIT_STEPS and totals == {FIT_STEPS}  # in order
+    est = wbsa.estimate(str(frames["one"]["path"]), "kinect-v2", str(small_estimator_model), method="both",
+                        clothing="underwear", segment=SegmentSettings(), body_fit=_fit_settings())
+    routes = browser.execute_script("""return [...document.querySelectorAll('#route-list .route')].map(b => ({
+        name: b.dataset.route, leads: b.classList.contains('leads'), text: b.innerText,
+        flags: [...b.querySelectorAll('li')].map(li => li.dataset.flag)}))""")
+    assert [r["name"] for r in routes] == ["regression", "body-fit"] == list(est.routes)
+    for shown, (name, p) in zip(routes, est.routes.items()):
+        assert f"{p.wbsa_m2:.2f} m²" in shown["text"] and f"{p.wbsa_lo_m2:.2f} – {p.wbsa_hi_m2:.2f} m²" in shown["text"]
+        assert shown["flags"] == list(p.flags) and shown["leads"] == (name == "regression")
+    assert float(_answer(browser)["wbsa"]) == pytest.approx(est.routes["regression"].wbsa_m2, abs=5e-4)
+    assert "Regression (leads)" == browser.find_element(By.ID, "lead-label").text
+    assert "regression leads" in browser.find_element(By.ID, "lead-why").text
+    image_flags = _answer(browser)["flagNames"]  # the picture's own checks, apart from the routes'
+    assert set(image_flags) <= set(est.flags) and not set(image_flags) & set(est.routes["body-fit"].flags)
+    legend = browser.execute_script("return [...document.querySelectorAll('#viewer-legend li')].map(li => li.innerText)")
+    assert len(legend) == 2 and "measured" in legend[0] and "body fit" in legend[1]
+    assert not COMMAND_LINE_WORDS.search(_page_text(browser))
+    _screenshot(browser, "serve-both.png")
+
+
+@pytest.mark.slow
+def test_the_readme_picture_is_the_shipped_default_models_answer(browser, frames, tmp_path):
+    """The page as ``wbsa serve`` starts it (no --model: wbsa.estimate's default model) on the tests' frame: its
+    number is the default model's, and the whole page is saved (test-artefacts/serve-page.png, the picture of
+    docs/serve-page.png and the README)."""
+    import wbsa
+    from wbsa.server.app import create_app
+    from wbsa.server.command import start_in_thread
+
+    app = create_app(None, temp_dir=str(tmp_path))
+    url, stop = start_in_thread(app)
+    try:
+        _upload(browser, url, frames["one"]["path"], height_cm="186", mass_kg="84")
+        _wait(browser, "document.body.dataset.answer && document.getElementById('viewer').dataset.triangles > 0")
+        est = wbsa.estimate(str(frames["one"]["path"]), "kinect-v2", clothing="underwear")
+        shown = _answer(browser)
+        assert float(shown["wbsa"]) == pytest.approx(est.wbsa_m2, abs=5e-4) and shown["flagNames"] == list(est.flags)
+        assert browser.execute_script("return current.model") == est.model  # the default model's name
+        height = browser.execute_script("return document.documentElement.scrollHeight")
+        browser.set_window_size(1280, height + 120)
+        _screenshot(browser, "serve-page.png")
+    finally:
+        browser.set_window_size(1280, 1900)
+        stop()
+
+
+def test_clothes_are_a_choice_the_page_requires_and_states(server, browser, frames, small_estimator_model):
+    """A file chosen before the clothes is not measured: the page asks for the clothes in plain words; choosing
+    them measures it, stated (clothing_stated, the layer's name), with wbsa.estimate's answer for those clothes."""
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.support.ui import Select
+
+    import wbsa
+    from wbsa.estimation import SegmentSettings
+    from wbsa.estimation.clothes import CLOTHES
+
+    url, _ = server
+    _upload(browser, url, frames["one"]["path"], clothes="")
+    _wait(browser, "!document.getElementById('error').hidden")
+    assert "Choose what the person wears" in _answer(browser)["error"] and not _shown(browser, "result")
+    assert browser.execute_script("return window.progressLog.length") == 0  # nothing was sent
+    options = browser.execute_script("return [...document.getElementById('clothes').options].map(o => o.value)")
+    assert options == ["", *CLOTHES]
+    Select(browser.find_element(By.ID, "clothes")).select_by_value("street")
+    _wait(browser, "document.body.dataset.answer && document.body.dataset.busy === '0'")
+    with urllib.request.urlopen(url + f"api/result/{_answer(browser)['id']}/estimate.json") as r:
+        stated = json.loads(r.read())
+    assert stated["clothes"] == "street" and stated["clothing_stated"] is True
+    assert "clothes_unstated" not in _answer(browser)["flagNames"]
+    est = wbsa.estimate(str(frames["one"]["path"]), "kinect-v2", str(small_estimator_model), clothing="street",
+                        segment=SegmentSettings())
+    assert float(_answer(browser)["wbsa"]) == pytest.approx(est.wbsa_m2, abs=5e-4)
+    assert not COMMAND_LINE_WORDS.search(_page_text(browser))
+
+
+def test_intrinsics_chosen_after_the_depth_file_run_it_again(server, browser, frames, small_estimator_model,
+                                                             tmp_path):
+    """The depth file first (camera from the image size: assumed, flagged), then the camera's intrinsics file: the
+    page measures the file again with them, says so, and shows wbsa.estimate's answer with that camera."""
+    from selenium.webdriver.common.by import By
+
+    from wbsa.camera import preset
+
+    url, _ = server
+    cam = tmp_path / "cam.json"
+    cam.write_text(json.dumps(preset("kinect-v2").to_open3d_json()))
+    _upload(browser, url, frames["one"]["path"], camera="auto")
+    _wait(browser, "document.body.dataset.answer && document.body.dataset.busy === '0'")
+    first = _answer(browser)
+    assert "camera_assumed" in first["flagNames"] and browser.execute_script("return window.progressLog.length") >= 3
+    browser.find_element(By.ID, "intrinsics").send_keys(str(cam))
+    _wait(browser, f"document.body.dataset.reruns === '1' && document.body.dataset.answer "
+                   f"&& document.body.dataset.answer !== '{first['id']}' && document.body.dataset.busy === '0'")
+    again = _answer(browser)
+    note = browser.find_element(By.ID, "rerun-note").text
+    assert "Measured again with the camera file cam.json" in note and _shown(browser, "rerun-note")
+    assert "camera_assumed" not in again["flagNames"]
+    est = _estimate(frames["one"]["path"], small_estimator_model)
+    assert float(again["wbsa"]) == pytest.approx(est.wbsa_m2, abs=5e-4)
+    _screenshot(browser, "serve-rerun-intrinsics.png")
+
+
+def test_messages_reach_the_page_in_its_own_words(server, browser, frames, tmp_path, small_estimator_model):
+    """The library's messages carry command-line words; the page shows every one of them in its own words
+    (wbsa.server.wording): real messages from the library, and an 8-bit picture dropped on the page."""
+    from PIL import Image
+
+    import wbsa
+    from wbsa.camera import preset
+    from wbsa.errors import WbsaError
+    from wbsa.estimation.methods.base import Request
+    from wbsa.estimation.methods.body_fit.predictor import BodyFitPredictor
+    from wbsa.estimation.methods.view import ViewEstimate, view_used
+    from wbsa.estimation.subject import checks
+    from wbsa.server.wording import choose_person, page_words
+
+    def message(call, *args) -> str:
+        with pytest.raises(WbsaError) as err:
+            call(*args)
+        return str(err.value)
+
+    grey = tmp_path / "photo.png"
+    Image.fromarray(np.full((424, 512), 128, np.uint8)).save(grey)
+    from wbsa.core.depth_image import read_depth
+
+    cli = [
+        message(checks.check_image_size, np.zeros((424, 512)), preset("kinect-v1")),
+        message(read_depth, grey),
+        message(checks.check_clothing, 0.2),
+        message(BodyFitPredictor().check_request, Request(clothing_m=0.01)),
+        message(wbsa.estimate, str(frames["two"]["path"]), "kinect-v2", str(small_estimator_model)),
+        view_used(ViewEstimate(131.0, 49.0, 12.0, 1.0, 0.41), None, None)[1]["uncertain_view"],
+        checks.person_shape_flags(1.0, 2.0, 1.9)["not_a_person"],
+        "p_weight = 1.00, p_age = 0.00, l_belly = +1.00",  # the body fit's outside_model_range detail, as it writes it
+    ]
+    for text in cli:
+        assert COMMAND_LINE_WORDS.search(text), text  # the library's own words: the command line's
+        assert not COMMAND_LINE_WORDS.search(page_words(text)), (text, page_words(text))
+    assert choose_person(page_words(cli[4])) and not choose_person(page_words(cli[0]))
+    url, _ = server
+    _upload(browser, url, grey)
+    _wait(browser, "!document.getElementById('error').hidden && document.body.dataset.busy === '0'")
+    error = _answer(browser)["error"]
+    assert "photo.png is an ordinary grey or colour picture, not a depth image" in error
+    assert not COMMAND_LINE_WORDS.search(_page_text(browser))
+    assert not _shown(browser, "result")  # nothing measured: no cards at all
+
+
+def test_the_progress_stream_ends_with_the_answer_a_script_gets(server, frames):
+    """Accept: application/x-ndjson gives the stages as JSON lines and, last, the answer with its status; the same
+    request without it gets the one JSON answer, with the same number."""
+    url, _ = server
+    body, ctype = _form({"camera": "kinect-v2"}, [("depth", "one.png", frames["one"]["path"].read_bytes())])
+    req = urllib.request.Request(url + "api/estimate", data=body, method="POST",
+                                 headers={"Content-Type": ctype, "Accept": "application/x-ndjson"})
+    with urllib.request.urlopen(req, timeout=120) as r:
+        assert r.headers["Content-Type"].startswith("application/x-ndjson")
+        lines = [json.loads(line) for line in r.read().decode().splitlines()]
+    stages = [line["progress"]["stage"] for line in lines[:-1]]
+    assert stages == ["reading", "subject", "regression", "answer"]
+    assert lines[-1]["status"] == 200
+    code, plain = _post(url, {"camera": "kinect-v2"}, [("depth", "one.png", frames["one"]["path"].read_bytes())])
+    assert code == 200 and plain["wbsa_m2"] == lines[-1]["answer"]["wbsa_m2"] and plain["id"] != lines[-1]["answer"]["id"]
+    # an answer without a result is the last line too, with the status a plain request gets
+    body, ctype = _form({"camera": "kinect-v2"}, [("depth", "two.png", frames["two"]["path"].read_bytes())])
+    req = urllib.request.Request(url + "api/estimate", data=body, method="POST",
+                                 headers={"Content-Type": ctype, "Accept": "application/x-ndjson"})
+    with urllib.request.urlopen(req, timeout=120) as r:
+        last = json.loads(r.read().decode().splitlines()[-1])
+    assert last["status"] == 422 and last["answer"]["choose_person"] and "click on the person" in last["answer"]["error"]
 
 
 # ---------------------------------------------------------------- the routes and bad input
@@ -351,7 +611,7 @@ def test_a_batch_gives_one_row_per_file_and_a_csv(server, frames, small_estimato
     assert batch["done_count"] == 3
     with urllib.request.urlopen(url + batch["csv"]) as r:
         rows = list(csv.DictReader(io.StringIO(r.read().decode())))
-    est = _estimate(frames["one"]["path"], small_estimator_model)
+    est = _estimate(frames["one"]["path"], small_estimator_model, clothing=None)  # a script that states none
     assert [r["file"] for r in rows] == ["a.png", "b.txt", "c.png"]
     assert float(rows[0]["wbsa_m2"]) == pytest.approx(est.wbsa_m2, abs=5e-4) and rows[0]["flags"] == ";".join(est.flags)
     assert rows[1]["wbsa_m2"] == "" and "not a depth file type" in rows[1]["error"]

@@ -10,7 +10,7 @@ from __future__ import annotations
 import dataclasses
 import os
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Callable
 
 import numpy as np
 
@@ -158,7 +158,8 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
              elevation_deg: float | None = None, clothing: str | None = None, clothing_m: float | None = None,
              stature_m: float | None = None, level: float = 0.95,
              depth_scale: float | None = None, segment: SegmentSettings | None = SegmentSettings(),
-             body_fit: BodyFitSettings | None = None, show_progress: bool | None = None) -> Estimate:
+             body_fit: BodyFitSettings | None = None, show_progress: bool | None = None,
+             progress: Callable[[str, int, int], None] | None = None) -> Estimate:
     """Estimate WBSA from one depth image of a standing person.
 
     Parameters
@@ -199,6 +200,11 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
         How to find the subject in a room; None: every return is the subject.
     body_fit : BodyFitSettings or None
         With ``method="body-fit"`` or ``"both"``: how the body is fitted (None: the defaults).
+    progress : callable, optional
+        Called as ``progress(stage, done, total)`` as the work goes on: ``("subject", 0, 1)`` before the subject
+        is found and measured, then for each route ``(route, 0, 1)`` as it starts (``regression``, ``body-fit``),
+        the body fit also ``("body-fit", step, steps)`` after each of its steps (a fit that settles stops
+        early). For a page or a log; the estimate is the same with or without it.
 
     Returns
     -------
@@ -238,7 +244,8 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     clothes = stated_clothes(clothing, clothing_m)
     if stature_m is not None:
         stature_m = checks.check_stated_stature(stature_m)
-    request = Request(azimuth_deg, elevation_deg, clothes.layer_m, level)
+    request = Request(azimuth_deg, elevation_deg, clothes.layer_m, level,
+                      progress=None if progress is None else lambda step, steps: progress("body-fit", step, steps))
     auto = isinstance(camera, str) and camera == AUTO_CAMERA
     intrinsics = None if auto else resolve_camera(camera)  # a bad camera is refused before the image is read
     depth_m = _depth_array(depth, depth_scale)
@@ -257,6 +264,8 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
                 raise
             flags["body_fit_failed"] = str(exc)  # both: the second route cannot serve this request
             predictors[k] = None
+    if progress is not None:
+        progress("subject", 0, 1)
     if segment is None:
         mask, floor = np.isfinite(depth_m) & (depth_m > 0), None
         if not mask.any():
@@ -288,11 +297,15 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     flags.update(checks.working_range_flags(m.distance_m, intrinsics))
     flags.update(checks.feet_flags(m.distance_m, intrinsics))
     subject = Subject(depth_m, mask, intrinsics, floor, m)
+    if progress is not None:
+        progress(predictors[0].name, 0, 1)
     prediction = predictors[0].predict(subject, request)
     routes = {predictors[0].name: prediction} if len(predictors) > 1 else {}
     for predictor in predictors[1:]:
         if predictor is None:
             continue
+        if progress is not None:
+            progress(predictor.name, 0, 1)
         try:  # both: a body fit that fails leaves the regression's answer standing, flagged
             routes[predictor.name] = predictor.predict(subject, request)
         except WbsaError as exc:

@@ -29,7 +29,6 @@ that the sensor's settings stay cheap to import for the command line.
 from __future__ import annotations
 
 import contextlib
-import functools
 import math
 from dataclasses import dataclass, replace
 
@@ -185,33 +184,20 @@ def preset_record(camera):
     return record if record is not None and record.intrinsics == camera else None
 
 
-#: Focal length (px) of the estimator's Kinect v1 envelope: the record's 575.8157 rounded, as the shipped
-#: estimator model was trained with.
-_ENVELOPE_FX_PX = 575.8
-
-
 def envelope_model(camera) -> SensorModel:
-    """The model whose :func:`envelope_m` the estimator assumes for a depth image of ``camera``: Kinect v1's
-    for every camera (its focal length rounded to 575.8 px), the envelope the shipped estimator model was
-    trained with (its planes, floor cut and mixed-pixel tolerance on the training renders used it).
+    """The model whose :func:`envelope_m` the estimator assumes for a depth image of ``camera``: the camera
+    preset's own (:func:`camera_model`), or Kinect v1's for a camera without a preset (its technology unknown).
 
     Parameters
     ----------
-    camera : wbsa.camera.Intrinsics
+    camera : wbsa.camera.Intrinsics or None
 
     Returns
     -------
     SensorModel
     """
-    return _trained_envelope()
-
-
-@functools.cache
-def _trained_envelope() -> SensorModel:
-    """Kinect v1's model with the envelope's focal length (built once)."""
-    from wbsa.camera.presets import CAMERAS
-
-    return sensor_model("structured-light", _ENVELOPE_FX_PX, CAMERAS["kinect-v1"].disparity)
+    record = preset_record(camera)
+    return camera_model(record if record is not None else "kinect-v1")
 
 
 def _namespace(*xs):

@@ -3,12 +3,15 @@
 ``app``       the Starlette application and its routes (:func:`create_app`)
 ``uploads``   upload checks: size, type and image size from the bytes, fields without paths
 ``jobs``      one estimate off the event loop (:func:`measure`, :class:`Runner`), results kept in memory
-``answer``    an Estimate as the page shows it: number, flags, view, meshes, formulae, downloads, depth picture
+``progress``  an estimate's progress as JSON lines, its answer last (``Accept: application/x-ndjson``)
+``answer``    an Estimate as the page shows it: number (each route's with ``both``), flags, view, meshes,
+              formulae, downloads, depth picture
 ``advice``    the page's rows of an estimate's flags (from :data:`wbsa.estimation.flags.FLAG_RECORDS`)
+``wording``   the page's words for the library's command-line words (one table)
 ``batch``     several files: rows, progress, CSV
 ``command``   the ``wbsa serve`` subcommand (uvicorn on 127.0.0.1 and a free port by default)
-``static/``   the page: HTML, CSS and JavaScript (a small WebGL viewer), no build step, nothing fetched from
-              elsewhere
+``static/``   the page: HTML, CSS and JavaScript (the page, the view sketch, a small canvas 3-D viewer), no
+              build step, nothing fetched from elsewhere
 
 The page is a thin layer over :func:`wbsa.estimate`: every check and number comes from it. Names are
 imported lazily.

@@ -1,8 +1,8 @@
 """The answer of ``wbsa serve``: an :class:`~wbsa.estimation.Estimate` as the page shows and offers it.
 
 - :func:`run_estimate`: the page's options into :func:`wbsa.estimate` (the one estimation code path);
-- :func:`answer_json`: the number first (WBSA, interval, method), the flags with what to do
-  (:mod:`wbsa.server.advice`), the view, the meshes for the 3-D view, the BSA formulae when height and
+- :func:`answer_json`: the number first (WBSA, interval, method; with ``both`` each route's own and which
+  leads), the flags with what to do (:mod:`wbsa.server.advice`, details in the page's words), the view, the meshes for the 3-D view, the BSA formulae when height and
   mass were typed, the downloads;
 - :func:`downloads`: JSON (``Estimate.to_dict``), FHIR R4 (:func:`~wbsa.estimation.fhir.fhir_observation`),
   the mask PNG and the surface PLY, made by the writers ``wbsa estimate`` uses;
@@ -24,16 +24,19 @@ from wbsa.errors import WbsaError
 DEPTH_PERCENTILES = (1.0, 99.0)
 
 
-def run_estimate(depth_m: np.ndarray, camera, model, options):
-    """:func:`wbsa.estimate` of ``depth_m`` with the page's ``options`` (:class:`wbsa.server.jobs.Options`)."""
+def run_estimate(depth_m: np.ndarray, camera, model, options, progress=None):
+    """:func:`wbsa.estimate` of ``depth_m`` with the page's ``options`` (:class:`wbsa.server.jobs.Options`),
+    reporting to ``progress(stage, done, total)`` (or None)."""
     import wbsa
     from wbsa.estimation import SegmentSettings
 
     model = None if options.method == "body-fit" else model  # the body fit has no estimator model
-    return wbsa.estimate(depth_m, camera, model, method=options.method, azimuth_deg=options.azimuth_deg,
-                         elevation_deg=options.elevation_deg, clothing=options.clothes, clothing_m=options.clothing_m,
+    body_fit = None if options.method == "regression" else options.body_fit
+    return wbsa.estimate(depth_m, camera, model, method=options.method, body_fit=body_fit,
+                         azimuth_deg=options.azimuth_deg, elevation_deg=options.elevation_deg,
+                         clothing=options.clothes, clothing_m=options.clothing_m,
                          stature_m=None if options.height_cm is None else options.height_cm / 100.0,
-                         segment=SegmentSettings(pick=options.pick))
+                         segment=SegmentSettings(pick=options.pick), progress=progress)
 
 
 def _stem(name: str) -> str:
@@ -77,13 +80,16 @@ DOWNLOAD_LABELS = {"estimate.json": "JSON", "fhir.json": "FHIR R4 Observation", 
 
 
 def meshes(est, result_id: str) -> list[dict]:
-    """The meshes of the 3-D view: name, and a PLY to load (or ``vertices``/``faces`` arrays).
+    """The meshes of the 3-D view: name, its words in the view's legend, and a PLY to load (or
+    ``vertices``/``faces`` arrays).
 
     The visible surface (camera frame, metres) and, with the body fit, the fitted body as the camera saw it.
     """
-    out = [{"name": "visible surface", "url": f"api/result/{result_id}/surface.ply", "frame": "camera"}]
+    out = [{"name": "visible surface", "label": "the surface the camera saw (measured)",
+            "url": f"api/result/{result_id}/surface.ply", "frame": "camera"}]
     if est.body is not None:
-        out.append({"name": "fitted body", "url": f"api/result/{result_id}/body-observed.ply", "frame": "camera"})
+        out.append({"name": "fitted body", "label": "the body fitted to it (body fit), as the camera saw it",
+                    "url": f"api/result/{result_id}/body-observed.ply", "frame": "camera"})
     return out
 
 
@@ -111,6 +117,55 @@ def formula_rows(height_cm: float | None, mass_kg: float | None, sex: str | None
     return {"rows": rows, "height_cm": height_cm, "mass_kg": mass_kg, "sex": sex}
 
 
+#: Each route's name on the page.
+ROUTE_LABELS = {"regression": "Regression", "body-fit": "Body fit", "combined": "Both combined"}
+#: Why the route that leads with method ``both`` does, in plain words (the measured comparison: docs/body_fit.md).
+LEAD_REASONS = {
+    "regression": "The number above is the regression's. With both methods the regression leads: on the test "
+                  "pictures it came closer to the true area than the body fit, which is shown beside it as a second "
+                  "opinion.",
+    "body-fit": "The number above is the body fit's: the regression gave no answer for this picture.",
+    "combined": "The number above combines the two methods' answers.",
+}
+
+
+def routes_json(est) -> dict | None:
+    """With method ``both``: each route's number, interval and own flags, which one leads and why; None otherwise.
+
+    The route whose number is the estimate's leads; an estimate whose number is neither route's is their
+    combination (``combined``). A body fit that failed is a route with its reason (``failed``).
+    """
+    from wbsa.server.advice import flag_rows
+    from wbsa.server.wording import page_words
+
+    if not est.routes:
+        return None
+    whole = est.to_dict()
+    shown = whole["routes"]
+    rows = []
+    for key, route in shown.items():
+        same = all(route[k] == whole[k] for k in ("wbsa_m2", "wbsa_lo_m2", "wbsa_hi_m2"))  # both rounded alike
+        rows.append({"name": key, "label": ROUTE_LABELS.get(key, key), "wbsa_m2": round(route["wbsa_m2"], 3),
+                     "wbsa_lo_m2": round(route["wbsa_lo_m2"], 3), "wbsa_hi_m2": round(route["wbsa_hi_m2"], 3),
+                     "model": route["model"], "flags": flag_rows(route["flags"]), "leads": same})
+    if "body_fit_failed" in est.flags and "body-fit" not in shown:
+        rows.append({"name": "body-fit", "label": ROUTE_LABELS["body-fit"], "leads": False, "flags": [],
+                     "failed": page_words(est.flags["body_fit_failed"])})
+    lead = next((r["name"] for r in rows if r["leads"]), "combined")
+    combined = None
+    if lead == "combined":
+        combined = {"name": "combined", "label": ROUTE_LABELS["combined"], "wbsa_m2": round(est.wbsa_m2, 3),
+                    "wbsa_lo_m2": round(est.wbsa_lo_m2, 3), "wbsa_hi_m2": round(est.wbsa_hi_m2, 3), "leads": True}
+    return {"rows": rows, "combined": combined, "lead": lead, "lead_label": ROUTE_LABELS.get(lead, lead),
+            "why": LEAD_REASONS.get(lead, "")}
+
+
+def shared_flags(est) -> dict[str, str]:
+    """The estimate's flags less those a route of ``both`` raised itself (shown with that route's number)."""
+    own = [dict(p.flags) for p in est.routes.values()]
+    return {k: v for k, v in est.flags.items() if not any(f.get(k) == v for f in own)}
+
+
 def answer_json(est, result_id: str, name: str, options, files: dict) -> dict:
     """What the page shows of one estimate (JSON-ready)."""
     from wbsa.server.advice import flag_rows
@@ -121,7 +176,8 @@ def answer_json(est, result_id: str, name: str, options, files: dict) -> dict:
         "wbsa_hi_m2": round(est.wbsa_hi_m2, 3), "level": est.level, "method": est.method,
         "method_text": est.method_text(), "model": est.model, "camera": est.camera,
         "estimate": est.to_dict(), "pick": list(options.pick) if isinstance(options.pick, tuple) else options.pick,
-        "flags": flag_rows(est.flags),
+        "flags": flag_rows(est.flags), "image_flags": flag_rows(shared_flags(est)),
+        "routes": routes_json(est),
         "view": {**est.view.to_dict(), "distance_m": round(est.distance_m, 3),
                  "azimuth_used_deg": est.view_used[0], "elevation_used_deg": est.view_used[1],
                  "uncertain": "uncertain_view" in est.flags},

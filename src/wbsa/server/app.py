@@ -8,6 +8,8 @@
                                        ``mass_kg``, ``sex``, ``pick``, ``azimuth_deg``,
                                        ``elevation_deg``) -> the answer
 ``POST /api/result/{id}/pick?pick=x,y`` the same image, the person at pixel (x, y) -> a new answer
+                                       (both: with ``Accept: application/x-ndjson``, the progress as
+                                       JSON lines and the answer last: :mod:`wbsa.server.progress`)
 ``GET /api/result/{id}/{file}``         ``depth.png``, ``estimate.json``, ``fhir.json``, ``mask.png``,
                                        ``surface.ply``
 ``POST /api/batch``                    several ``depth`` files -> a batch id; ``GET /api/batch/{id}``
@@ -75,8 +77,9 @@ def _number(fields: dict, name: str, low: float, high: float, what: str) -> floa
         raise UploadError(f"{name}: {exc}") from None
 
 
-def options_from_form(form, presets, methods) -> "Options":
-    """The page's choices as :class:`~wbsa.server.jobs.Options`, every field checked."""
+def options_from_form(form, presets, methods, body_fit=None) -> "Options":
+    """The page's choices as :class:`~wbsa.server.jobs.Options`, every field checked (``body_fit``: the server's
+    settings of the body fit)."""
     from wbsa.cli_types import pick as parse_pick
     from wbsa.estimation.clothes import CLOTHES, clothes_help
     from wbsa.server.jobs import Options, camera_from_upload
@@ -112,11 +115,11 @@ def options_from_form(form, presets, methods) -> "Options":
                    pick=pick, method=method, height_cm=_number(f, "height_cm", 1, 300, "a height in cm"),
                    mass_kg=_number(f, "mass_kg", 0.1, 700, "a mass in kg"), sex=sex,
                    azimuth_deg=_number(f, "azimuth_deg", -360, 360, "an azimuth in degrees"),
-                   elevation_deg=_number(f, "elevation_deg", -90, 90, "an elevation in degrees"))
+                   elevation_deg=_number(f, "elevation_deg", -90, 90, "an elevation in degrees"), body_fit=body_fit)
 
 
 def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_upload_bytes: int = MAX_UPLOAD_BYTES,
-               temp_dir: str | None = None, keep_results: int = 64, token: str | None = None):
+               temp_dir: str | None = None, keep_results: int = 64, token: str | None = None, body_fit=None):
     """The ``wbsa serve`` application (Starlette, ASGI).
 
     Parameters
@@ -137,6 +140,8 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
     token : str, optional
         A token every request must carry (:class:`wbsa.server.access.TokenGate`; 403 without it). None: no
         token (loopback only: ``wbsa serve`` makes one for any other address).
+    body_fit : BodyFitSettings, optional
+        The settings of the body fit (methods ``body-fit`` and ``both``; None: the defaults).
 
     Returns
     -------
@@ -145,7 +150,7 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
     """
     from starlette.applications import Starlette
     from starlette.requests import ClientDisconnect, Request
-    from starlette.responses import FileResponse, JSONResponse, Response
+    from starlette.responses import FileResponse, JSONResponse, Response, StreamingResponse
     from starlette.routing import Mount, Route
     from starlette.staticfiles import StaticFiles
 
@@ -154,6 +159,9 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
     from wbsa.typing import METHODS
     from wbsa.server.batch import Batch, run_batch
     from wbsa.server.jobs import BoundedStore, Runner, internal_error, measure, new_id
+    from wbsa.estimation.clothes import CLOTHES
+    from wbsa.server.progress import STREAM, stream_answer, wants_stream
+    from wbsa.server.wording import page_words
 
     if model is not None and not hasattr(model, "predict"):
         from wbsa.estimation.methods.regression.default_model import load_model
@@ -168,7 +176,7 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
     batches = BoundedStore(16, "this batch is no longer kept; upload its files again")
 
     def error(exc: UploadError) -> JSONResponse:
-        return JSONResponse({"error": str(exc)}, status_code=exc.status)
+        return JSONResponse({"error": page_words(str(exc))}, status_code=exc.status)
 
     async def page(request: Request) -> Response:
         return FileResponse(STATIC / "index.html", media_type="text/html")
@@ -177,21 +185,35 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
         return JSONResponse({
             "presets": [{"name": k, "width": CAMERAS[k].intrinsics.width, "height": CAMERAS[k].intrinsics.height} for k in presets],
             "methods": methods, "max_upload_bytes": max_upload_bytes, "max_clothing_cm": 5,
+            "clothes": [{"name": c.name, "words": c.words, "layer_cm": round(100 * c.layer_m, 2),
+                         "sd_cm": round(100 * c.sd_m, 2)} for c in CLOTHES.values()],
             "model": "default" if model is None else str(getattr(model, "meta", {}).get("name", "given"))})
 
-    async def answered(work) -> Response:
-        """Run ``work()`` (a coroutine giving a result) in one of the runner's places and answer with the result;
-        a bad request gets its one-line message, a failure of wbsa itself a 500 with no traceback."""
+    async def answered(request: Request, prepare) -> Response:
+        """Check the request with ``prepare()`` (a coroutine giving ``job(progress) -> Result``), then run the job
+        in one of the runner's places: one JSON answer, or with ``Accept: application/x-ndjson`` its progress
+        and then the answer (:mod:`wbsa.server.progress`). A bad request gets its one-line message, a failure of
+        wbsa itself a 500 with no traceback."""
         try:
             runner.reserve()
         except UploadError as exc:
             return error(exc)
         try:
-            result = await work()
+            job = await prepare()
         except UploadError as exc:
+            runner.release()
             return error(exc)
         except ClientDisconnect:
+            runner.release()
             return Response(status_code=400)
+        except Exception as exc:  # a failure of wbsa itself
+            runner.release()
+            return JSONResponse({"error": internal_error(exc)}, status_code=500)
+        if wants_stream(request):
+            return StreamingResponse(stream_answer(runner, job, results.add, internal_error), media_type=STREAM,
+                                     headers={"Cache-Control": "no-store", "X-Accel-Buffering": "no"})
+        try:
+            result = await runner.run(job, None)
         except Exception as exc:  # a failure of wbsa itself: the server answers and keeps running
             return JSONResponse({"error": internal_error(exc)}, status_code=500)
         finally:
@@ -200,24 +222,24 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
         return JSONResponse(finite_or_none(result.answer), status_code=422 if "error" in result.answer else 200)
 
     async def estimate_one(request: Request) -> Response:
-        async def work():
+        async def prepare():
             form = await read_form(request, max_upload_bytes)
-            options = options_from_form(form, presets, methods)
+            options = options_from_form(form, presets, methods, body_fit)
             depth = form.files.get("depth", [])
             if len(depth) != 1:
                 raise UploadError("send one depth file in the field 'depth' (for several, use the batch)"
                                   if depth else "no depth file was sent; choose or drop a depth image")
             check_depth_upload(depth[0])
-            return await runner.run(measure, depth[0], options, model, root)
+            return lambda progress: measure(depth[0], options, model, root, progress=progress)
 
-        return await answered(work)
+        return await answered(request, prepare)
 
     async def pick(request: Request) -> Response:
         import dataclasses
 
         from wbsa.cli_types import pick as parse_pick
 
-        async def work():
+        async def prepare():
             before = results.get(request.path_params["rid"])
             if before.depth_m is None:
                 raise UploadError("this upload holds no depth image to pick from; upload a depth file")
@@ -226,12 +248,16 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
             except argparse.ArgumentTypeError as exc:
                 raise UploadError(f"pick: {exc}") from None
             options = dataclasses.replace(before.options, pick=at)
-            result = await runner.run(measure, None, options, model, root, depth_m=before.depth_m)
-            result.name = before.name
-            result.answer["name"] = before.name
-            return result
 
-        return await answered(work)
+            def job(progress):
+                result = measure(None, options, model, root, depth_m=before.depth_m, progress=progress)
+                result.name = before.name
+                result.answer["name"] = before.name
+                return result
+
+            return job
+
+        return await answered(request, prepare)
 
     async def result_file(request: Request) -> Response:
         try:
@@ -252,7 +278,7 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
             return error(exc)
         try:
             form = await read_form(request, max_upload_bytes)
-            options = options_from_form(form, presets, methods)
+            options = options_from_form(form, presets, methods, body_fit)
             uploads = form.files.get("depth", [])
             if not uploads:
                 raise UploadError("no depth files were sent; choose or drop depth images")

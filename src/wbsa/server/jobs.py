@@ -50,6 +50,8 @@ class Options:
     sex : str or None
     azimuth_deg, elevation_deg : float or None
         A stated view (optional; it is estimated, and checked when given).
+    body_fit : BodyFitSettings or None
+        The server's settings of the body fit (``create_app(body_fit=...)``; None: the defaults), not the page's.
     """
 
     camera: str = "auto"
@@ -64,6 +66,7 @@ class Options:
     sex: str | None = None
     azimuth_deg: float | None = None
     elevation_deg: float | None = None
+    body_fit: object = None
 
 
 @dataclass
@@ -176,11 +179,12 @@ def camera_of(options: Options):
 
 
 def measure(upload: Upload | None, options: Options, model, root: Path, *, depth_m: np.ndarray | None = None,
-            result_id: str | None = None) -> Result:
+            result_id: str | None = None, progress=None) -> Result:
     """Read an upload (or take ``depth_m``), estimate, and make the answer and its downloads.
 
     Runs in a worker thread. Every :class:`~wbsa.errors.WbsaError` becomes the answer's ``error``
-    (one line, the server's paths replaced by the upload's name); once the image is read, the answer
+    (one line, the server's paths replaced by the upload's name, in the page's words:
+    :mod:`wbsa.server.wording`; ``choose_person`` when it asks for a click on a person); once the image is read, the answer
     keeps its depth picture, so the operator can click the person meant.
 
     Parameters
@@ -194,12 +198,20 @@ def measure(upload: Upload | None, options: Options, model, root: Path, *, depth
     depth_m : (h, w) float, optional
         An image already read (a pick on an earlier result).
     result_id : str, optional
+    progress : callable, optional
+        ``progress(stage, done, total)``: ``reading`` the upload, the stages of :func:`wbsa.estimate`
+        (``subject``, ``regression``, ``body-fit`` with its steps), ``answer`` (the downloads).
 
     Returns
     -------
     Result
     """
     from wbsa.server import answer
+    from wbsa.server.wording import choose_person, page_words
+
+    def report(stage: str, done: int = 0, total: int = 1) -> None:
+        if progress is not None:
+            progress(stage, done, total)
 
     rid = result_id or new_id()
     name = upload.name if upload is not None else options.intrinsics_name
@@ -207,14 +219,17 @@ def measure(upload: Upload | None, options: Options, model, root: Path, *, depth
     result = Result(rid, {}, options=options, name=name)
     try:
         if depth_m is None:
+            report("reading")
             depth_m = read_upload(upload, folder)
         result.depth_m = depth_m
-        est = answer.run_estimate(depth_m, camera_of(options), model, options)
+        est = answer.run_estimate(depth_m, camera_of(options), model, options, progress)
         result.estimate = est
+        report("answer")
         result.files = answer.downloads(est, folder, name)
         result.answer = answer.answer_json(est, rid, name, options, result.files)
     except WbsaError as exc:
-        result.answer = {"id": rid, "name": name, "error": scrub(str(exc), folder, name or "the upload")}
+        message = page_words(scrub(str(exc), folder, name or "the upload"))
+        result.answer = {"id": rid, "name": name, "error": message, "choose_person": choose_person(message)}
     finally:
         shutil.rmtree(folder, ignore_errors=True)
     if result.depth_m is not None:

@@ -16,7 +16,7 @@ import numpy as np
 from wbsa.camera.presets import TRAINED_CAMERAS, CameraRecord, camera_record
 from wbsa.errors import WbsaError
 from wbsa.sensor.settings import KINECT_V1_BASELINE_M, KINECT_V1_DISPARITY_STEP_PX, SensorSettings
-from wbsa.typing import EDGE_PIXELS, EdgePixels
+from wbsa.typing import EDGE_PIXELS, EdgePixels, NoiseModel
 
 #: Camera-to-subject distances (m) a training world may span: nearer, a standing adult does not fit the frame
 #: of any preset; farther, beyond every preset's working range.
@@ -38,7 +38,10 @@ class CaptureSettings:
     camera_height_m : (float, float)
         Height of the camera above the floor.
     noise : bool
-        Sensor noise (Nguyen et al. 2012), disparity quantisation where the camera has one, grazing dropout.
+        Sensor noise, disparity quantisation where the camera has one, grazing dropout.
+    noise_model : {'camera', 'nguyen2012'}
+        With ``noise``: each camera's own technology model (:mod:`wbsa.sensor.technology`: structured light,
+        time of flight, active stereo, LiDAR), or Kinect v1's (Nguyen et al. 2012) for every camera.
     noise_scale : (float, float)
         Factor on the noise model's σ, uniform: real cameras are less noisy (time of flight) or noisier
         (stereo at range) than Kinect v1's model, and the estimator must not depend on its exact level.
@@ -56,6 +59,7 @@ class CaptureSettings:
     distance_m: tuple[float, float] = (1.5, 4.5)
     camera_height_m: tuple[float, float] = (0.8, 2.0)
     noise: bool = True
+    noise_model: NoiseModel = "camera"
     noise_scale: tuple[float, float] = (0.2, 1.5)
     ideal_share: float = 0.1
     max_holes_fraction: float = 0.03
@@ -79,6 +83,9 @@ class CaptureSettings:
         lo, hi = self.camera_height_m
         if not 0.0 <= lo <= hi:
             raise WbsaError(f"camera_height_m {self.camera_height_m} must be (low, high) metres with 0 <= low <= high")
+        if self.noise_model not in ("camera", "nguyen2012"):
+            raise WbsaError(f"noise_model {self.noise_model!r} must be 'camera' or 'nguyen2012' "
+                            "(noise=False for none)")
         lo, hi = self.noise_scale
         if not 0.0 <= lo <= hi <= 10.0:
             raise WbsaError(f"noise_scale {self.noise_scale} must be (low, high) factors with 0 <= low <= high <= 10")
@@ -102,16 +109,17 @@ class Capture:
 
 def sensor_for(camera: CameraRecord, rng: np.random.Generator, settings: CaptureSettings):
     """The :class:`~wbsa.sensor.SensorSettings` of a camera with random holes and dropout: depth noise
-    (Nguyen et al. 2012) and, where the camera has one, its disparity quantisation."""
+    (``settings.noise_model``: the camera's own technology, or Nguyen et al. 2012's Kinect v1) and, where the
+    camera has one, its disparity quantisation."""
 
     if not settings.noise:
         return SensorSettings()
-    baseline, step = camera.disparity or (None, None)
-    return SensorSettings(noise="nguyen2012", quantise=baseline is not None,
-                       baseline_m=baseline or KINECT_V1_BASELINE_M,
-                       disparity_step_px=step or KINECT_V1_DISPARITY_STEP_PX,
-                       holes_fraction=float(rng.uniform(0, settings.max_holes_fraction)),
-                       pixel_dropout=float(rng.uniform(0, settings.max_pixel_dropout)), range_limits=True)
+    baseline, step = camera.disparity or (KINECT_V1_BASELINE_M, KINECT_V1_DISPARITY_STEP_PX)
+    own = settings.noise_model == "camera"
+    return SensorSettings(noise=settings.noise_model, technology=camera.technology if own else None,
+                          quantise=camera.disparity is not None, baseline_m=baseline, disparity_step_px=step,
+                          holes_fraction=float(rng.uniform(0, settings.max_holes_fraction)),
+                          pixel_dropout=float(rng.uniform(0, settings.max_pixel_dropout)), range_limits=True)
 
 
 def fits_frame(vertices: np.ndarray, camera, view, target: np.ndarray, margin_px: float = 3.0) -> bool:

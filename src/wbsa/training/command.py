@@ -26,14 +26,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--camera", action="append", default=None, metavar="NAME|JSON",
                    help=presets_help() + f"; repeat for several (default: {', '.join(TRAINED_CAMERAS)})")
     p.add_argument("--disparity", default=None, metavar="BASELINE_M,STEP_PX",
-                   help="with a JSON camera: its disparity quantisation (structured light, stereo), e.g. 0.05,0.0833; "
-                        "default none (time of flight)")
+                   help="with a JSON camera: its disparity (stereo: its quantisation and Intel's depth RMS noise), "
+                        "e.g. 0.05,0.0833; default none (time of flight)")
     p.add_argument("--distance", type=range_of(*DISTANCE_LIMITS_M, unit="m"), default=c.distance_m,
                    metavar="LOW,HIGH", help=f"camera-to-subject distances in metres (default "
                                             f"{c.distance_m[0]:g},{c.distance_m[1]:g})")
     p.add_argument("--noise-scale", type=range_of(0.0, 10.0, unit="times the noise model's sigma"),
                    default=c.noise_scale, metavar="LOW,HIGH",
-                   help=f"depth noise as a factor on Nguyen et al.'s sigma (default {c.noise_scale[0]:g},"
+                   help=f"depth noise as a factor on the sigma of each camera's technology model (default {c.noise_scale[0]:g},"
                         f"{c.noise_scale[1]:g})")
     p.add_argument("--subjects", type=int, default=d.n_random, metavar="N",
                    help=f"random virtual people (default {d.n_random})")

@@ -8,7 +8,7 @@ A method is a :class:`Predictor` in a package of its own under :mod:`wbsa.estima
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING, Callable, Protocol
 
 import numpy as np
 
@@ -45,12 +45,14 @@ class Subject:
 @dataclass(frozen=True)
 class Request:
     """What the user states beside the image: the view (degrees, None = estimate it), the layer of clothes
-    (m) and the interval's level."""
+    (m) and the interval's level; and where a long method reports its progress (``progress(step, steps)``, or
+    None)."""
 
     azimuth_deg: float | None = None
     elevation_deg: float | None = None
     clothing_m: float = 0.0
     level: float = 0.95
+    progress: Callable[[int, int], None] | None = field(default=None, compare=False, repr=False)
 
 
 @dataclass(frozen=True)

@@ -5,6 +5,10 @@ const $ = (id) => document.getElementById(id);
 let current = null;       // the answer shown
 let viewer = null;
 let info = { max_upload_bytes: Infinity };
+let lastFiles = null;     // the depth file last measured alone, sent again when the camera changes
+let waitingForClothes = null;  // a file chosen before the clothes: measured once they are chosen
+let rerunWaiting = "";    // a camera chosen while busy: run again when the current estimate ends
+window.progressLog = [];  // every progress line of the last estimate (the tests read it)
 
 function el(tag, attrs, text) {
   const e = document.createElement(tag);
@@ -20,7 +24,6 @@ function showError(message) {
 }
 
 function setBusy(on) {
-  $("busy").hidden = !on;
   $("go").disabled = on;
   document.body.dataset.busy = on ? "1" : "0";
 }
@@ -29,13 +32,17 @@ async function loadInfo() {
   info = await (await fetch("api/info")).json();
   for (const p of info.presets) $("camera").append(el("option", { value: p.name }, `${p.name} (${p.width} × ${p.height})`));
   for (const m of info.methods) $("method").append(el("option", { value: m }, m));
+  for (const c of info.clothes) {
+    const words = c.words.charAt(0).toUpperCase() + c.words.slice(1);
+    $("clothes").append(el("option", { value: c.name }, `${words} (${fmt(c.layer_cm, 1)} ± ${fmt(c.sd_cm, 1)} cm)`));
+  }
 }
 
 function formData(files) {
   const fd = new FormData();
   for (const f of files) fd.append("depth", f, f.name);
   fd.append("camera", $("camera").value);
-  fd.append("clothing_cm", $("clothing").value);
+  fd.append("clothes", $("clothes").value);
   fd.append("method", $("method").value);
   fd.append("height_cm", $("height").value);
   fd.append("mass_kg", $("mass").value);
@@ -47,69 +54,175 @@ function formData(files) {
   return fd;
 }
 
-async function readAnswer(response) {
-  let body;
-  try { body = await response.json(); } catch (e) { body = { error: `the server answered ${response.status} without a message` }; }
-  return body;
+// The stages of an estimate as the server reports them (wbsa.server.progress), in the page's words.
+const STAGES = {
+  reading: "Reading the depth file",
+  subject: "Finding and measuring the person",
+  regression: "Regression: predicting the area from the measured surface",
+  "body-fit": "Fitting a whole body to the picture",
+  answer: "Making the answer and the downloads",
+};
+
+function startProgress() {
+  window.progressLog = [];
+  $("progress-stages").replaceChildren();
+  $("progress-stage").textContent = "Sending the file";
+  $("progress-count").textContent = "";
+  $("progress-bar").removeAttribute("value");
+  $("progress").hidden = false;
 }
 
-async function send(files) {
+function showProgress(p) {
+  window.progressLog.push(p);
+  const list = $("progress-stages");
+  let item = list.querySelector(`li[data-stage="${p.stage}"]`);
+  for (const li of list.children) if (li !== item) li.classList.add("done");
+  if (!item) {
+    item = el("li", { "data-stage": p.stage }, STAGES[p.stage] || p.stage);
+    list.append(item);
+  }
+  $("progress-stage").textContent = STAGES[p.stage] || p.stage;
+  const steps = p.total > 1;
+  $("progress-count").textContent = steps ? `step ${p.done} of ${p.total}` : "";
+  if (steps) { $("progress-bar").max = p.total; $("progress-bar").value = p.done; }
+  else $("progress-bar").removeAttribute("value");
+  if (steps) item.dataset.steps = `${p.done}/${p.total}`;
+}
+
+// One answer: JSON, or the progress stream (one JSON object a line, the answer last).
+async function readAnswer(response) {
+  const type = response.headers.get("content-type") || "";
+  if (!type.startsWith("application/x-ndjson") || !response.body) {
+    try { return await response.json(); } catch (e) { return { error: `the server answered ${response.status} without a message` }; }
+  }
+  const reader = response.body.getReader();
+  const decoder = new TextDecoder();
+  let buffered = "", last = null;
+  const take = (line) => {
+    if (!line.trim()) return;
+    const msg = JSON.parse(line);
+    if (msg.progress) showProgress(msg.progress);
+    else if (msg.answer) last = msg.answer;
+  };
+  while (true) {
+    const { value, done } = await reader.read();
+    if (done) break;
+    buffered += decoder.decode(value, { stream: true });
+    let cut;
+    while ((cut = buffered.indexOf("\n")) >= 0) { take(buffered.slice(0, cut)); buffered = buffered.slice(cut + 1); }
+  }
+  take(buffered);
+  return last || { error: "the server stopped before its answer; send the file again" };
+}
+
+async function estimate(url, body) {
+  showError("");
+  setBusy(true);
+  startProgress();
+  try {
+    const response = await fetch(url, { method: "POST", body, headers: { Accept: "application/x-ndjson" } });
+    const answer = await readAnswer(response);
+    show(answer);
+    return answer;
+  } catch (e) {
+    showError(`the server did not answer (${e.message}); is wbsa serve still running?`);
+    return null;
+  } finally {
+    $("progress").hidden = true;
+    setBusy(false);
+  }
+}
+
+// rerun: what changed, said on the answer ("" for a new file)
+async function send(files, rerun = "") {
   if (!files.length) { showError("choose or drop a depth file first"); return; }
   const bytes = files.reduce((n, f) => n + f.size, 0);
   if (bytes > info.max_upload_bytes) {
     showError(`the upload is ${(bytes / 2 ** 20).toFixed(1)} MiB, above this server's limit of ${(info.max_upload_bytes / 2 ** 20).toFixed(0)} MiB; send one depth image at a time, or a smaller image`);
     return;
   }
-  if (files.length > 1) return sendBatch(files);
-  showError("");
-  setBusy(true);
-  try {
-    const response = await fetch("api/estimate", { method: "POST", body: formData(files) });
-    show(await readAnswer(response));
-  } catch (e) {
-    showError(`the server did not answer (${e.message}); is wbsa serve still running?`);
-  } finally {
-    setBusy(false);
+  if (!$("clothes").value) {  // clothes are stated, never assumed
+    waitingForClothes = files;
+    $("clothes").classList.add("needed");
+    $("clothes").focus();
+    showError("Choose what the person wears (under “What the person wears”): the file is measured as soon as you do.");
+    return;
   }
+  waitingForClothes = null;
+  $("clothes").classList.remove("needed");
+  if (files.length > 1) { lastFiles = null; return sendBatch(files); }
+  lastFiles = files;
+  const body = formData(files);
+  if (rerun && current && Array.isArray(current.pick)) body.append("pick", current.pick.join(","));  // the same person
+  const answer = await estimate("api/estimate", body);
+  const note = $("rerun-note");
+  note.hidden = !(rerun && answer);
+  note.textContent = rerun ? `Measured again with ${rerun}, chosen after the depth file.` : "";
+  document.body.dataset.reruns = String(Number(document.body.dataset.reruns || 0) + (rerun && answer ? 1 : 0));
+  if (rerunWaiting) { const why = rerunWaiting; rerunWaiting = ""; send(lastFiles, why); }
+}
+
+// The camera or the clothes changed after a depth file was measured: measure it again with them.
+function choiceChanged(what) {
+  if (!lastFiles) return;
+  if (document.body.dataset.busy === "1") { rerunWaiting = what; return; }
+  send(lastFiles, what);
 }
 
 async function pickAt(x, y) {
   if (!current || !current.id) return;
-  showError("");
-  setBusy(true);
-  try {
-    const response = await fetch(`api/result/${current.id}/pick?pick=${x},${y}`, { method: "POST" });
-    show(await readAnswer(response));
-  } catch (e) {
-    showError(`the server did not answer (${e.message}); is wbsa serve still running?`);
-  } finally {
-    setBusy(false);
-  }
+  await estimate(`api/result/${current.id}/pick?pick=${x},${y}`, null);
 }
 
 function fmt(v, digits) { return Number(v).toFixed(digits); }
 // " ± 3°" for a spread that was estimated, nothing for one that was not (a fitted body's view)
 function spread(v) { return v === null || v === undefined ? "" : ` ± ${fmt(v, 0)}°`; }
 
+function interval(level, lo, hi) { return `${Math.round(100 * level)} % interval ${fmt(lo, 2)} – ${fmt(hi, 2)} m²`; }
+
 function show(a) {
   $("batch").hidden = true;
+  $("rerun-note").hidden = true;
   if (a.error) showError(a.error);
-  if (!a.depth) { if (!a.error) showError("the server's answer holds no result"); return; }
+  if (!a.depth) {  // nothing was read: no earlier answer stays on show under the message
+    if (!a.error) showError("the server's answer holds no result");
+    $("result").hidden = true;
+    document.body.dataset.answer = "";
+    return;
+  }
   current = a;
   $("result").hidden = false;
   const ok = a.error === undefined;
   document.body.dataset.answer = ok ? a.id : "";
-  $("wbsa-value").textContent = ok ? fmt(a.wbsa_m2, 2) : "—";
+  // no answer: no number, sketch, 3-D view or downloads; the depth picture alone, large when a click is asked for
+  for (const id of ["answer", "sketch-card", "viewer-card", "downloads-card"]) $(id).hidden = !ok;
+  const choose = !ok && Boolean(a.choose_person);
+  $("pick-card").hidden = ok || !choose;
+  $("depth-card").hidden = !ok && choose;
+  $((ok || !choose) ? "depth-slot" : "pick-slot").append($("depth-img"));
+  $("depth-img").classList.toggle("large", choose);
+  // large: as wide as the page allows while the whole picture stays in the window below the message
+  $("depth-img").style.width = choose ? `min(100%, calc((100vh - 190px) * ${a.depth.width / a.depth.height}), ${4 * a.depth.width}px)` : "";
+  $("result").classList.toggle("choose", choose);
+  $("wbsa-value").textContent = ok ? fmt(a.wbsa_m2, 2) : "";
   $("wbsa-value").dataset.wbsaM2 = ok ? a.wbsa_m2 : "";
-  $("interval").textContent = ok ? `${Math.round(100 * a.level)} % interval ${fmt(a.wbsa_lo_m2, 2)} – ${fmt(a.wbsa_hi_m2, 2)} m²` : "no estimate: see the message above";
+  $("interval").textContent = ok ? interval(a.level, a.wbsa_lo_m2, a.wbsa_hi_m2) : "";
   $("method-line").textContent = ok ? `Method: ${a.method_text}` : "";
-  $("file-line").textContent = a.name ? `File: ${a.name}` : "";
+  $("file-line").textContent = a.name ? `File: ${a.name}` + (ok ? `, camera ${a.camera}` : "") : "";
   showDepth(a.depth);
-  showFlags(ok ? a.flags : null);
+  showRoutes(ok ? a.routes : null, ok ? a.level : null);
+  showFlags(ok ? (a.routes ? a.image_flags : a.flags) : null, Boolean(ok && a.routes));
   showView(ok ? a.view : null);
   showFormulae(ok ? a.formulae : null, ok ? a.wbsa_m2 : null);
   showDownloads(ok ? a.downloads : []);
   if (ok) showMeshes(a.meshes); else if (viewer) viewer.clear();
+  if (choose) {  // the message heads the picture, which fills the window below it
+    showError("");
+    $("pick-title").textContent = a.error;
+    const img = $("depth-img");
+    const scroll = () => $("pick-card").scrollIntoView({ block: "start" });
+    if (img.complete && img.naturalWidth) scroll(); else img.addEventListener("load", scroll, { once: true });
+  }
 }
 
 function showDepth(d) {
@@ -117,65 +230,57 @@ function showDepth(d) {
   img.src = d.url;
   img.dataset.width = d.width;
   img.dataset.height = d.height;
-  $("depth-legend").textContent = `Colour by distance: blue ${fmt(d.near_m, 2)} m (near) to red ${fmt(d.far_m, 2)} m (far), grey: no return. White outline: the person measured.`;
+  const legend = `Colour by distance: blue ${fmt(d.near_m, 2)} m (near) to red ${fmt(d.far_m, 2)} m (far), grey: no return.`;
+  $("depth-legend").textContent = `${legend} White outline: the person measured.`;
+  $("pick-legend").textContent = legend;
 }
 
-function showFlags(flags) {
+function flagItem(f) {
+  const li = el("li", { "data-flag": f.name, title: f.name });
+  li.append(el("b", {}, f.meaning.charAt(0).toUpperCase() + f.meaning.slice(1) + "."));
+  li.append(el("span", { class: "todo" }, f.todo));
+  li.append(el("span", { class: "detail" }, `Detail: ${f.detail}`));
+  return li;
+}
+
+// With method both: the flags of the picture itself here, each route's own under its number.
+function showFlags(flags, both) {
   const list = $("flag-list");
   list.replaceChildren();
   $("flags").hidden = !flags || flags.length === 0;
   $("no-flags").hidden = !flags || flags.length > 0;
-  for (const f of flags || []) {
-    const li = el("li", { "data-flag": f.name });
-    li.append(el("b", {}, f.meaning.charAt(0).toUpperCase() + f.meaning.slice(1) + "."));
-    li.append(el("span", { class: "todo" }, f.todo));
-    li.append(el("span", { class: "detail" }, `${f.name}: ${f.detail}`));
-    list.append(li);
-  }
+  $("no-flags").textContent = both ? "All checks of the picture passed." : "All checks passed.";
+  $("flags-title").textContent = both ? "Check the picture before you use the numbers" : "Check before you use the number";
+  for (const f of flags || []) list.append(flagItem(f));
 }
 
-function svg(tag, attrs) {
-  const e = document.createElementNS("http://www.w3.org/2000/svg", tag);
-  for (const [k, v] of Object.entries(attrs)) e.setAttribute(k, v);
-  return e;
-}
-
-// Top-down sketch: world +X to the right, the person's front (world -Y) down; the camera at its azimuth
-// (0 = in front, 90 = at the person's left). Elevation in a side inset.
-function showView(v) {
-  const s = $("sketch");
-  s.replaceChildren();
-  if (!v) { $("view-line").textContent = ""; return; }
-  const cx = 150, cy = 130, r = 95;
-  const az = v.azimuth_used_deg * Math.PI / 180, sd = Math.min(v.azimuth_sd_deg, 90) * Math.PI / 180;
-  const at = (a, rad) => [cx + rad * Math.sin(a), cy + rad * Math.cos(a)];
-  const [a0x, a0y] = at(az - sd, r), [a1x, a1y] = at(az + sd, r);
-  s.append(svg("path", { d: `M${cx},${cy} L${a0x},${a0y} A${r},${r} 0 0 0 ${a1x},${a1y} Z`, fill: "#cfe0f7", stroke: "none" }));
-  const cams = [[az, 1]];
-  if (v.uncertain) cams.push([Math.PI - az, 0.35]);  // front and back may be swapped
-  for (const [a, opacity] of cams) {
-    const [x, y] = at(a, r);
-    const g = svg("g", { transform: `translate(${x},${y}) rotate(${-a * 180 / Math.PI})`, opacity: String(opacity) });
-    g.append(svg("rect", { x: -14, y: -8, width: 28, height: 16, rx: 3, fill: "#0b63c5" }));
-    g.append(svg("rect", { x: -5, y: -14, width: 10, height: 6, fill: "#0b63c5" }));
-    s.append(g);
-    s.append(svg("line", { x1: cx, y1: cy, x2: x, y2: y, stroke: "#0b63c5", "stroke-dasharray": "4 4", opacity: String(opacity) }));
+// Method both: each route with its own number, interval and flags, which one leads and why.
+function showRoutes(r, level) {
+  $("routes").hidden = !r;
+  $("lead-label").hidden = !r;
+  const list = $("route-list");
+  list.replaceChildren();
+  if (!r) return;
+  $("lead-label").textContent = `${r.lead_label} (leads)`;
+  $("lead-why").textContent = r.why;
+  const rows = r.combined ? [r.combined, ...r.rows] : r.rows;
+  for (const row of rows) {
+    const box = el("div", { class: "route" + (row.leads ? " leads" : ""), "data-route": row.name });
+    box.append(el("h3", {}, row.label + (row.leads ? " — leads" : "")));
+    if (row.failed) {
+      box.append(el("p", { class: "error-inline" }, `No answer: ${row.failed}`));
+    } else {
+      box.append(el("div", { class: "route-value" }, `${fmt(row.wbsa_m2, 2)} m²`));
+      box.append(el("div", { class: "small" }, interval(level, row.wbsa_lo_m2, row.wbsa_hi_m2)));
+      const flags = row.flags || [];
+      if (flags.length) {
+        const ul = el("ul", { class: "route-flags" });
+        for (const f of flags) ul.append(flagItem(f));
+        box.append(ul);
+      } else if (row.flags) box.append(el("p", { class: "ok small" }, "No warnings for this method."));
+    }
+    list.append(box);
   }
-  s.append(svg("ellipse", { cx, cy, rx: 26, ry: 13, fill: "#f2c7a5", stroke: "#8a5a3c" }));
-  s.append(svg("circle", { cx, cy: cy + 3, r: 8, fill: "#e5b08a", stroke: "#8a5a3c" }));
-  s.append(svg("path", { d: `M${cx - 4},${cy + 12} L${cx},${cy + 19} L${cx + 4},${cy + 12} Z`, fill: "#8a5a3c" }));
-  const front = svg("text", { x: cx, y: cy + 34, "text-anchor": "middle", "font-size": 11, fill: "#5b6577" });
-  front.textContent = "front";
-  s.append(front);
-  // elevation inset
-  const ex = 40, ey = 280, el_ = v.elevation_used_deg * Math.PI / 180;
-  s.append(svg("line", { x1: ex, y1: ey, x2: ex, y2: ey - 40, stroke: "#8a5a3c", "stroke-width": 5 }));
-  s.append(svg("line", { x1: ex, y1: ey - 20, x2: ex + 70 * Math.cos(el_), y2: ey - 20 - 70 * Math.sin(el_), stroke: "#0b63c5", "stroke-dasharray": "4 4" }));
-  s.append(svg("rect", { x: ex + 70 * Math.cos(el_) - 6, y: ey - 20 - 70 * Math.sin(el_) - 5, width: 12, height: 10, fill: "#0b63c5" }));
-  const et = svg("text", { x: ex + 90, y: ey - 5, "font-size": 11, fill: "#5b6577" });
-  et.textContent = `elevation ${fmt(v.elevation_used_deg, 0)}°`;
-  s.append(et);
-  $("view-line").textContent = `Azimuth ${fmt(v.azimuth_deg, 0)}°${spread(v.azimuth_sd_deg)} (0 = in front, 90 = at the person's left; its mirror image, −azimuth, looks the same${v.uncertain ? "; the faint camera: front and back may be swapped" : ""}), elevation ${fmt(v.elevation_deg, 0)}°${spread(v.elevation_sd_deg)}, ${fmt(v.distance_m, 2)} m away.`;
 }
 
 function showFormulae(f, wbsa) {
@@ -204,9 +309,19 @@ function showDownloads(items) {
 
 async function showMeshes(meshes) {
   if (!viewer) viewer = new WbsaViewer($("viewer"));
+  const legend = $("viewer-legend");
+  legend.replaceChildren();
   try {
     const n = await viewer.show(meshes);
-    $("viewer-line").textContent = `${meshes.map((m) => m.name).join(", ")}: ${n.toLocaleString()} triangles.`;
+    meshes.forEach((m, k) => {
+      const [r, g, b] = WbsaViewer.COLOURS[k % WbsaViewer.COLOURS.length];
+      const li = el("li", { "data-mesh": m.name });
+      const swatch = el("span", { class: "swatch" });
+      swatch.style.background = `rgb(${r},${g},${b})`;  // CSSOM, allowed by the page's CSP (no inline style)
+      li.append(swatch, document.createTextNode(m.label || m.name));
+      legend.append(li);
+    });
+    $("viewer-line").textContent = `${n.toLocaleString()} triangles.`;
   } catch (e) {
     $("viewer-line").textContent = `the 3-D view could not be drawn (${e.message})`;
   }
@@ -270,6 +385,15 @@ function init() {
     drop.classList.remove("over");
     send([...e.dataTransfer.files]);
   });
+  $("intrinsics").addEventListener("change", () => {
+    const f = $("intrinsics").files[0];
+    choiceChanged(f ? `the camera file ${f.name}` : "the camera chosen");
+  });
+  $("clothes").addEventListener("change", () => {
+    if (waitingForClothes) { const files = waitingForClothes; waitingForClothes = null; send(files); return; }
+    choiceChanged(`the clothes: ${$("clothes").selectedOptions[0].textContent}`);
+  });
+  $("camera").addEventListener("change", () => choiceChanged(`the camera ${$("camera").selectedOptions[0].textContent}`));
   $("depth-img").addEventListener("click", (e) => {
     const img = e.currentTarget;
     const x = Math.floor(e.offsetX * Number(img.dataset.width) / img.clientWidth);

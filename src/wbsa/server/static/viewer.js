@@ -134,7 +134,7 @@ class WbsaViewer {
     const light = [0.3, 0.5, 0.8];
     const ln = Math.hypot(...light);
     const tris = [];
-    const colours = [[214, 160, 120], [120, 160, 214]];
+    const colours = WbsaViewer.COLOURS;
     let drawn = 0;
     this.meshes.forEach((m, k) => {
       const v = m.vertices, n = v.length / 3;
@@ -169,6 +169,9 @@ class WbsaViewer {
     canvas.dataset.triangles = String(drawn);
   }
 }
+
+// Each mesh's colour, in the order given (the page's legend reads them).
+WbsaViewer.COLOURS = [[214, 160, 120], [120, 160, 214], [140, 190, 120]];
 
 window.WbsaViewer = WbsaViewer;
 window.parsePly = parsePly;

@@ -41,7 +41,7 @@ def _models(spacing_m: float):
 
 def fit_body(depth_m: np.ndarray, mask: np.ndarray, camera, floor, *, clothing_m: float = 0.0,
              azimuth_deg: float | None = None, settings: BodyFitSettings = BodyFitSettings(),
-             seed: int = 0, start=None) -> BodyFit:
+             seed: int = 0, start=None, progress=None) -> BodyFit:
     """Fit anny to one depth view of a standing person and measure the fitted body.
 
     Parameters
@@ -66,6 +66,8 @@ def fit_body(depth_m: np.ndarray, mask: np.ndarray, camera, floor, *, clothing_m
         ``start(observation, fit_model) -> Starts``: fit from these starts (:class:`wbsa.estimation.methods.body_fit.init.Starts`,
         in the observation's view frame) instead of the render-and-compare grid; e.g. a known body, to measure
         how far the fit drifts from it.
+    progress : callable or None
+        Called as ``progress(step, steps)`` after each optimiser step (:func:`optimise`).
 
     Returns
     -------
@@ -92,13 +94,13 @@ def fit_body(depth_m: np.ndarray, mask: np.ndarray, camera, floor, *, clothing_m
     torch.set_num_threads(settings.threads)
     try:
         return _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fit_model, meter, start,
-                    float(clothing_m))
+                    float(clothing_m), progress)
     finally:
         torch.set_num_threads(threads)
 
 
 def _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fit_model, meter, start,
-         clothing_m) -> BodyFit:
+         clothing_m, progress) -> BodyFit:
     """:func:`fit_body` on checked inputs, with anny loaded."""
     import torch
 
@@ -123,7 +125,7 @@ def _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fi
         starts = (first_guesses(fit_model, objective, settings.restarts, azimuth_deg, settings.child_starts)
                   if start is None else start(obs, fit_model))
     covered = body_model.vertices_of_bones(COVERED_BONES) if clothing_m > 0 else None
-    opt = optimise(fit_model, objective, starts, settings, deadline, clothing_m, covered)
+    opt = optimise(fit_model, objective, starts, settings, deadline, clothing_m, covered, progress)
 
     body = measure_body(meter, opt.params, settings.composition)
     rest = body["rest"]

@@ -101,7 +101,7 @@ def clothes_layer(full: np.ndarray, closed_faces: np.ndarray, covered: np.ndarra
 
 
 def optimise(fit_body, objective, starts, settings: BodyFitSettings, deadline: float, clothing_m: float = 0.0,
-             covered: np.ndarray | None = None) -> Optimum:
+             covered: np.ndarray | None = None, progress=None) -> Optimum:
     """Fit every start of ``starts`` (:class:`wbsa.estimation.methods.body_fit.init.Starts`) to ``objective``'s observation.
 
     Parameters
@@ -118,6 +118,8 @@ def optimise(fit_body, objective, starts, settings: BodyFitSettings, deadline: f
         (:func:`clothes_layer`, refreshed with the correspondences), and the bare body is what is fitted.
     covered : (n,) bool, optional
         The vertices under the clothes (needed with ``clothing_m`` > 0).
+    progress : callable or None
+        Called as ``progress(step, steps)`` after each step (``step`` of ``settings.steps`` done).
     """
     import torch
 
@@ -259,6 +261,8 @@ def optimise(fit_body, objective, starts, settings: BodyFitSettings, deadline: f
             phen[:, -3:].clamp_(min=0.02)
             local.clamp_(-1.0, 1.0)
             angles.copy_(torch.maximum(torch.minimum(angles, hi), lo))
+        if progress is not None:
+            progress(step + 1, settings.steps)
     if not np.isfinite(best_loss).any():  # stopped while the scale annealed: the latest states, at one scale
         best_loss, best = latest_loss, latest
     i = int(np.argmin(best_loss))

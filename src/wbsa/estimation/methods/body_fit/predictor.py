@@ -51,7 +51,7 @@ class BodyFitPredictor:
         from wbsa.estimation.methods.body_fit.fit import fit_body
 
         fit = fit_body(subject.depth_m, subject.mask, subject.camera, subject.floor, clothing_m=request.clothing_m,
-                       azimuth_deg=request.azimuth_deg, settings=self.settings)
+                       azimuth_deg=request.azimuth_deg, settings=self.settings, progress=request.progress)
         psi = float(fold_azimuth(fit.azimuth_deg))
         view = ViewEstimate(psi, float("nan"), fit.elevation_deg, float("nan"), float("nan"))
         az = psi if request.azimuth_deg is None else float(fold_azimuth(request.azimuth_deg))

@@ -101,7 +101,20 @@ class Objective:
 
     # -- geometry ---------------------------------------------------------------------------
     def project(self, v):
-        """Crop pixel coordinates (row, col) and camera z of view-frame vertices ``(b, k, 3)``."""
+        """Crop pixel coordinates (row, col) and camera z of view-frame vertices ``(b, k, 3)``.
+
+        Parameters
+        ----------
+        v : (b, k, 3) float32 tensor
+            Vertices, view frame, metres.
+
+        Returns
+        -------
+        row, col : (b, k) float32 tensors
+            Pixel coordinates in the observation's crop.
+        z : (b, k) float32 tensor
+            Camera depth (m), clamped to at least 5 cm.
+        """
         p = v @ self.basis + self.origin
         z = p[..., 2].clamp(min=0.05)
         y = p[..., 1] / z
@@ -129,7 +142,18 @@ class Objective:
 
     # -- terms --------------------------------------------------------------------------------
     def robust(self, r2):
-        """Robust penalty of squared residuals in units of the scale (each point's cost)."""
+        """Robust penalty of squared residuals in units of the scale (each point's cost).
+
+        Parameters
+        ----------
+        r2 : float32 tensor, any shape
+            Squared residuals divided by the squared scale (dimensionless).
+
+        Returns
+        -------
+        float32 tensor, shape of ``r2``
+            Geman–McClure ``r2 / (1 + r2)`` (at most 1), or Huber when the objective's loss is ``'huber'``.
+        """
         if self.robust_loss == "huber":
             r = r2.clamp(min=1e-12).sqrt()
             return self.torch.where(r <= 1.0, 0.5 * r2, r - 0.5)
@@ -137,7 +161,24 @@ class Objective:
 
     def surface_points(self, v_all, tri, bary):
         """The matched surface points ``(b, p, 3)`` and their unit triangle normals of vertices ``v_all (b, m, 3)``,
-        triangles ``tri (b, p, 3)`` (positions in ``v_all``) and barycentric weights ``bary (b, p, 3)``."""
+        triangles ``tri (b, p, 3)`` (positions in ``v_all``) and barycentric weights ``bary (b, p, 3)``.
+
+        Parameters
+        ----------
+        v_all : (b, m, 3) float32 tensor
+            Vertices of the selection, view frame, metres.
+        tri : (b, p, 3) int64 tensor
+            Each observed point's triangle (positions in ``v_all``).
+        bary : (b, p, 3) float32 tensor
+            Barycentric weights of each point in its triangle.
+
+        Returns
+        -------
+        point : (b, p, 3) float32 tensor
+            The surface points, view frame, metres.
+        normal : (b, p, 3) float32 tensor
+            Unit normals of their triangles.
+        """
         torch = self.torch
         b, p = tri.shape[:2]
         corners = torch.gather(v_all, 1, tri.reshape(b, -1, 1).expand(-1, -1, 3)).reshape(b, p, 3, 3)
@@ -150,6 +191,15 @@ class Objective:
 
         ``scale_m`` overrides the robust scale (the fit anneals it from coarse to fine, so that points far from
         a poor start still pull on it).
+
+        Parameters
+        ----------
+        v_all : (b, m, 3) float32 tensor
+            Vertices of the selection, view frame, metres.
+        tri, bary : (b, p, 3) tensors
+            Each point's triangle (int64, positions in ``v_all``) and float32 barycentric weights.
+        scale_m : float, optional
+            The robust scale, metres (default the objective's).
         """
         return self.data_points(v_all, tri, bary, scale_m).mean(1)
 
@@ -174,12 +224,26 @@ class Objective:
         return self.robust(r2)
 
     def residuals_m(self, v_all, tri, bary):
-        """(b, p) point-to-plane distances (m) of the observed points to their closest surface points."""
+        """(b, p) point-to-plane distances (m) of the observed points to their closest surface points.
+
+        Parameters
+        ----------
+        v_all : (b, m, 3) float32 tensor
+            Vertices of the selection, view frame, metres.
+        tri, bary : (b, p, 3) tensors
+            Each point's triangle (int64, positions in ``v_all``) and float32 barycentric weights.
+        """
         point, n = self.surface_points(v_all, tri, bary)
         return ((self.points[None] - point) * n).sum(-1)
 
     def silhouette(self, v):
-        """(b,) mean squared distance (in units of 1 cm) by which the vertices project outside the mask."""
+        """(b,) mean squared distance (in units of 1 cm) by which the vertices project outside the mask.
+
+        Parameters
+        ----------
+        v : (b, k, 3) float32 tensor
+            Vertices, view frame, metres.
+        """
         row, col, z = self.project(v)
         dist_px, beyond = self._bilinear(self.outside, row, col)
         excess_px = (dist_px + beyond - self.tolerance_px).clamp(min=0.0)
@@ -188,7 +252,15 @@ class Objective:
 
     def free_space(self, v, facing):
         """(b,) mean squared depth (units of 1 cm) by which camera-facing vertices ``facing (b, k)`` stand in
-        front of the surface seen at their pixel, beyond :data:`FREE_SPACE_TOLERANCE_M`."""
+        front of the surface seen at their pixel, beyond :data:`FREE_SPACE_TOLERANCE_M`.
+
+        Parameters
+        ----------
+        v : (b, k, 3) float32 tensor
+            Vertices, view frame, metres.
+        facing : (b, k) bool tensor
+            Vertices facing the camera (the only ones the term counts).
+        """
         torch = self.torch
         row, col, z = self.project(v)
         h, w = self.depth.shape
@@ -204,7 +276,16 @@ class Objective:
     def contour(self, v, corr):
         """(b,) mean robust distance (scale 1 cm) of the outline pixels to their outline vertices ``corr (b, c)``,
         beyond the silhouette tolerance (sensors drop the grazing returns at the outline: the outline seen lies
-        about a pixel inside the body's)."""
+        about a pixel inside the body's).
+
+        Parameters
+        ----------
+        v : (b, k, 3) float32 tensor
+            Vertices, view frame, metres.
+        corr : (b, c) int64 tensor or None
+            Position in ``v`` of each outline pixel's vertex (:meth:`contour_correspondences`); None or c = 0:
+            zeros.
+        """
         torch = self.torch
         if corr is None or corr.shape[1] == 0:
             return torch.zeros(v.shape[0])
@@ -218,7 +299,23 @@ class Objective:
         return (r2 / (1.0 + r2)).mean(1)
 
     def contour_correspondences(self, v: np.ndarray, normals: np.ndarray):
-        """Nearest outline vertex (in the image) of every outline pixel, per restart: ``(b, c)`` int64 tensor."""
+        """Nearest outline vertex (in the image) of every outline pixel, per restart: ``(b, c)`` int64 tensor.
+
+        A vertex is on the outline when the cosine between its normal and its viewing ray is below
+        :data:`OUTLINE_COS`; with fewer than 10 such vertices in a restart, every vertex is a candidate.
+
+        Parameters
+        ----------
+        v : (b, k, 3) float64
+            Vertices, view frame, metres.
+        normals : (b, k, 3) float64
+            Their unit normals.
+
+        Returns
+        -------
+        (b, c) int64 tensor or None
+            Position in ``v`` of each outline pixel's vertex; None when the observation has no outline pixels.
+        """
         from scipy.spatial import cKDTree
 
         torch = self.torch

@@ -81,17 +81,49 @@ class Observation:
     sensor: object = None
 
     def to_camera(self, points_f: np.ndarray) -> np.ndarray:
-        """(k, 3) view-frame points in camera coordinates."""
+        """(k, 3) view-frame points in camera coordinates.
+
+        Parameters
+        ----------
+        points_f : (k, 3) float64
+            Points in the view frame, metres.
+
+        Returns
+        -------
+        (k, 3) float64
+            The same points in camera coordinates, metres.
+        """
         return np.asarray(points_f, dtype=np.float64) @ self.basis + self.origin
 
     def elevation_deg(self, centre_f: np.ndarray) -> float:
-        """Angle of the camera above the horizontal through ``centre_f`` (view frame), degrees."""
+        """Angle of the camera above the horizontal through ``centre_f`` (view frame), degrees.
+
+        Parameters
+        ----------
+        centre_f : (3,) float64
+            A point in the view frame, metres.
+        """
         d = self.camera_position - centre_f
         return float(np.degrees(np.arcsin(d[2] / np.linalg.norm(d))))
 
 
 def check_inputs(depth_m: np.ndarray, mask: np.ndarray, camera) -> tuple[np.ndarray, np.ndarray]:
-    """``depth_m`` as (h, w) float64 and ``mask`` as (h, w) bool, or a one-line :class:`WbsaError`."""
+    """``depth_m`` as (h, w) float64 and ``mask`` as (h, w) bool, or a one-line :class:`WbsaError`.
+
+    Parameters
+    ----------
+    depth_m : (h, w) array_like of float
+        Depth image, metres in front of the camera; 0 for no return.
+    mask : (h, w) bool
+        The subject's pixels.
+    camera : Camera
+        The camera that took the image (its ``width`` × ``height`` must match).
+
+    Raises
+    ------
+    WbsaError
+        A shape, dtype or size mismatch, non-finite or negative depths, or no subject pixel with a return.
+    """
     try:
         depth = np.asarray(depth_m, dtype=np.float64)
     except (TypeError, ValueError):
@@ -118,7 +150,22 @@ def check_inputs(depth_m: np.ndarray, mask: np.ndarray, camera) -> tuple[np.ndar
 
 
 def view_frame(points_cam: np.ndarray, floor) -> tuple[np.ndarray, np.ndarray]:
-    """The view frame (basis rows, origin) of a subject's (k, 3) camera-frame points (see the module docstring)."""
+    """The view frame (basis rows, origin) of a subject's (k, 3) camera-frame points (see the module docstring).
+
+    Parameters
+    ----------
+    points_cam : (k, 3) float64
+        The subject's points in camera coordinates, metres.
+    floor : Plane or None
+        The floor plane in camera coordinates (:func:`wbsa.estimation.subject.cloud.body_frame`).
+
+    Returns
+    -------
+    basis : (3, 3) float64
+        Rows: the view frame's axes in camera coordinates.
+    origin : (3,) float64
+        The view frame's origin in camera coordinates, metres.
+    """
     from wbsa.estimation.subject.cloud import body_frame
 
     frame = body_frame(points_cam, floor)
@@ -135,6 +182,21 @@ def observe(depth_m: np.ndarray, mask: np.ndarray, camera, floor, n_points: int,
 
     Returns on the floor (within its noise, :func:`wbsa.estimation.subject.cloud.above_floor`) are dropped from
     the points; the silhouette keeps every subject pixel (the feet reach the floor).
+
+    Parameters
+    ----------
+    depth_m : (h, w) float64
+        Depth image, metres; 0 for no return.
+    mask : (h, w) bool
+        The subject's pixels.
+    camera : Camera
+        The camera that took the image.
+    floor : Plane or None
+        The floor plane in camera coordinates.
+    n_points : int
+        Most points kept (a seeded even subsample beyond it).
+    rng : numpy.random.Generator
+        Draws the point and outline subsamples.
 
     Raises
     ------
@@ -186,6 +248,26 @@ def outline(depth: np.ndarray, sub: np.ndarray, corner: tuple[int, int], shape: 
     An outline pixel (a subject pixel with a non-subject 4-neighbour) is kept when none of its non-subject
     neighbours is nearer the camera than it by more than 5 cm (an occluder: the outline there is not the
     body's) and it is not on the image border (the body may go on beyond it).
+
+    Parameters
+    ----------
+    depth : (h', w') float64
+        The depth image's crop, metres; 0 for no return.
+    sub : (h', w') bool
+        The subject's pixels in the crop.
+    corner : (int, int)
+        Image row and column of the crop's first pixel.
+    shape : (int, int)
+        The whole image's (h, w).
+    rng : numpy.random.Generator
+        Draws the subsample of at most :data:`MAX_CONTOUR` pixels.
+
+    Returns
+    -------
+    pixels : (c, 2) float64
+        Crop (row, col) of the kept outline pixels.
+    depth : (c,) float64
+        Their depth, metres.
     """
     from scipy import ndimage
 

@@ -116,7 +116,7 @@ def check_inputs(depth_m: np.ndarray, mask: np.ndarray, camera) -> tuple[np.ndar
         Depth image, metres in front of the camera; 0 for no return.
     mask : (h, w) bool
         The subject's pixels.
-    camera : Camera
+    camera : wbsa.camera.Intrinsics
         The camera that took the image (its ``width`` × ``height`` must match).
 
     Raises
@@ -189,7 +189,7 @@ def observe(depth_m: np.ndarray, mask: np.ndarray, camera, floor, n_points: int,
         Depth image, metres; 0 for no return.
     mask : (h, w) bool
         The subject's pixels.
-    camera : Camera
+    camera : wbsa.camera.Intrinsics
         The camera that took the image.
     floor : Plane or None
         The floor plane in camera coordinates.

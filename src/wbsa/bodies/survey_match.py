@@ -1,6 +1,6 @@
 """Fit anny phenotypes to body measures: stature, mass, waist, hip, arm and leg of real people.
 
-(About 500 lines, above the project's ~400: the batched Levenberg–Marquardt solver, its bounds, step
+(About 540 lines, above the project's ~400: the batched Levenberg–Marquardt solver, its bounds, step
 control and the girth rescue share one set of per-person state arrays; splitting them would pass that
 state across modules for no gain in clarity.)
 

@@ -427,7 +427,7 @@ def test_messages_reach_the_page_in_its_own_words(server, browser, frames, tmp_p
         message(checks.check_image_size, np.zeros((424, 512)), preset("kinect-v1")),
         message(read_depth, grey),
         message(checks.check_clothing, 0.2),
-        message(BodyFitPredictor().check_request, Request(clothing_m=0.01)),
+        message(BodyFitPredictor().check_request, Request(level=0.8)),
         message(wbsa.estimate, str(frames["two"]["path"]), "kinect-v2", str(small_estimator_model)),
         view_used(ViewEstimate(131.0, 49.0, 12.0, 1.0, 0.41), None, None)[1]["uncertain_view"],
         checks.person_shape_flags(1.0, 2.0, 1.9)["not_a_person"],

@@ -339,10 +339,11 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
 def _clothes_widened(prediction, routes: dict, predictors: list, subject, request, clothes: Clothes):
     """The lead prediction and the routes with their intervals widened by the clothes' uncertainty
     (:func:`wbsa.estimation.clothes.widened`): each predictor predicts again with the layer thicker by it; a
-    route that refuses a layer that thick keeps its interval (the body fit takes it: it fits again, dressed thicker)."""
+    route that refuses a layer that thick keeps its interval (the body fit takes it: it fits again, dressed thicker;
+    that second fit reports no steps, so the progress shown is the answer's own fit)."""
     from wbsa.estimation.clothes import widened
 
-    thicker = dataclasses.replace(request, clothing_m=clothes.layer_m + clothes.sd_m)
+    thicker = dataclasses.replace(request, clothing_m=clothes.layer_m + clothes.sd_m, progress=None)
     by_name = {p.name: p for p in predictors if p is not None}
     out = {}
     for name, route in ({predictors[0].name: prediction} | routes).items():

@@ -9,6 +9,10 @@ holes on; the estimator is not told the view. Seeded: the same arguments print t
     python benchmarks/bench_estimate.py --subjects 300 --workers 2 [--out results.csv] [--figure agreement.png]
     python benchmarks/bench_estimate.py --edge-pixels mixed    # time-of-flight mixed pixels at every depth edge
     python benchmarks/bench_estimate.py --edge-pixels dropped  # ... or none there (a camera's flying-pixel filter)
+    python benchmarks/bench_estimate.py --subjects 150 --renderer both --fixed-setup --rows runs/rows-both
+        # the same captures drawn by the plain renderer too (wbsa.testing.plain_render), side by side; with the
+        # plain renderer's fixed set-up (Kinect v2, 2.5 m, 1.0 m high, front and 30°); rows kept as they come
+        # in runs/rows-both, so a stopped run resumes
 
 The model is the one shipped with wbsa, or --model.
 """
@@ -22,7 +26,7 @@ from dataclasses import replace
 import numpy as np
 import pandas as pd
 
-from wbsa.typing import EDGE_PIXELS, TEST_SCENES
+from wbsa.typing import EDGE_PIXELS, TEST_RENDERERS, TEST_SCENES
 
 TARGETS = {"kept": 0.98, "included": 0.01, "seg_share": 0.99, "az_median": 10.0, "az_p95": 30.0, "mape_all": 2.5,
            "mape_fb": 2.0, "bias": 0.5, "coverage": (0.93, 0.97), "seconds": 5.0}
@@ -169,6 +173,9 @@ def report(res: pd.DataFrame, wall_s: float) -> None:
          f"{ok['azimuth_error_deg'].median():.1f} / {ok['azimuth_error_deg'].quantile(0.95):.1f}", "≤ 10 / ≤ 30",
          ok["azimuth_error_deg"].median() <= TARGETS["az_median"]
          and ok["azimuth_error_deg"].quantile(0.95) <= TARGETS["az_p95"]),
+        ("measured stature (straight postures, vs rest stature): median / 90th pct |err|, cm",
+         "{:+.2f} / {:.2f}".format(*stature_errors_cm(ok)[["vs_rest_median_cm", "vs_rest_p90_abs_cm"]]), "≤ 1.0 / ≤ 2.0",
+         abs(stature_errors_cm(ok)["vs_rest_median_cm"]) <= 1.0 and stature_errors_cm(ok)["vs_rest_p90_abs_cm"] <= 2.0),
         ("elevation error: median |err|, deg", f"{np.median(np.abs(ok['est_elevation_deg'] - ok['elevation_deg'])):.1f}",
          "", None),
         ("WBSA MAPE, all views, %", f"{np.mean(np.abs(err)):.2f}", "≤ 2.5", np.mean(np.abs(err)) <= TARGETS["mape_all"]),
@@ -201,6 +208,50 @@ def report(res: pd.DataFrame, wall_s: float) -> None:
     print("\nflags raised:", flags[flags != ""].value_counts().to_dict())
 
 
+#: Postures whose standing height is the rest stature (legs straight and together or at rest).
+STRAIGHT_POSTURES = ("a-pose", "arms-down", "arms-wide", "hands-on-hips", "elbows-bent", "feet-together")
+
+
+def stature_errors_cm(g: pd.DataFrame) -> pd.Series:
+    """Measured stature against the posed body's height (all postures) and against the rest stature (straight
+    postures): signed median and 90th percentile of the absolute error, cm."""
+    posed = 100 * (g["est_stature_m"] - g["posed_height_m"])
+    straight = g["posture"].isin(STRAIGHT_POSTURES)
+    rest = 100 * (g.loc[straight, "est_stature_m"] - g.loc[straight, "stature_m"])
+    return pd.Series({"n": len(g), "vs_posed_median_cm": posed.median(), "vs_posed_p90_abs_cm": posed.abs().quantile(0.9),
+                      "n_straight": int(straight.sum()), "vs_rest_median_cm": rest.median(),
+                      "vs_rest_p90_abs_cm": rest.abs().quantile(0.9)})
+
+
+def side_by_side(res: pd.DataFrame) -> None:
+    """The renderers side by side on the same captures: per renderer, and paired (plain minus project)."""
+    ok = res[res["error"] == ""].copy()
+    ok["err_pct"] = 100 * (ok["est_wbsa_m2"] / ok["wbsa_m2"] - 1)
+    print("\nby renderer (the same captures; refused images left out of the WBSA figures):")
+    table = ok.groupby("renderer").apply(summarise, include_groups=False).join(
+        ok.groupby("renderer").apply(stature_errors_cm, include_groups=False).drop(columns="n"))
+    refused = res.groupby("renderer")["error"].apply(lambda e: int((e != "").sum())).rename("refused")
+    print(table.join(refused).round(3).to_string())
+    wide = ok.pivot_table(index="image", columns="renderer", values="err_pct")
+    if {"project", "plain"} <= set(wide.columns):
+        d = (wide["plain"] - wide["project"]).dropna()
+        half = 1.96 * d.std(ddof=1) / np.sqrt(len(d)) if len(d) > 1 else float("nan")
+        print(f"\nWBSA signed error, plain minus project renderer, paired: {d.mean():+.2f} % "
+              f"(95 % CI {d.mean() - half:+.2f} … {d.mean() + half:+.2f}; n = {len(d)}; target ±0.5 %: "
+              f"{verdict(abs(d.mean()) <= 0.5)})")
+        by_cam = ok.pivot_table(index=["image", "camera"], columns="renderer", values="err_pct").dropna()
+        print("  per camera:", (by_cam["plain"] - by_cam["project"]).groupby(level="camera").mean().round(2).to_dict())
+        plain, project = ok[ok["renderer"] == "plain"], ok[ok["renderer"] == "project"]
+        print(f"regression bias on the plain renderer: {plain['err_pct'].mean():+.2f} % (target ±0.7 %: "
+              f"{verdict(abs(plain['err_pct'].mean()) <= 0.7)}); MAPE plain {plain['err_pct'].abs().mean():.2f} % vs "
+              f"project {project['err_pct'].abs().mean():.2f} % (target ≤ project + 0.3: "
+              f"{verdict(plain['err_pct'].abs().mean() <= project['err_pct'].abs().mean() + 0.3)})")
+    st = table[["vs_rest_median_cm", "vs_rest_p90_abs_cm"]]
+    met = (st["vs_rest_median_cm"].abs() <= 1.0) & (st["vs_rest_p90_abs_cm"] <= 2.0)
+    print("measured stature, straight postures, median / 90th pct |err| ≤ 1.0 / 2.0 cm: "
+          + ", ".join(f"{r} {verdict(m)}" for r, m in met.items()))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--subjects", type=int, default=300, help="held-out images, one per subject (default 300)")
@@ -225,6 +276,14 @@ def main() -> None:
                          "is told the layer, as a user states it")
     ap.add_argument("--clothing-unstated", action="store_true",
                     help="with --clothing-m: the estimator is told none (what clothes nobody states read)")
+    ap.add_argument("--renderer", choices=TEST_RENDERERS, default="project",
+                    help="who draws the captures: the project's renderer (default), the plain one "
+                         "(wbsa.testing.plain_render: Open3D, its own noise) or both, side by side")
+    ap.add_argument("--fixed-setup", action="store_true",
+                    help="also draw each subject with the plain renderer in its fixed set-up (Kinect v2 2.5 m away, "
+                         "1.0 m high, level; front and 30°)")
+    ap.add_argument("--rows", default=None, metavar="DIR",
+                    help="keep each chunk's rows in this folder as they come; the same command again resumes")
     ap.add_argument("--figure", default=None,
                     help="also draw a Bland–Altman plot and the error by body build to this PNG")
     args = ap.parse_args()
@@ -244,8 +303,9 @@ def main() -> None:
                       ideal_share=1.0 if args.ideal else 0.0)
     settings = RoomTestSettings(capture=capture, seed=args.seed, edge_pixels=args.edge_pixels,
                                 edge_share=args.edge_share, scene=args.scene, clothing_m=args.clothing_m,
-                                clothing_stated=not args.clothing_unstated)
-    res = run_room_tests(pop, settings, model_path, workers=args.workers)
+                                clothing_stated=not args.clothing_unstated, renderer=args.renderer,
+                                fixed_setup=args.fixed_setup)
+    res = run_room_tests(pop, settings, model_path, workers=args.workers, rows_dir=args.rows)
     if args.out:
         res.to_csv(args.out, index=False)
     print(f"model {model_path}; {len(pop)} subjects ({(pop['population'] == 'survey').sum()} survey-matched), "
@@ -255,7 +315,12 @@ def main() -> None:
           + (f", noise x{args.noise_scale:g}" if args.noise_scale != 1.0 and not args.ideal else "")
           + (f", clothes {100 * args.clothing_m:g} cm" if args.clothing_m else "")
           + (" (not stated)" if args.clothing_m and args.clothing_unstated else ""))
-    report(res, time.perf_counter() - t0)
+    for renderer, part in res.groupby("renderer", sort=False):
+        if res["renderer"].nunique() > 1:
+            print(f"\n======== renderer: {renderer} ========")
+        report(part, time.perf_counter() - t0)
+    if res["renderer"].nunique() > 1:
+        side_by_side(res)
     if args.figure:
         draw_agreement(res, args.figure, f"{len(pop)} held-out subjects, seed {args.seed}")
 

@@ -46,6 +46,9 @@ EdgePixels = Literal["kept", "mixed", "dropped"]
 #: What surrounds the subject in a held-out test capture: a room (floor, wall, maybe a second person), or
 #: nothing (a render of the body alone, as of a 3-D body scan).
 TestScene = Literal["room", "alone"]
+#: Who draws a held-out capture: the project's renderer (scan engine and sensor model), the plain one
+#: (:mod:`wbsa.testing.plain_render`: Open3D and its own noise), or both, side by side.
+TestRenderer = Literal["project", "plain", "both"]
 #: Units and up axis of a mesh file (:func:`wbsa.simulate.target.to_body_frame`).
 MeshUnits = Literal["m", "cm", "mm", "in"]
 MeshUp = Literal["z", "y"]
@@ -83,6 +86,7 @@ POSTURE_NAMES: tuple[str, ...] = get_args(PostureName)
 POSTURE_CHOICES: tuple[str, ...] = get_args(PostureChoice)
 EDGE_PIXELS: tuple[str, ...] = get_args(EdgePixels)
 TEST_SCENES: tuple[str, ...] = get_args(TestScene)
+TEST_RENDERERS: tuple[str, ...] = get_args(TestRenderer)
 PRESET_NAMES: tuple[str, ...] = get_args(PresetName)
 DEPTH_TECHNOLOGIES: tuple[str, ...] = get_args(DepthTechnology)
 METHODS: tuple[str, ...] = get_args(Method)

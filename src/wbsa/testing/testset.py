@@ -18,7 +18,14 @@ import pandas as pd
 from wbsa.training.capture import CaptureSettings, sample_capture
 from wbsa.estimation.subject.checks import MAX_CLOTHING_M
 from wbsa.errors import WbsaError
-from wbsa.typing import EDGE_PIXELS, TEST_SCENES, EdgePixels, TestScene
+from wbsa.typing import EDGE_PIXELS, TEST_RENDERERS, TEST_SCENES, EdgePixels, TestRenderer, TestScene
+
+#: Stream tag of the plain renderer's noise (independent of the capture's streams).
+PLAIN_NOISE_STREAM = 0x91A1
+#: The plain renderer's fixed set-up (the second check): a Kinect v2 2.5 m from the subject's centre, 1.0 m
+#: over the floor, looking level, a wall 0.8 m behind the subject, seen from the front and from 30°.
+FIXED_SETUP = {"camera": "kinect-v2", "distance_m": 2.5, "height_m": 1.0, "wall_behind_m": 0.8,
+               "azimuths_deg": (0.0, 30.0)}
 
 
 @dataclass(frozen=True)
@@ -57,11 +64,18 @@ class RoomTestSettings:
     clothing_stated : bool
         The estimator is told the layer, as a user states it (``clothing_m`` of :func:`~wbsa.estimation.estimate`);
         False: it is told nothing (taken as none and flagged ``clothes_unstated``), what a layer nobody states reads.
+    renderer : {'project', 'plain', 'both'}
+        Who draws each capture: the project's renderer, the plain one (:mod:`wbsa.testing.plain_render`:
+        the same scene, camera and position, Open3D's ray casting and its own noise), or both (two rows per
+        capture, the column ``renderer`` telling them apart).
+    fixed_setup : bool
+        Also draw each posed subject with the plain renderer in :data:`FIXED_SETUP` (rows ``plain-fixed-0``
+        and ``plain-fixed-30``: the subject alone before its wall, no second person, no clothes).
     seed : int
     """
 
-    capture: CaptureSettings = field(default_factory=lambda: CaptureSettings(edge_pixels=("kept",), noise_scale=(1.0, 1.0),
-                                                                             ideal_share=0.0))
+    capture: CaptureSettings = field(default_factory=lambda: CaptureSettings(
+        edge_pixels=("kept",), noise_scale=(1.0, 1.0), grazing_dropout_scale=(1.0, 1.0), ideal_share=0.0))
     wall_behind_m: tuple[float, float] = (0.5, 1.5)
     second_person: float = 0.3
     side_m: tuple[float, float] = (0.9, 1.6)
@@ -71,6 +85,8 @@ class RoomTestSettings:
     scene: TestScene = "room"
     clothing_m: float = 0.0
     clothing_stated: bool = True
+    renderer: TestRenderer = "project"
+    fixed_setup: bool = False
     seed: int = 1000
 
     def __post_init__(self) -> None:
@@ -80,6 +96,8 @@ class RoomTestSettings:
             raise WbsaError(f"edge_share {self.edge_share} must be a share of the depth edges in [0, 1]")
         if self.scene not in TEST_SCENES:
             raise WbsaError(f"scene {self.scene!r} is unknown; use one of {', '.join(TEST_SCENES)}")
+        if self.renderer not in TEST_RENDERERS:
+            raise WbsaError(f"renderer {self.renderer!r} is unknown; use one of {', '.join(TEST_RENDERERS)}")
         if not 0.0 <= self.clothing_m <= MAX_CLOTHING_M:
             raise WbsaError(f"clothing_m {self.clothing_m} must be a layer of 0–{MAX_CLOTHING_M:g} m (0.01 for 1 cm "
                             "of clothes)")
@@ -204,20 +222,92 @@ def room_test_captures(population: pd.DataFrame, others: pd.DataFrame, first: in
         yield HeldOutCapture(index, posture, cap, room, frame, depth, truth, bool(people), vertices)
 
 
+def plain_capture(tc: HeldOutCapture, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """The same capture drawn by the plain renderer (:mod:`wbsa.testing.plain_render`).
+
+    The same room (subject, other people, floor, wall), intrinsics and camera centre and rotation as the
+    project's render of ``tc``; the noise its own, from ``SeedSequence([seed, tc.index, PLAIN_NOISE_STREAM])``,
+    or none for an ideal capture.
+
+    Parameters
+    ----------
+    tc : HeldOutCapture
+    seed : int
+        The test set's seed.
+
+    Returns
+    -------
+    depth_m : (h, w) float64
+        Whole millimetres, 0 where nothing is seen.
+    triangle_id : (h, w) int64
+        The triangle of the room's mesh each pixel sees, −1 where none.
+    """
+    from wbsa.camera.extrinsics import pose_from_view
+    from wbsa.testing.plain_render import plain_depth
+
+    cam = tc.capture.camera
+    pose = pose_from_view(tc.capture.view, tc.room.subject_center)
+    rng = None if tc.capture.sensor.is_ideal else np.random.default_rng(
+        np.random.SeedSequence([seed, tc.index, PLAIN_NOISE_STREAM]))
+    depth, tri = plain_depth(tc.room.mesh.vertices, tc.room.mesh.faces, width=cam.width, height=cam.height,
+                             fx=cam.fx, fy=cam.fy, cx=cam.cx, cy=cam.cy, rotation=pose.R,
+                             center_m=pose.camera_center, rng=rng)
+    return depth, tri
+
+
+def fixed_setup_capture(tc: HeldOutCapture, body_model, azimuth_deg: float, seed: int):
+    """The posed subject of ``tc`` drawn by the plain renderer in :data:`FIXED_SETUP` from ``azimuth_deg``.
+
+    Returns
+    -------
+    camera : wbsa.camera.Intrinsics
+    depth_m : (h, w) float64
+    triangle_id : (h, w) int64
+    room : wbsa.training.room.RoomScene
+    """
+    from wbsa.camera.presets import preset
+    from wbsa.testing.plain_render import level_camera
+    from wbsa.testing.plain_render import plain_depth
+    from wbsa.training.room import compose_room
+
+    cam = preset(FIXED_SETUP["camera"])
+    room = compose_room(body_model.skin_mesh(tc.vertices), azimuth_deg, wall_behind_m=FIXED_SETUP["wall_behind_m"])
+    th = np.radians(azimuth_deg)
+    rotation, center = level_camera(room.subject_center, np.array([np.sin(th), -np.cos(th), 0.0]),
+                                    FIXED_SETUP["distance_m"], FIXED_SETUP["height_m"])
+    rng = np.random.default_rng(np.random.SeedSequence([seed, tc.index, PLAIN_NOISE_STREAM, int(azimuth_deg)]))
+    depth, tri = plain_depth(room.mesh.vertices, room.mesh.faces, width=cam.width, height=cam.height, fx=cam.fx,
+                             fy=cam.fy, cx=cam.cx, cy=cam.cy, rotation=rotation, center_m=center, rng=rng)
+    return cam, depth, tri, room
+
+
+def rendered(tc: HeldOutCapture, settings: RoomTestSettings, body_model=None):
+    """Yield ``(renderer, camera, depth_m, truth, triangle_id, room, azimuth_deg)`` of one capture for every
+    renderer ``settings.renderer`` names (and the fixed set-up's): its camera, depth (whole millimetres), the
+    subject's pixels, the triangle each pixel sees, the scene and the camera's azimuth."""
+    cam, az = tc.capture.camera, tc.capture.view.azimuth_deg
+    if settings.renderer in ("project", "both"):
+        yield "project", cam, tc.depth_m, tc.truth, tc.frame.triangle_id, tc.room, az
+    if settings.renderer in ("plain", "both"):
+        depth, tri = plain_capture(tc, settings.seed)
+        yield "plain", cam, depth, tc.room.is_subject(tri) & (depth > 0), tri, tc.room, az
+    if settings.fixed_setup:
+        for azimuth in FIXED_SETUP["azimuths_deg"]:
+            fcam, depth, tri, room = fixed_setup_capture(tc, body_model, azimuth, settings.seed)
+            yield f"plain-fixed-{azimuth:g}", fcam, depth, room.is_subject(tri) & (depth > 0), tri, room, azimuth
+
+
 def room_capture_chunk(population: pd.DataFrame, others: pd.DataFrame, first: int, settings: RoomTestSettings,
                        model_path: str | None) -> pd.DataFrame:
     """Capture and estimate every subject of ``population`` (``others``: the same number of possible second people).
 
-    Returns one row per subject: truth, capture, segmentation (``seg_kept``, ``seg_included``; and the same
+    Returns one row per subject and renderer (``settings.renderer``): truth, capture, segmentation (``seg_kept``, ``seg_included``; and the same
     outside the feet's contact strip, ``seg_kept_off_strip``, ``seg_included_off_strip``: see
     :func:`contact_strip`), the estimate (``est_*``, ``flags``; ``error`` when it raised) and the estimate's
     wall time.
     """
     from wbsa.bodies.body_model import BodyModel
     from wbsa.estimation.methods.regression.default_model import load_model
-    from wbsa.estimation.subject.segment import SegmentSettings
-    from wbsa.estimation.single_view import estimate
-    from wbsa.estimation.methods.view import fold_azimuth
     from wbsa.parallel import keep_large_allocations, single_threaded_math
 
     keep_large_allocations()
@@ -226,56 +316,152 @@ def room_capture_chunk(population: pd.DataFrame, others: pd.DataFrame, first: in
         body_model = BodyModel()
         model = load_model(model_path)
         for tc in room_test_captures(population, others, first, settings, body_model):
-            cap, depth, truth = tc.capture, tc.depth_m, tc.truth
-            strip = contact_strip(truth, tc.room.surface_height_m(tc.frame.triangle_id))
-            t = population.iloc[tc.index - first]
-            row = {k: t[k] for k in ("subject_id", "population", "sex", "age_years", "stature_m", "mass_kg", "wbsa_m2")
-                   if k in t.index}
-            row.update(image=tc.index, posture=tc.posture, camera=cap.camera.name, scene=settings.scene,
-                       noise_scale=cap.sensor.effective_noise_scale,
-                       ideal_sensor=cap.sensor.is_ideal, azimuth_deg=cap.view.azimuth_deg,
-                       elevation_deg=cap.view.elevation_deg, distance_m=cap.view.distance_m,
-                       camera_height_m=cap.camera_height_m, fits=cap.fits, second_person=tc.second_person,
-                       clothing_m=settings.clothing_m, clothing_stated=settings.clothing_stated,
-                       subject_pixels=int(truth.sum()))
-            t0 = time.perf_counter()
-            try:
-                est = estimate(depth, cap.camera, model, segment=SegmentSettings(pick=settings.pick),
-                               clothing_m=settings.clothing_m if settings.clothing_stated else None)
-            except WbsaError as exc:
-                row.update(error=str(exc), seconds=time.perf_counter() - t0)
-                rows.append(row)
-                continue
-            seconds = time.perf_counter() - t0
-            mask = est.mask
-            row.update(error="", seconds=seconds, est_wbsa_m2=est.wbsa_m2, est_lo_m2=est.wbsa_lo_m2,
-                       est_hi_m2=est.wbsa_hi_m2, est_azimuth_deg=est.view.azimuth_deg,
-                       est_azimuth_sd_deg=est.view.azimuth_sd_deg, est_elevation_deg=est.view.elevation_deg,
-                       est_stature_m=est.stature_m, est_vbsa_m2=est.vbsa_m2, flags=",".join(est.flags),
-                       seg_kept=float((mask & truth).sum() / max(truth.sum(), 1)),
-                       seg_included=float((mask & ~truth).sum() / max(mask.sum(), 1)),
-                       seg_kept_off_strip=float((mask & truth & ~strip).sum() / max((truth & ~strip).sum(), 1)),
-                       seg_included_off_strip=float((mask & ~truth & ~strip).sum() / max((mask & ~strip).sum(), 1)),
-                       azimuth_error_deg=float(abs(est.view.azimuth_deg - fold_azimuth(cap.view.azimuth_deg))))
-            rows.append(row)
+            for drawn in rendered(tc, settings, body_model):
+                rows.append(estimate_row(tc, *drawn, population.iloc[tc.index - first], settings, model))
     return pd.DataFrame(rows)
 
 
+def estimate_row(tc: HeldOutCapture, renderer: str, camera, depth: np.ndarray, truth: np.ndarray,
+                 triangle_id: np.ndarray, room, azimuth_deg: float, subject: pd.Series, settings: RoomTestSettings,
+                 model) -> dict:
+    """One row of :func:`room_capture_chunk`: the truth, the capture, the estimate and its segmentation.
+
+    Parameters
+    ----------
+    tc : HeldOutCapture
+    renderer : str
+        Who drew ``depth``.
+    camera : wbsa.camera.Intrinsics
+        The camera it was drawn with.
+    depth : (h, w) float64
+        The capture's depth image, metres.
+    truth : (h, w) bool
+        The subject's pixels.
+    triangle_id : (h, w) int
+        The triangle each pixel sees (−1 where none), for the feet's contact strip.
+    room : wbsa.training.room.RoomScene
+        The scene drawn.
+    azimuth_deg : float
+        The camera's azimuth.
+    subject : pandas.Series
+        The subject's row of the population (its truth).
+    settings : RoomTestSettings
+    model : EstimatorModel
+    """
+    from wbsa.estimation.methods.view import fold_azimuth
+    from wbsa.estimation.single_view import estimate
+    from wbsa.estimation.subject.segment import SegmentSettings
+
+    cap = tc.capture
+    strip = contact_strip(truth, room.surface_height_m(triangle_id))
+    row = {k: subject[k] for k in ("subject_id", "population", "sex", "age_years", "stature_m", "mass_kg", "wbsa_m2")
+           if k in subject.index}
+    fixed = renderer.startswith("plain-fixed")
+    row.update(image=tc.index, renderer=renderer, posture=tc.posture, camera=camera.name, scene=settings.scene,
+               noise_scale=cap.sensor.effective_noise_scale, posed_height_m=float(tc.vertices[:, 2].max()),
+               ideal_sensor=cap.sensor.is_ideal, azimuth_deg=azimuth_deg,
+               elevation_deg=cap.view.elevation_deg if not fixed else float(np.degrees(np.arctan2(
+                   FIXED_SETUP["height_m"] - room.subject_center[2], FIXED_SETUP["distance_m"]))),
+               distance_m=cap.view.distance_m if not fixed else FIXED_SETUP["distance_m"],
+               camera_height_m=cap.camera_height_m if not fixed else FIXED_SETUP["height_m"], fits=cap.fits,
+               second_person=tc.second_person and not fixed,
+               clothing_m=0.0 if fixed else settings.clothing_m, clothing_stated=settings.clothing_stated,
+               subject_pixels=int(truth.sum()))
+    t0 = time.perf_counter()
+    try:
+        est = estimate(depth, camera, model, segment=SegmentSettings(pick=settings.pick),
+                       clothing_m=(0.0 if fixed else settings.clothing_m) if settings.clothing_stated else None)
+    except WbsaError as exc:
+        row.update(error=str(exc), seconds=time.perf_counter() - t0)
+        return row
+    seconds = time.perf_counter() - t0
+    mask = est.mask
+    row.update(error="", seconds=seconds, est_wbsa_m2=est.wbsa_m2, est_lo_m2=est.wbsa_lo_m2,
+               est_hi_m2=est.wbsa_hi_m2, est_azimuth_deg=est.view.azimuth_deg,
+               est_azimuth_sd_deg=est.view.azimuth_sd_deg, est_elevation_deg=est.view.elevation_deg,
+               est_stature_m=est.stature_m, est_vbsa_m2=est.vbsa_m2, flags=",".join(est.flags),
+               seg_kept=float((mask & truth).sum() / max(truth.sum(), 1)),
+               seg_included=float((mask & ~truth).sum() / max(mask.sum(), 1)),
+               seg_kept_off_strip=float((mask & truth & ~strip).sum() / max((truth & ~strip).sum(), 1)),
+               seg_included_off_strip=float((mask & ~truth & ~strip).sum() / max((mask & ~strip).sum(), 1)),
+               azimuth_error_deg=float(abs(est.view.azimuth_deg - fold_azimuth(azimuth_deg))))
+    return row
+
+
 def run_room_tests(population: pd.DataFrame, settings: RoomTestSettings, model_path: str | None, *, workers: int = 1,
-                   chunk: int = 10, show_progress: bool | None = None) -> pd.DataFrame:
-    """:func:`room_capture_chunk` over a whole population (the second people are the population shifted by one)."""
+                   chunk: int = 10, show_progress: bool | None = None, rows_dir: str | None = None) -> pd.DataFrame:
+    """:func:`room_capture_chunk` over a whole population (the second people are the population shifted by one).
+
+    ``rows_dir``: a folder where each chunk's rows are written as it finishes (``chunk-<first>.parquet``, atomically),
+    beside ``run.json`` (the settings, model and subjects); a run given the same folder again reads the
+    chunks already there and captures only the others, so a long benchmark resumes after a stop. A folder
+    written with other settings is refused.
+    """
+    from wbsa.parallel import map_chunks
     from wbsa.progress import progress
 
     others = population.iloc[np.roll(np.arange(len(population)), 1)].reset_index(drop=True)
     starts = list(range(0, len(population), chunk))
+    done = _resume(rows_dir, population, settings, model_path, chunk)
+    todo = [s for s in starts if s not in done]
     args = [(population.iloc[s:s + chunk].reset_index(drop=True), others.iloc[s:s + chunk].reset_index(drop=True),
-             s, settings, model_path) for s in starts]
-    from wbsa.parallel import map_chunks
+             s, settings, model_path) for s in todo]
+
+    def keep(part: pd.DataFrame) -> None:
+        if rows_dir is not None and len(part):
+            _write_chunk(rows_dir, int(part["image"].min()) // chunk * chunk, part)
+        bar.update(len(part) // (2 if settings.renderer == "both" else 1))
 
     bar = progress(total=len(population), desc="test captures", unit="image", enabled=show_progress)
+    bar.update(sum(min(chunk, len(population) - s) for s in done))
     try:
-        parts = map_chunks(room_capture_chunk, args, workers=workers, tag="estimator-test",
-                           on_result=lambda part: bar.update(len(part)))
+        parts = map_chunks(room_capture_chunk, args, workers=workers, tag="estimator-test", on_result=keep)
     finally:
         bar.close()
-    return pd.concat(parts, ignore_index=True)
+    table = pd.concat([*done.values(), *parts], ignore_index=True)
+    return table.sort_values(["image", "renderer"], kind="stable").reset_index(drop=True)
+
+
+def _run_record(population: pd.DataFrame, settings: RoomTestSettings, model_path: str | None, chunk: int) -> dict:
+    import dataclasses
+    import hashlib
+    import json
+
+    subjects = hashlib.sha256(pd.util.hash_pandas_object(population, index=False).values.tobytes()).hexdigest()[:12]
+    return json.loads(json.dumps({"settings": dataclasses.asdict(settings), "model": str(model_path), "chunk": chunk,
+                                  "subjects": subjects, "n": len(population)}, default=str))
+
+
+def _resume(rows_dir: str | None, population: pd.DataFrame, settings: RoomTestSettings, model_path: str | None,
+            chunk: int) -> dict[int, pd.DataFrame]:
+    """The chunks already in ``rows_dir`` (first image → rows), after checking they were made the same way."""
+    import json
+    from pathlib import Path
+
+    from wbsa.atomic import atomic_path
+
+    if rows_dir is None:
+        return {}
+    folder = Path(rows_dir)
+    record = _run_record(population, settings, model_path, chunk)
+    meta = folder / "run.json"
+    if meta.exists():
+        if json.loads(meta.read_text()) != record:
+            raise WbsaError(f"{folder} holds rows of another run (other settings, model or subjects); give a new "
+                            "folder or remove it")
+    else:
+        with atomic_path(meta) as tmp:
+            tmp.write_text(json.dumps(record, indent=1, sort_keys=True))
+    done = {}
+    for path in sorted(folder.glob("chunk-*.parquet")):
+        done[int(path.stem.split("-")[1])] = pd.read_parquet(path)
+    return done
+
+
+def _write_chunk(rows_dir: str, first: int, part: pd.DataFrame) -> None:
+    from pathlib import Path
+
+    from wbsa.atomic import atomic_path
+
+    with atomic_path(Path(rows_dir) / f"chunk-{first:06d}.parquet") as tmp:
+        part.to_parquet(tmp, index=False)

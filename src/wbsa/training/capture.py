@@ -44,7 +44,12 @@ class CaptureSettings:
         time of flight, active stereo, LiDAR), or Kinect v1's (Nguyen et al. 2012) for every camera.
     noise_scale : (float, float)
         Factor on the noise model's σ, uniform: real cameras are less noisy (time of flight) or noisier
-        (stereo at range) than Kinect v1's model, and the estimator must not depend on its exact level.
+        (stereo at range) than their model, and the estimator must not depend on its exact level. The default
+        0–3 spans the sensor sweep of ``benchmarks/bench_estimate.py --noise-scale`` (0, 0.3, 1, 3).
+    grazing_dropout_scale : (float, float)
+        Factor on the noise model's grazing dropout angle (returns within that angle of grazing are lost),
+        uniform: some cameras drop the rim of a body, others return it (noisy or mixed), and the estimator
+        meets both. Drawn after the noise scale, and not at all when fixed.
     ideal_share : float
         Share of captures with no sensor effects at all (an ideal render, as of a 3-D body scan).
     max_holes_fraction, max_pixel_dropout : float
@@ -60,7 +65,8 @@ class CaptureSettings:
     camera_height_m: tuple[float, float] = (0.8, 2.0)
     noise: bool = True
     noise_model: NoiseModel = "camera"
-    noise_scale: tuple[float, float] = (0.2, 1.5)
+    noise_scale: tuple[float, float] = (0.0, 3.0)
+    grazing_dropout_scale: tuple[float, float] = (0.0, 2.0)
     ideal_share: float = 0.1
     max_holes_fraction: float = 0.03
     max_pixel_dropout: float = 0.02
@@ -89,6 +95,10 @@ class CaptureSettings:
         lo, hi = self.noise_scale
         if not 0.0 <= lo <= hi <= 10.0:
             raise WbsaError(f"noise_scale {self.noise_scale} must be (low, high) factors with 0 <= low <= high <= 10")
+        lo, hi = self.grazing_dropout_scale
+        if not 0.0 <= lo <= hi <= 5.0:
+            raise WbsaError(f"grazing_dropout_scale {self.grazing_dropout_scale} must be (low, high) factors with "
+                            "0 <= low <= high <= 5")
         if not 0.0 <= self.ideal_share <= 1.0:
             raise WbsaError(f"ideal_share {self.ideal_share} must be a share of the captures in [0, 1]")
 
@@ -193,8 +203,9 @@ def as_scan_render(capture: Capture) -> Capture:
 
 
 def _noise_level(sensor: SensorSettings, rng: np.random.Generator, settings: CaptureSettings) -> SensorSettings:
-    """``sensor`` made ideal (``ideal_share``) or its noise scaled (``noise_scale``); drawn after every other
-    draw of a capture, and not at all when fixed, so fixed settings keep the captures they drew before."""
+    """``sensor`` made ideal (``ideal_share``), or its noise (``noise_scale``) and grazing dropout
+    (``grazing_dropout_scale``) scaled; drawn after every other draw of a capture, and not at all when fixed,
+    so fixed settings keep the captures they drew before."""
     import dataclasses
 
     if not settings.noise:
@@ -203,4 +214,9 @@ def _noise_level(sensor: SensorSettings, rng: np.random.Generator, settings: Cap
         return SensorSettings()
     lo, hi = settings.noise_scale
     scale = float(rng.uniform(lo, hi)) if hi > lo else lo
-    return sensor if scale == 1.0 else dataclasses.replace(sensor, noise_scale=scale)
+    sensor = sensor if scale == 1.0 else dataclasses.replace(sensor, noise_scale=scale)
+    lo, hi = settings.grazing_dropout_scale
+    grazing = float(rng.uniform(lo, hi)) if hi > lo else lo
+    if grazing == 1.0 or sensor.effective_grazing_dropout_deg is None:
+        return sensor
+    return dataclasses.replace(sensor, grazing_dropout_deg=grazing * sensor.effective_grazing_dropout_deg)

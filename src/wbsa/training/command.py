@@ -12,6 +12,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     from wbsa.training.capture import DISTANCE_LIMITS_M, CaptureSettings
     from wbsa.training.settings import RenderSettings
     from wbsa.training.settings import TrainSettings
+    from wbsa.typing import SURVEY_MEASURES
 
     d, r, c = TrainSettings(), RenderSettings(), CaptureSettings()
     p = sub.add_parser("train", help="train an estimator model for your own camera, distances or population",
@@ -39,6 +40,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help=f"random virtual people (default {d.n_random})")
     p.add_argument("--survey-subjects", type=int, default=d.n_survey, metavar="N",
                    help=f"people matched to NHANES (default {d.n_survey})")
+    p.add_argument("--survey-measures", choices=SURVEY_MEASURES, default=d.survey_measures,
+                   help=f"NHANES measures the survey subjects are fitted to: all seven (stature, mass, waist, hip, arm "
+                        f"circumference, arm and leg length) or the first four (default {d.survey_measures})")
     p.add_argument("--ages", type=range_of(0.0, 90.0, unit="years"), default=d.age_years, metavar="LOW,HIGH",
                    help=f"ages of the random people in years (default {d.age_years[0]:g},{d.age_years[1]:g})")
     p.add_argument("--views", type=int, default=r.views_per_subject, metavar="N",
@@ -90,8 +94,8 @@ def settings_from_args(args: argparse.Namespace):
 
         capture = replace(capture, cameras=tuple(_camera(s, disparity) for s in args.camera))
     render = RenderSettings(views_per_subject=args.views, capture=capture)
-    return TrainSettings(n_random=args.subjects, n_survey=args.survey_subjects, age_years=tuple(args.ages),
-                         render=render, seed=args.seed)
+    return TrainSettings(n_random=args.subjects, n_survey=args.survey_subjects,
+                         survey_measures=args.survey_measures, age_years=tuple(args.ages), render=render, seed=args.seed)
 
 
 def run_train(args: argparse.Namespace) -> int:

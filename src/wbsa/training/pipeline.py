@@ -43,8 +43,7 @@ def training_population(settings: TrainSettings, show_progress: bool | None = No
         from wbsa.bodies.survey import SurveyPopulationSettings, build_survey_population
         from wbsa.bodies.survey_match import MatchSettings
 
-        # the training world's survey people are matched on four measures (the recipe of the shipped model)
-        survey = SurveyPopulationSettings(match=MatchSettings(measures="four"))
+        survey = SurveyPopulationSettings(match=MatchSettings(measures=settings.survey_measures))
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # unmatched people are still people; their truth is their body
             parts.append(build_survey_population(settings.n_survey, seed=settings.seed + 1, settings=survey,

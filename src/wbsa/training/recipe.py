@@ -17,7 +17,7 @@ from wbsa.estimation.methods.regression.model import EstimatorModel
 from wbsa.training.settings import TrainSettings
 
 #: Bumped whenever the measures, the renders or the model change what a trained model means.
-MODEL_REVISION = 17
+MODEL_REVISION = 18
 #: The command that rebuilds the shipped model (also written into its card).
 REBUILD_COMMAND = "wbsa train --default"
 
@@ -39,6 +39,7 @@ def training_world(settings: TrainSettings) -> dict:
                for name in c.cameras if isinstance(name, str)]
     return {
         "subjects": {"random": settings.n_random, "survey_matched_nhanes": settings.n_survey,
+                     "survey_measures": settings.survey_measures,
                      "random_age_years": list(settings.age_years),
                      "calibration_share": settings.calibration_fraction},
         "captures_per_subject": r.views_per_subject,
@@ -46,7 +47,8 @@ def training_world(settings: TrainSettings) -> dict:
         "cameras": cameras,
         "distance_m": list(c.distance_m), "camera_height_m": list(c.camera_height_m),
         "azimuth_deg": [0.0, 360.0],
-        "sensor": {"noise_scale": list(c.noise_scale), "ideal_share": c.ideal_share, "edge_pixels": list(c.edge_pixels)},
+        "sensor": {"noise_scale": list(c.noise_scale), "grazing_dropout_scale": list(c.grazing_dropout_scale),
+                   "ideal_share": c.ideal_share, "edge_pixels": list(c.edge_pixels)},
         "scene": {"room": r.room, "body_alone_share": r.alone_share, "scan_render_share_of_alone": r.scan_share},
         "clothes": {"dressed_share": r.clothed_share, "layer_m": list(r.clothing_m)},
     }

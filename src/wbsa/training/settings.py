@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 
 from wbsa.errors import SettingsError
 from wbsa.training.capture import CaptureSettings
+from wbsa.typing import SURVEY_MEASURES, SurveyMeasures
 
 @dataclass(frozen=True)
 class RenderSettings:
@@ -85,6 +86,10 @@ class TrainSettings:
     ----------
     n_random, n_survey : int
         Random and survey-matched subjects.
+    survey_measures : {'seven', 'four'}
+        The NHANES measures the survey-matched subjects are fitted to (:class:`~wbsa.bodies.survey_match.MatchSettings`):
+        all seven (stature, mass, waist, hip, arm circumference, arm and leg length: bodies shaped like the
+        measured people, as the held-out benchmark's are) or the first four.
     age_years : (float, float)
         Ages of the random subjects, uniform in years.
     calibration_fraction : float
@@ -107,6 +112,7 @@ class TrainSettings:
 
     n_random: int = 900
     n_survey: int = 480
+    survey_measures: SurveyMeasures = "seven"
     age_years: tuple[float, float] = (3.0, 80.0)
     calibration_fraction: float = 0.25
     render: RenderSettings = field(default_factory=RenderSettings)
@@ -120,6 +126,8 @@ class TrainSettings:
     def __post_init__(self) -> None:
         if self.n_random < 0 or self.n_survey < 0 or self.n_random + self.n_survey < 8:
             raise SettingsError("n_random", "+ n_survey must be at least 8 subjects")
+        if self.survey_measures not in SURVEY_MEASURES:
+            raise SettingsError("survey_measures", f"{self.survey_measures!r} must be one of {', '.join(SURVEY_MEASURES)}")
         if not 0.05 <= self.calibration_fraction <= 0.5:
             raise SettingsError("calibration_fraction", f"{self.calibration_fraction} must lie in [0.05, 0.5]")
         if not isinstance(self.render, RenderSettings):

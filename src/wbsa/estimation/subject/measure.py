@@ -21,13 +21,18 @@ PROFILE_STRIP = 0.08
 #: Height bands (stature units) of the shape measures: width and thickness of each band, metres.
 SHAPE_BANDS = np.linspace(0.0, 1.0, 21)
 #: The scalar measures of :class:`SubjectMeasures` (its :meth:`~SubjectMeasures.features`; the models' inputs).
-SCALAR_MEASURES = ("vbsa_m2", "stature_m", "silhouette_m2", "width_m", "thickness_m", "distance_m", "elevation_deg",
+SCALAR_MEASURES = ("vbsa_m2", "seen_area_m2", "stature_m", "silhouette_m2", "width_m", "thickness_m", "distance_m", "elevation_deg",
                    "elevation_axis_deg", "pitch_m", "n_pixels", "mixed_share", "gap_share", "edge_gap_share",
                    "depth_noise_m", "floor_seen")
 #: Low pixels (within this of the floor) with fewer subject neighbours than this in their 5×5 window are
 #: dropped: noisy floor returns that escaped the floor cut next to the feet.
 _LOW_BAND_M = 0.10
 _MIN_NEIGHBOURS = 8
+#: The crown's radius of curvature as a camera in front of the head sees it (m): a camera below the top of the
+#: head at an angle φ sees its highest point about ``CROWN_RADIUS_M · (1 − cos φ)`` below the top. Fitted on
+#: 80 renders of seed 2000 (40 by the project's renderer, 40 by the plain one; ``benchmarks/bench_estimate.py``'s
+#: subjects, not the held-out seed 1000): 0.12 m on the project's, 0.24 m on the plain one's.
+CROWN_RADIUS_M = 0.18
 
 
 @dataclass(frozen=True)
@@ -38,8 +43,12 @@ class SubjectMeasures:
     ----------
     vbsa_m2 : float
         Area of the grid reconstruction of the subject's pixels (paper's VBSA).
+    seen_area_m2 : float
+        Area of the seen surface (:mod:`wbsa.estimation.subject.seen_surface`: gaps filled, depth smoothed, the
+        rim capped): the visible area the models read, which holes, dropped returns and noise hardly move.
     stature_m : float
-        Height of the top of the subject above the floor (or its extent along its long axis).
+        Height of the top of the subject above the floor (or its extent along its long axis): the highest point
+        of the seen surface, raised by the part of the crown the camera cannot see (:data:`CROWN_RADIUS_M`).
     silhouette_m2 : float
         Σ z² / (fx·fy) over the pixels: the subject's area projected on a plane facing the camera.
     width_m, thickness_m : float
@@ -74,6 +83,7 @@ class SubjectMeasures:
     """
 
     vbsa_m2: float
+    seen_area_m2: float
     stature_m: float
     silhouette_m2: float
     width_m: float
@@ -157,10 +167,23 @@ def _crop(mask: np.ndarray, pad: int = 3) -> tuple[slice, slice]:
             slice(max(cols[0] - pad, 0), min(cols[-1] + pad + 1, w)))
 
 
-def _elevation(frame: BodyFrame, points: np.ndarray, floor_seen: bool) -> tuple[float, float, float, float]:
-    """(stature, mid-lateral, distance, elevation°) of a subject's points in a body frame."""
+def _elevation(frame: BodyFrame, points: np.ndarray, floor_seen: bool,
+               top_points: np.ndarray | None = None) -> tuple[float, float, float, float]:
+    """(stature, mid-lateral, distance, elevation°) of a subject's points in a body frame.
+
+    The top is the highest of ``top_points`` (the seen surface's; default ``points``' 99.8th percentile of
+    height) raised by :data:`CROWN_RADIUS_M` · (1 − cos φ), φ the angle of the line of sight from the camera up
+    to it (0 with the camera above it).
+    """
     q = frame.coordinates(points)
-    top = float(np.quantile(q[:, 1], 0.998))
+    if top_points is None:
+        top = float(np.quantile(q[:, 1], 0.998))
+    else:
+        qt = frame.coordinates(top_points)
+        k = int(np.argmax(qt[:, 1]))
+        sight = np.asarray(top_points[k], dtype=np.float64)
+        rise = float(np.clip(sight @ frame.up / max(float(np.linalg.norm(sight)), 1e-9), 0.0, 1.0))
+        top = float(qt[k, 1]) + CROWN_RADIUS_M * (1.0 - math.sqrt(1.0 - rise * rise))
     stature = max(top if floor_seen else top - float(np.quantile(q[:, 1], 0.002)), 1e-3)
     mid_lat = 0.5 * float(np.quantile(q[:, 0], 0.002) + np.quantile(q[:, 0], 0.998))
     centre = frame.base + frame.right * mid_lat + frame.up * (stature / 2.0)
@@ -194,6 +217,7 @@ def measure_subject(depth_m: np.ndarray, mask: np.ndarray, intrinsics, floor: Pl
     from wbsa.surface import reconstruct
 
     from wbsa.estimation.subject.mixed_pixels import outline_shares
+    from wbsa.estimation.subject.seen_surface import seen_surface
 
     depth = np.asarray(depth_m, dtype=np.float64)
     mask = np.asarray(mask, dtype=bool) & np.isfinite(depth) & (depth > 0)
@@ -218,7 +242,10 @@ def measure_subject(depth_m: np.ndarray, mask: np.ndarray, intrinsics, floor: Pl
     mask = np.zeros_like(mask)
     mask[rs, cs] = sub_mask
     frame = body_frame(points, floor)
-    stature, mid_lat, distance, elevation = _elevation(frame, points, floor is not None)
+    seen = seen_surface(np.where(mask, depth, 0.0), mask, intrinsics)
+    sr, sc = np.nonzero(seen.mask)
+    seen_points = ray_directions(intrinsics, sr, sc) * seen.depth_m[sr, sc][:, None]
+    stature, mid_lat, distance, elevation = _elevation(frame, points, floor is not None, seen_points)
     axis_elevation = elevation if floor is None else _elevation(body_frame(points, None), points, False)[3]
     q = frame.coordinates(points)
     focal = math.sqrt(float(intrinsics.fx) * float(intrinsics.fy))
@@ -226,7 +253,7 @@ def measure_subject(depth_m: np.ndarray, mask: np.ndarray, intrinsics, floor: Pl
     surface = reconstruct(frame_from_depth_image(np.where(mask, depth, 0.0), intrinsics, normals=False), "grid")
     border = bool(mask[0].any() or mask[-1].any() or mask[:, 0].any() or mask[:, -1].any())
     return SubjectMeasures(
-        vbsa_m2=surface.area_m2, stature_m=stature, silhouette_m2=float(np.sum(z * z)) / (intrinsics.fx * intrinsics.fy),
+        vbsa_m2=surface.area_m2, seen_area_m2=seen.area_m2, stature_m=stature, silhouette_m2=float(np.sum(z * z)) / (intrinsics.fx * intrinsics.fy),
         width_m=float(np.quantile(q[:, 0], 0.998) - np.quantile(q[:, 0], 0.002)),
         thickness_m=float(np.quantile(q[:, 2], 0.998) - np.quantile(q[:, 2], 0.002)),
         distance_m=distance, elevation_deg=elevation, elevation_axis_deg=axis_elevation, pitch_m=distance / focal,

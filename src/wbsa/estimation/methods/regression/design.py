@@ -14,8 +14,8 @@ import numpy as np
 from wbsa.errors import WbsaError
 
 #: Values whose training range is recorded and checked (flag ``out_of_training_range``; :func:`range_values`).
-RANGE_KEYS = ("vbsa_m2", "stature_m", "distance_m", "elevation_deg", "depth_noise_px", "clothing_m")
-_BASE = ("vbsa_m2", "stature_m", "silhouette_m2", "width_m", "thickness_m")
+RANGE_KEYS = ("seen_area_m2", "stature_m", "distance_m", "elevation_deg", "depth_noise_px", "clothing_m")
+_BASE = ("seen_area_m2", "stature_m", "silhouette_m2", "width_m", "thickness_m")
 #: How the camera treated the subject's outline (:func:`wbsa.estimation.subject.mixed_pixels.outline_shares`).
 _OUTLINE = ("mixed_share", "gap_share", "edge_gap_share")
 #: How the image was taken besides: its depth noise (taken per pixel pitch) and whether a floor was seen.
@@ -86,8 +86,8 @@ def capture_terms(features: dict[str, np.ndarray]) -> list[np.ndarray]:
     outline shares, the depth noise over the pixel pitch (Kinect v1's noise model measured on a body at 2.6 m,
     11 mm: about 2.5 on Kinect v1's pixels, 1.6 on Kinect v2's; an ideal render in whole millimetres reads
     about 0.6 mm), whether a floor was seen (1) or not (0), and the stated clothes twice: their thickness in
-    centimetres, and that thickness over the body's apparent width (VBSA / stature; a layer t over a limb of
-    radius r adds about t / r of its area, so thin bodies gain more).
+    centimetres, and that thickness over the body's apparent width (seen area / stature; a layer t over a limb of
+    radius r adds about t / r of its area, so thin bodies gain more; the width is the seen area over the stature).
 
     Parameters
     ----------
@@ -96,7 +96,8 @@ def capture_terms(features: dict[str, np.ndarray]) -> list[np.ndarray]:
     """
     cols = [np.asarray(features[k], dtype=np.float64) for k in _OUTLINE]
     clothing_m = np.asarray(features["clothing_m"], dtype=np.float64)
-    width_m = np.asarray(features["vbsa_m2"], dtype=np.float64) / np.asarray(features["stature_m"], dtype=np.float64)
+    width_m = np.asarray(features["seen_area_m2"], dtype=np.float64) / np.asarray(features["stature_m"],
+                                                                                dtype=np.float64)
     return cols + [_depth_noise_px(features), np.asarray(features["floor_seen"], dtype=np.float64),
                    100.0 * clothing_m, clothing_m / width_m]
 
@@ -158,7 +159,7 @@ def spread_design(psi_deg: np.ndarray, psi_sd_deg: np.ndarray, features: dict[st
     psi_deg, psi_sd_deg : (n,) float64
         Folded azimuth and its spread (degrees).
     features : dict of (n,) float64
-        The measures and the stated clothes (``pitch_m``, ``n_pixels``, ``stature_m``, ``vbsa_m2``, the
+        The measures and the stated clothes (``pitch_m``, ``n_pixels``, ``stature_m``, ``seen_area_m2``, the
         outline shares, ``depth_noise_m``, ``floor_seen`` and ``clothing_m`` are used).
     log_wbsa : (n,) float64
         The model's predicted log WBSA (m²).

@@ -1,8 +1,8 @@
 """The estimator's model file: view model, WBSA regression continuous in view and distance, calibrated interval.
 
 WBSA is predicted on the log scale from what :func:`~wbsa.estimation.subject.measure.measure_subject` measures and
-the view: a ridge regression of log WBSA on log VBSA, log stature (paper eq. 8), log silhouette area,
-width and thickness, each times a view basis (1, cos ψ, cos 2ψ, cos 3ψ, sin φ), plus distance, pixel
+the view: a ridge regression of log WBSA on the log seen area (the visible area of
+:mod:`~wbsa.estimation.subject.seen_surface`), log stature (paper eq. 8), log silhouette area, width and thickness, each times a view basis (1, cos ψ, cos 2ψ, cos 3ψ, sin φ), plus distance, pixel
 pitch, how the camera treated the outline (mixed returns, gaps: the area read through the outline
 moves with them), the depth noise (a noisy surface reads a different area), whether a floor was seen and
 the clothes the user states (a layer of clothes adds area the image cannot tell from skin);

@@ -13,6 +13,7 @@ and build, beside Du Bois and Mosteller given the TRUE height and mass.
     python benchmarks/bench_body_fit.py --subjects 20 --displace   # bodies outside anny's shape space
     python benchmarks/bench_body_fit.py --calibrate --subjects 40 --seed 2000   # rebuild the interval calibration
     python benchmarks/bench_body_fit.py --drift --subjects 10 --draws 3   # truth-started drift, seed 3000
+    python benchmarks/bench_body_fit.py --subjects 40 --renderer both   # the plain renderer's captures beside
 
 ``--displace``: each subject's skin gets seeded smooth local displacements of 1–3 cm (3–7 Gaussian bumps of
 6–15 cm along the normals of the trunk and legs, centred between 0.3 and 0.75 of stature; truth: the displaced
@@ -72,7 +73,7 @@ def displaced(vertices: np.ndarray, faces: np.ndarray, skin_faces: np.ndarray, m
 
 
 def fit_chunk(population: pd.DataFrame, others: pd.DataFrame, first: int, seed: int, displace: bool,
-              model_path: str | None, fit_settings) -> pd.DataFrame:
+              model_path: str | None, fit_settings, renderer: str = "project") -> pd.DataFrame:
     """Capture, segment and fit every subject (the captures of :func:`wbsa.testing.testset.room_test_captures`,
     those of ``bench_estimate.py``)."""
     from wbsa.bodies.body_model import BodyModel
@@ -81,9 +82,9 @@ def fit_chunk(population: pd.DataFrame, others: pd.DataFrame, first: int, seed: 
     from wbsa.estimation.methods.body_fit import fit_body
     from wbsa.estimation.subject.segment import SegmentSettings, segment_subject
     from wbsa.estimation.methods.view import azimuth_error_deg
-    from wbsa.testing.testset import RoomTestSettings, room_test_captures
+    from wbsa.testing.testset import RoomTestSettings, rendered, room_test_captures
 
-    settings = RoomTestSettings(seed=seed)
+    settings = RoomTestSettings(seed=seed, renderer=renderer)
     body_model = BodyModel()
 
     def bumped(vertices: np.ndarray, index: int) -> np.ndarray:
@@ -93,21 +94,24 @@ def fit_chunk(population: pd.DataFrame, others: pd.DataFrame, first: int, seed: 
         return out
 
     rows = []
-    for tc in room_test_captures(population, others, first, settings, body_model, bumped if displace else None):
-        index, cap, depth = tc.index, tc.capture, tc.depth_m
+    captures = ((tc, drawn) for tc in room_test_captures(population, others, first, settings, body_model,
+                                                         bumped if displace else None)
+                for drawn in rendered(tc, settings, body_model))
+    for tc, (renderer_name, camera, depth, _, _, _, _) in captures:
+        index, cap = tc.index, tc.capture
         t = population.iloc[index - first]
         truth_wbsa = (float(triangle_areas_m2(tc.vertices, body_model.skin_faces).sum()) if displace
                       else float(t["wbsa_m2"]))
         posture, people = tc.posture, tc.second_person
         row = {k: t[k] for k in ("subject_id", "population", "sex", "age_years", "stature_m", "mass_kg",
                                  "volume_m3") if k in t.index}
-        row.update(wbsa_m2=truth_wbsa, image=index, posture=posture, camera=cap.camera.name,
+        row.update(wbsa_m2=truth_wbsa, image=index, renderer=renderer_name, posture=posture, camera=camera.name,
                    azimuth_deg=cap.view.azimuth_deg, elevation_deg=cap.view.elevation_deg,
                    distance_m=cap.view.distance_m, second_person=bool(people), displaced=displace)
         t0 = time.perf_counter()
         try:
-            seg = segment_subject(depth, cap.camera, SegmentSettings(pick=settings.pick))
-            fit = fit_body(depth, seg.mask, cap.camera, seg.floor, settings=fit_settings, seed=index)
+            seg = segment_subject(depth, camera, SegmentSettings(pick=settings.pick))
+            fit = fit_body(depth, seg.mask, camera, seg.floor, settings=fit_settings, seed=index)
         except WbsaError as exc:
             row.update(error=str(exc), seconds=time.perf_counter() - t0)
             rows.append(row)
@@ -123,12 +127,12 @@ def fit_chunk(population: pd.DataFrame, others: pd.DataFrame, first: int, seed: 
             from wbsa.estimation.single_view import estimate
 
             try:
-                est = estimate(depth, cap.camera, model_path, segment=SegmentSettings(pick=settings.pick))
+                est = estimate(depth, camera, model_path, segment=SegmentSettings(pick=settings.pick))
                 row.update(reg_wbsa_m2=est.wbsa_m2, reg_lo_m2=est.wbsa_lo_m2, reg_hi_m2=est.wbsa_hi_m2)
             except WbsaError as exc:
                 row.update(reg_error=str(exc))
         rows.append(row)
-        print(f"image {index}: {posture}, az {cap.view.azimuth_deg:.0f}: "
+        print(f"image {index} ({renderer_name}): {posture}, az {cap.view.azimuth_deg:.0f}: "
               + (f"WBSA {100 * (fit.wbsa_m2 / truth_wbsa - 1):+.2f} %, stature "
                  f"{100 * (fit.stature_m - t['stature_m']):+.1f} cm, az err {rows[-1]['azimuth_error_deg']:.1f}°, "
                  f"{fit.seconds:.1f} s, flags {list(fit.flags)}" if not row.get("error") else row["error"]),
@@ -144,6 +148,25 @@ def summarise(g: pd.DataFrame) -> pd.Series:
                       "mass_mape_pct": 100 * np.mean(np.abs(g["fit_mass_kg"] / g["mass_kg"] - 1)),
                       "az_median_deg": g["azimuth_error_deg"].median(), "seconds_med": g["seconds"].median(),
                       "flagged": (g["flags"] != "").mean()})
+
+
+def side_by_side(res: pd.DataFrame) -> None:
+    """The renderers on the same captures: WBSA and fitted stature per renderer, and paired (plain − project)."""
+    ok = res[res["error"] == ""].copy()
+    ok["err_pct"] = 100 * (ok["fit_wbsa_m2"] / ok["wbsa_m2"] - 1)
+    ok["stature_err_cm"] = 100 * (ok["fit_stature_m"] - ok["stature_m"])
+    table = ok.groupby("renderer").agg(n=("err_pct", "size"), mape_pct=("err_pct", lambda e: e.abs().mean()),
+                                       bias_pct=("err_pct", "mean"), stature_median_cm=("stature_err_cm", "median"),
+                                       stature_p90_abs_cm=("stature_err_cm", lambda e: e.abs().quantile(0.9)))
+    print("\nby renderer (fitted rest stature against the truth):")
+    print(table.round(3).to_string())
+    wide = ok.pivot_table(index="image", columns="renderer", values="err_pct")
+    if {"project", "plain"} <= set(wide.columns):
+        d = (wide["plain"] - wide["project"]).dropna()
+        half = 1.96 * d.std(ddof=1) / np.sqrt(len(d)) if len(d) > 1 else float("nan")
+        print(f"WBSA signed error, plain minus project renderer, paired: {d.mean():+.2f} % (95 % CI "
+              f"{d.mean() - half:+.2f} … {d.mean() + half:+.2f}; n = {len(d)}; target ±0.5 %: "
+              f"{verdict(abs(d.mean()) <= 0.5)})")
 
 
 def verdict(ok: bool) -> str:
@@ -231,6 +254,9 @@ def main() -> None:
                     help="--drift: the cameras, comma-separated (default all trained presets)")
     ap.add_argument("--out", default=None, help="write the per-image results here (.csv)")
     ap.add_argument("--calibrate", action="store_true", help="store the interval calibration from these fits")
+    ap.add_argument("--renderer", choices=("project", "plain", "both"), default="project",
+                    help="who draws the captures: the project's renderer (default), the plain one "
+                         "(wbsa.testing.plain_render) or both, side by side")
     args = ap.parse_args()
     if args.seed is None:
         args.seed = 3000 if args.drift else 1000
@@ -264,13 +290,20 @@ def main() -> None:
     others = pop.iloc[np.roll(np.arange(len(pop)), 1)].reset_index(drop=True)
     stop = len(pop) if args.count is None else min(len(pop), args.first + args.count)
     part = slice(args.first, stop)
+    if args.calibrate and args.renderer != "project":
+        ap.error("--calibrate calibrates on the project's renderer: leave --renderer at project")
     res = fit_chunk(pop.iloc[part].reset_index(drop=True), others.iloc[part].reset_index(drop=True), args.first,
-                    args.seed, args.displace, args.model, fit_settings)
+                    args.seed, args.displace, args.model, fit_settings, args.renderer)
     if args.out:
         res.to_csv(args.out, index=False)
     print(f"\n{len(pop)} subjects ({(pop['population'] == 'survey').sum()} survey-matched), seed {args.seed}, images "
           f"{args.first}–{stop - 1}" + (", displaced skin (outside anny's shapes)" if args.displace else ""))
-    report(res, time.perf_counter() - t0, args.displace)
+    for renderer, group in res.groupby("renderer", sort=False):
+        if res["renderer"].nunique() > 1:
+            print(f"\n======== renderer: {renderer} ========")
+        report(group, time.perf_counter() - t0, args.displace)
+    if res["renderer"].nunique() > 1:
+        side_by_side(res)
     if args.calibrate:
         from wbsa.estimation.methods.body_fit.interval import calibrate, fit_fingerprint, save
 

@@ -13,6 +13,8 @@ holes on; the estimator is not told the view. Seeded: the same arguments print t
         # the same captures drawn by the plain renderer too (wbsa.testing.plain_render), side by side; with the
         # plain renderer's fixed set-up (Kinect v2, 2.5 m, 1.0 m high, front and 30°); rows kept as they come
         # in runs/rows-both, so a stopped run resumes
+    python benchmarks/bench_estimate.py --subjects 150 --noise-sweep 0,0.3,1,3 --rows runs/rows-sweep
+        # the same captures with each camera's noise model scaled: the mean signed error at each scale minus at 1x
 
 The model is the one shipped with wbsa, or --model.
 """
@@ -279,6 +281,9 @@ def main() -> None:
     ap.add_argument("--renderer", choices=TEST_RENDERERS, default="project",
                     help="who draws the captures: the project's renderer (default), the plain one "
                          "(wbsa.testing.plain_render: Open3D, its own noise) or both, side by side")
+    ap.add_argument("--noise-sweep", default=None, metavar="F,F,...",
+                    help="run the same captures at each of these noise scales (e.g. 0,0.3,1,3; 1 must be among them) "
+                         "and print the mean signed error at each minus at 1x")
     ap.add_argument("--fixed-setup", action="store_true",
                     help="also draw each subject with the plain renderer in its fixed set-up (Kinect v2 2.5 m away, "
                          "1.0 m high, level; front and 30°)")
@@ -299,6 +304,9 @@ def main() -> None:
         model_path = str(default_model_path())
     t0 = time.perf_counter()
     pop = population(args.subjects, args.survey_share, args.seed)
+    if args.noise_sweep:
+        noise_sweep(pop, args, model_path)
+        return
     capture = replace(RoomTestSettings().capture, noise_scale=(args.noise_scale, args.noise_scale),
                       ideal_share=1.0 if args.ideal else 0.0)
     settings = RoomTestSettings(capture=capture, seed=args.seed, edge_pixels=args.edge_pixels,
@@ -323,6 +331,46 @@ def main() -> None:
         side_by_side(res)
     if args.figure:
         draw_agreement(res, args.figure, f"{len(pop)} held-out subjects, seed {args.seed}")
+
+
+def noise_sweep(pop: pd.DataFrame, args: argparse.Namespace, model_path: str) -> None:
+    """The held-out captures at each noise scale of ``args.noise_sweep``: error by scale, and minus at 1×."""
+    from pathlib import Path
+
+    from wbsa.testing.testset import RoomTestSettings, run_room_tests
+
+    try:
+        scales = [float(x) for x in args.noise_sweep.split(",")]
+    except ValueError:
+        raise SystemExit(f"error: --noise-sweep {args.noise_sweep!r} must be numbers separated by commas, e.g. 0,0.3,1,3")
+    if 1.0 not in scales:
+        raise SystemExit("error: --noise-sweep must include 1 (the scale the others are compared with)")
+    parts = []
+    for f in scales:
+        capture = replace(RoomTestSettings().capture, noise_scale=(f, f))
+        settings = RoomTestSettings(capture=capture, seed=args.seed, renderer=args.renderer)
+        rows = str(Path(args.rows) / f"scale-{f:g}") if args.rows else None
+        parts.append(run_room_tests(pop, settings, model_path, workers=args.workers, rows_dir=rows)
+                     .assign(noise_factor=f))
+    res = pd.concat(parts, ignore_index=True)
+    if args.out:
+        res.to_csv(args.out, index=False)
+    ok = res[res["error"] == ""].copy()
+    ok["err_pct"] = 100 * (ok["est_wbsa_m2"] / ok["wbsa_m2"] - 1)
+    ok["stature_err_cm"] = 100 * (ok["est_stature_m"] - ok["posed_height_m"])
+    table = ok.groupby(["renderer", "noise_factor"]).agg(
+        n=("err_pct", "size"), mape_pct=("err_pct", lambda e: e.abs().mean()), bias_pct=("err_pct", "mean"),
+        stature_median_cm=("stature_err_cm", "median"))
+    refused = res.groupby(["renderer", "noise_factor"])["error"].apply(lambda e: int((e != "").sum()))
+    table["refused"] = refused
+    wide = ok.pivot_table(index=["renderer", "image"], columns="noise_factor", values="err_pct")
+    paired = wide.sub(wide[1.0], axis=0).groupby(level="renderer").mean()
+    print(f"\nnoise sweep, {len(pop)} held-out subjects, seed {args.seed}, model {model_path}:")
+    print(table.round(3).to_string())
+    print("\nmean signed WBSA error minus at 1x, paired on the same captures, % (target within ±1):")
+    print(paired.round(3).to_string())
+    worst = float(paired.drop(columns=1.0).abs().max().max())
+    print(f"worst: {worst:.2f} %: {verdict(worst <= 1.0)}")
 
 
 def draw_agreement(res: pd.DataFrame, path: str, title: str) -> None:

@@ -573,7 +573,7 @@ def test_camera_presets_have_the_documented_fields_of_view():
 
 
 def test_checks_errors_and_flags():
-    from wbsa.camera import preset
+    from wbsa.camera import camera_record, preset
     from wbsa.estimation.subject import checks
     from wbsa.estimation.methods.view import ViewEstimate, view_flags
 
@@ -588,7 +588,7 @@ def test_checks_errors_and_flags():
     assert "view_disagrees" in view_flags((90.0, None), est)
     assert "view_disagrees" in view_flags((None, 50.0), est)
     assert checks.range_flags({"stature_m": 2.3}, {"stature_m": (1.0, 2.0)})["out_of_training_range"].startswith("stature")
-    assert checks.working_range_flags(4.3, preset("kinect-v1"))
+    assert checks.working_range_flags(4.3, camera_record("kinect-v1"))
 
 
 def test_trees_predict_like_scikit_learn():

@@ -411,6 +411,7 @@ def test_messages_reach_the_page_in_its_own_words(server, browser, frames, tmp_p
     from wbsa.estimation.methods.base import Request
     from wbsa.estimation.methods.body_fit.predictor import BodyFitPredictor
     from wbsa.estimation.methods.view import ViewEstimate, view_used
+    from wbsa.estimation.clothes import check_clothing
     from wbsa.estimation.subject import checks
     from wbsa.server.wording import choose_person, page_words
 
@@ -426,7 +427,7 @@ def test_messages_reach_the_page_in_its_own_words(server, browser, frames, tmp_p
     cli = [
         message(checks.check_image_size, np.zeros((424, 512)), preset("kinect-v1")),
         message(read_depth, grey),
-        message(checks.check_clothing, 0.2),
+        message(check_clothing, 0.2),
         message(BodyFitPredictor().check_request, Request(level=0.8)),
         message(wbsa.estimate, str(frames["two"]["path"]), "kinect-v2", str(small_estimator_model)),
         view_used(ViewEstimate(131.0, 49.0, 12.0, 1.0, 0.41), None, None)[1]["uncertain_view"],

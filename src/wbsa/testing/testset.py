@@ -16,7 +16,7 @@ import numpy as np
 import pandas as pd
 
 from wbsa.training.capture import CaptureSettings, sample_capture
-from wbsa.estimation.subject.checks import MAX_CLOTHING_M
+from wbsa.estimation.limits import MAX_CLOTHING_M
 from wbsa.errors import WbsaError
 from wbsa.typing import EDGE_PIXELS, TEST_SCENES, EdgePixels, TestScene
 

@@ -67,7 +67,7 @@ class RenderSettings:
 
 def check_clothing_settings(clothed_share: float, clothing_m: tuple[float, float]) -> None:
     """Refuse a share of dressed captures outside [0, 1] or a thickness range outside 0–5 cm (one-line SettingsError)."""
-    from wbsa.estimation.subject.checks import MAX_CLOTHING_M
+    from wbsa.estimation.limits import MAX_CLOTHING_M
 
     if not 0.0 <= clothed_share <= 1.0:
         raise SettingsError("clothed_share", f"{clothed_share} must be a share of the captures in [0, 1]")

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from wbsa.errors import check_field
+from wbsa.estimation.limits import DEPTH_RANGE_M
 from wbsa.typing import PICK_RULES, PickRule
 
 
@@ -17,7 +18,7 @@ class SegmentSettings:
     Attributes
     ----------
     min_depth_m, max_depth_m : float
-        Returns outside this z-range are background.
+        Returns outside this z-range are background (default :data:`wbsa.estimation.limits.DEPTH_RANGE_M`).
     voxel_m : float
         Voxel size of the thinned cloud used for planes and clusters.
     max_planes : int
@@ -40,8 +41,8 @@ class SegmentSettings:
         Seed of the RANSAC plane search (same seed, same mask).
     """
 
-    min_depth_m: float = 0.3
-    max_depth_m: float = 8.0
+    min_depth_m: float = DEPTH_RANGE_M[0]
+    max_depth_m: float = DEPTH_RANGE_M[1]
     voxel_m: float = 0.03
     max_planes: int = 5
     min_plane_fraction: float = 0.04

@@ -41,7 +41,7 @@ def _models(spacing_m: float):
 
 def fit_body(depth_m: np.ndarray, mask: np.ndarray, camera, floor, *, clothing_m: float = 0.0,
              azimuth_deg: float | None = None, settings: BodyFitSettings = BodyFitSettings(),
-             seed: int = 0, start=None, progress=None) -> BodyFit:
+             seed: int = 0, start=None, progress=None, sensor=None) -> BodyFit:
     """Fit anny to one depth view of a standing person and measure the fitted body.
 
     Parameters
@@ -68,6 +68,9 @@ def fit_body(depth_m: np.ndarray, mask: np.ndarray, camera, floor, *, clothing_m
         how far the fit drifts from it.
     progress : callable or None
         Called as ``progress(step, steps)`` after each optimiser step (:func:`optimise`).
+    sensor : SensorModel, optional
+        The camera's depth-noise model (:func:`wbsa.sensor.technology.envelope_model`): the data term weighs each
+        reading by it. None: that of a camera whose technology is unknown.
 
     Returns
     -------
@@ -83,7 +86,7 @@ def fit_body(depth_m: np.ndarray, mask: np.ndarray, camera, floor, *, clothing_m
 
     from wbsa.estimation.methods.body_fit.observation import check_inputs
 
-    from wbsa.estimation.subject.checks import check_clothing
+    from wbsa.estimation.clothes import check_clothing
 
     check_clothing(clothing_m)
     if azimuth_deg is not None and not math.isfinite(azimuth_deg):
@@ -94,13 +97,13 @@ def fit_body(depth_m: np.ndarray, mask: np.ndarray, camera, floor, *, clothing_m
     torch.set_num_threads(settings.threads)
     try:
         return _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fit_model, meter, start,
-                    float(clothing_m), progress)
+                    float(clothing_m), progress, sensor)
     finally:
         torch.set_num_threads(threads)
 
 
 def _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fit_model, meter, start,
-         clothing_m, progress) -> BodyFit:
+         clothing_m, progress, sensor) -> BodyFit:
     """:func:`fit_body` on checked inputs, with anny loaded."""
     import torch
 
@@ -112,15 +115,13 @@ def _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fi
     from wbsa.estimation.methods.body_fit.objective import Objective
     from wbsa.estimation.methods.body_fit.observation import observe
     from wbsa.estimation.methods.body_fit.optimize import optimise
-    from wbsa.sensor.technology import camera_model, preset_record
 
     t0 = time.perf_counter()
     deadline = t0 + settings.time_budget_s
     rng = np.random.default_rng(np.random.SeedSequence([int(seed), 0xB0D7]))
-    obs = observe(depth, mask, camera, floor, settings.n_points, rng)
-    record = preset_record(camera)  # the data term weighs each reading by the camera technology's own noise
+    obs = observe(depth, mask, camera, floor, settings.n_points, rng, sensor)
     objective = Objective(obs, settings.robust_loss, settings.robust_scale_m, settings.silhouette_tolerance_px,
-                          camera_model(record if record is not None else "kinect-v1"))
+                          obs.sensor)
     with torch.no_grad():
         starts = (first_guesses(fit_model, objective, settings.restarts, azimuth_deg, settings.child_starts)
                   if start is None else start(obs, fit_model))

@@ -50,8 +50,9 @@ class BodyFitPredictor:
         """
         from wbsa.estimation.methods.body_fit.fit import fit_body
 
-        fit = fit_body(subject.depth_m, subject.mask, subject.camera, subject.floor, clothing_m=request.clothing_m,
-                       azimuth_deg=request.azimuth_deg, settings=self.settings, progress=request.progress)
+        fit = fit_body(subject.depth_m, subject.mask, subject.camera.intrinsics, subject.floor,
+                       clothing_m=request.clothing_m, azimuth_deg=request.azimuth_deg, settings=self.settings,
+                       progress=request.progress, sensor=subject.sensor)
         psi = float(fold_azimuth(fit.azimuth_deg))
         view = ViewEstimate(psi, float("nan"), fit.elevation_deg, float("nan"), float("nan"))
         az = psi if request.azimuth_deg is None else float(fold_azimuth(request.azimuth_deg))

@@ -82,6 +82,7 @@ def options_from_form(form, presets, methods, body_fit=None) -> "Options":
     settings of the body fit)."""
     from wbsa.cli_types import pick as parse_pick
     from wbsa.estimation.clothes import CLOTHES, clothes_help
+    from wbsa.estimation.limits import LIMITS
     from wbsa.server.jobs import Options, camera_from_upload
 
     check_fields(form, FIELDS, FILES)
@@ -105,14 +106,14 @@ def options_from_form(form, presets, methods, body_fit=None) -> "Options":
             pick = parse_pick(f["pick"].strip())
         except argparse.ArgumentTypeError as exc:
             raise UploadError(f"pick: {exc}") from None
-    clothing_cm = _number(f, "clothing_cm", 0, 5, "a thickness of clothes in cm")
+    clothing_cm = _number(f, "clothing_cm", *LIMITS["clothing"].scaled(100), "a thickness of clothes in cm")
     clothes = f.get("clothes", "").strip() or None
     if clothes is not None and clothes not in CLOTHES:
         raise UploadError(f"clothes {clothes!r} is unknown; choose one of {clothes_help()}")
     return Options(camera=camera, intrinsics=camera_from_upload(intrinsics[0]) if intrinsics else None,
                    intrinsics_name=intrinsics[0].name if intrinsics else "", clothes=clothes,
                    clothing_m=None if clothing_cm is None else clothing_cm / 100.0,
-                   pick=pick, method=method, height_cm=_number(f, "height_cm", 1, 300, "a height in cm"),
+                   pick=pick, method=method, height_cm=_number(f, "height_cm", *LIMITS["stature"].scaled(100), "a height in cm"),
                    mass_kg=_number(f, "mass_kg", 0.1, 700, "a mass in kg"), sex=sex,
                    azimuth_deg=_number(f, "azimuth_deg", -360, 360, "an azimuth in degrees"),
                    elevation_deg=_number(f, "elevation_deg", -90, 90, "an elevation in degrees"), body_fit=body_fit)
@@ -160,6 +161,7 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
     from wbsa.server.batch import Batch, run_batch
     from wbsa.server.jobs import BoundedStore, Runner, internal_error, measure, new_id
     from wbsa.estimation.clothes import CLOTHES
+    from wbsa.estimation.limits import limits_json
     from wbsa.server.progress import STREAM, stream_answer, wants_stream
     from wbsa.server.wording import page_words
 
@@ -184,7 +186,7 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
     async def info(request: Request) -> Response:
         return JSONResponse({
             "presets": [{"name": k, "width": CAMERAS[k].intrinsics.width, "height": CAMERAS[k].intrinsics.height} for k in presets],
-            "methods": methods, "max_upload_bytes": max_upload_bytes, "max_clothing_cm": 5,
+            "methods": methods, "max_upload_bytes": max_upload_bytes, "limits": limits_json(),
             "clothes": [{"name": c.name, "words": c.words, "layer_cm": round(100 * c.layer_m, 2),
                          "sd_cm": round(100 * c.sd_m, 2)} for c in CLOTHES.values()],
             "model": "default" if model is None else str(getattr(model, "meta", {}).get("name", "given"))})

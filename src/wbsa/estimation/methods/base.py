@@ -2,7 +2,7 @@
 :class:`Predictor` interface (the role :mod:`wbsa.camera.backends`' protocol plays for the ray casters).
 
 A method is a :class:`Predictor` in a package of its own under :mod:`wbsa.estimation.methods`;
-:func:`~wbsa.estimation.methods.dispatch.predictor_for` is the one place that picks it.
+:func:`~wbsa.estimation.methods.dispatch.predictors_for` is the one place that picks it.
 """
 
 from __future__ import annotations

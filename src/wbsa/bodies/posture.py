@@ -54,6 +54,7 @@ import pandas as pd
 from wbsa.bodies.posing import JOINT_MOTIONS, SIDES, SinkTest, pose_vertices, segment_transforms
 from wbsa.typing import PostureChoice
 from wbsa.errors import WbsaError
+from wbsa.settings_io import check_types
 
 #: Angle columns of a postured population table, degrees, changes from the rest A-pose.
 ANGLE_COLUMNS = tuple(f"{m.split('_')[0]}_{s}_{m.split('_')[1]}_deg" for s in SIDES for m in JOINT_MOTIONS)
@@ -131,6 +132,7 @@ class PostureSettings:
     mix: tuple[str, ...] = tuple(POSTURES)
 
     def __post_init__(self) -> None:
+        check_types(self)
         choices = get_args(PostureChoice)
         if self.posture not in choices:
             raise WbsaError(f"posture {self.posture!r} is unknown; use one of {', '.join(choices)}")

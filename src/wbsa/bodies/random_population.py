@@ -18,6 +18,7 @@ import pandas as pd
 from wbsa.errors import WbsaError
 from wbsa.bodies.age import param_to_years, years_to_param
 from wbsa.bodies.body_model import LOCAL_CHANGE_COLUMNS
+from wbsa.settings_io import check_types
 
 Shape = Literal["paper", "varied"]
 #: The fat depot each local change follows in the varied shape (abdominal or gluteal).
@@ -103,6 +104,7 @@ class RandomPopulationSettings:
                    height=(0.0, 1.0), proportions=(0.0, 1.0), cupsize=(0.0, 1.0), shape="varied")
 
     def __post_init__(self) -> None:
+        check_types(self)
         if not isinstance(self.n, (int, np.integer)) or self.n <= 0:
             raise WbsaError(f"population size n = {self.n} must be a positive integer; e.g. 100")
         if self.age_sampling not in ("parameter", "years"):

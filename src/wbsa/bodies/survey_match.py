@@ -48,6 +48,7 @@ from wbsa.bodies.survey_measures import TorchMeasurer, fit_measures
 from wbsa.typing import SurveyMeasures
 from wbsa.bodies.survey_start import StartGrid, StartTable
 from wbsa.progress import progress
+from wbsa.settings_io import check_types
 
 #: Target columns :func:`match_bodies` reads (NaN waist, hip or limb measure = not measured), in the order
 #: of :data:`~wbsa.bodies.survey_measures.FIT_MEASURES`; the last three only with seven measures.
@@ -144,6 +145,7 @@ class MatchSettings:
     threads: int | None = 1
 
     def __post_init__(self) -> None:
+        check_types(self)
         from wbsa.typing import SURVEY_MEASURES
 
         if self.measures not in SURVEY_MEASURES:

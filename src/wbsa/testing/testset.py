@@ -19,6 +19,7 @@ from wbsa.training.capture import CaptureSettings, sample_capture
 from wbsa.estimation.limits import MAX_CLOTHING_M
 from wbsa.errors import WbsaError
 from wbsa.typing import EDGE_PIXELS, TEST_SCENES, EdgePixels, TestScene
+from wbsa.settings_io import check_types
 
 
 @dataclass(frozen=True)
@@ -74,6 +75,7 @@ class RoomTestSettings:
     seed: int = 1000
 
     def __post_init__(self) -> None:
+        check_types(self)
         if self.edge_pixels not in EDGE_PIXELS:
             raise WbsaError(f"edge_pixels {self.edge_pixels!r} is unknown; use one of {', '.join(EDGE_PIXELS)}")
         if not 0.0 <= self.edge_share <= 1.0:

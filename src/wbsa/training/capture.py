@@ -17,6 +17,7 @@ from wbsa.camera.presets import TRAINED_CAMERAS, CameraRecord, camera_record
 from wbsa.errors import WbsaError
 from wbsa.sensor.settings import KINECT_V1_BASELINE_M, KINECT_V1_DISPARITY_STEP_PX, SensorSettings
 from wbsa.typing import EDGE_PIXELS, EdgePixels, NoiseModel
+from wbsa.settings_io import check_types
 
 #: Camera-to-subject distances (m) a training world may span: nearer, a standing adult does not fit the frame
 #: of any preset; farther, beyond every preset's working range.
@@ -67,6 +68,7 @@ class CaptureSettings:
     edge_pixels: tuple[EdgePixels, ...] = EDGE_PIXELS  # type: ignore[assignment]
 
     def __post_init__(self) -> None:
+        check_types(self)
         if isinstance(self.edge_pixels, str) or not self.edge_pixels or not set(self.edge_pixels) <= set(EDGE_PIXELS):
             raise WbsaError(f"edge_pixels {self.edge_pixels!r} must be a tuple of some of {', '.join(EDGE_PIXELS)}, "
                             "e.g. ('kept',)")

@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 
 from wbsa.errors import SettingsError
 from wbsa.training.capture import CaptureSettings
+from wbsa.settings_io import check_types
 
 @dataclass(frozen=True)
 class RenderSettings:
@@ -56,6 +57,7 @@ class RenderSettings:
     clothing_m: tuple[float, float] = (0.0, 0.015)
 
     def __post_init__(self) -> None:
+        check_types(self)
         check_clothing_settings(self.clothed_share, self.clothing_m)
         if not isinstance(self.views_per_subject, int) or self.views_per_subject < 1:
             raise SettingsError("views_per_subject", f"must be an integer >= 1, got {self.views_per_subject!r}")
@@ -118,6 +120,7 @@ class TrainSettings:
     seed: int = 0
 
     def __post_init__(self) -> None:
+        check_types(self)
         if self.n_random < 0 or self.n_survey < 0 or self.n_random + self.n_survey < 8:
             raise SettingsError("n_random", "+ n_survey must be at least 8 subjects")
         if not 0.05 <= self.calibration_fraction <= 0.5:

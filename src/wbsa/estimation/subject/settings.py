@@ -9,6 +9,7 @@ import numpy as np
 from wbsa.errors import check_field
 from wbsa.estimation.limits import DEPTH_RANGE_M
 from wbsa.typing import PICK_RULES, PickRule
+from wbsa.settings_io import check_types
 
 
 @dataclass(frozen=True)
@@ -55,6 +56,7 @@ class SegmentSettings:
     seed: int = 0
 
     def __post_init__(self) -> None:
+        check_types(self)
         check_field(0 <= self.min_depth_m < self.max_depth_m, "min_depth_m",
                     f"must be 0 or more and below max_depth_m (the depth range {self.min_depth_m}–"
                     f"{self.max_depth_m} m is empty)")

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 from wbsa.bodies.composition import CompositionSettings
 from wbsa.errors import SettingsError
 from wbsa.typing import DATA_TERMS, ROBUST_LOSSES, DataTerm, RobustLoss
+from wbsa.settings_io import check_types
 
 #: Box of each posture motion (degrees, change from anny's rest A-pose; :data:`wbsa.bodies.posing.JOINT_MOTIONS`
 #: order): wide enough for every named standing posture with its jitter (:data:`wbsa.bodies.posture.POSTURES`)
@@ -101,6 +102,7 @@ class BodyFitSettings:
     threads: int = 1
 
     def __post_init__(self) -> None:
+        check_types(self)
         def positive(name: str) -> None:
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):

@@ -146,10 +146,6 @@ class MatchSettings:
 
     def __post_init__(self) -> None:
         check_types(self)
-        from wbsa.typing import SURVEY_MEASURES
-
-        if self.measures not in SURVEY_MEASURES:
-            raise WbsaError(f"match measures {self.measures!r} must be one of {', '.join(SURVEY_MEASURES)}")
         lo, hi = self.bounds
         if not 0.0 <= lo < hi <= 1.0:
             raise WbsaError(f"match bounds {self.bounds} must satisfy 0 <= low < high <= 1")

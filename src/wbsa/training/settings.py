@@ -59,7 +59,7 @@ class RenderSettings:
     def __post_init__(self) -> None:
         check_types(self)
         check_clothing_settings(self.clothed_share, self.clothing_m)
-        if not isinstance(self.views_per_subject, int) or self.views_per_subject < 1:
+        if self.views_per_subject < 1:
             raise SettingsError("views_per_subject", f"must be an integer >= 1, got {self.views_per_subject!r}")
         if not 0.0 <= self.alone_share <= 1.0:
             raise SettingsError("alone_share", f"{self.alone_share} must be a share of the captures in [0, 1]")
@@ -125,12 +125,9 @@ class TrainSettings:
             raise SettingsError("n_random", "+ n_survey must be at least 8 subjects")
         if not 0.05 <= self.calibration_fraction <= 0.5:
             raise SettingsError("calibration_fraction", f"{self.calibration_fraction} must lie in [0.05, 0.5]")
-        if not isinstance(self.render, RenderSettings):
-            raise SettingsError("render", f"must be a RenderSettings, got {type(self.render).__name__}")
-        if not isinstance(self.folds, int) or self.folds < 2:
+        if self.folds < 2:
             raise SettingsError("folds", f"must be an integer >= 2, got {self.folds!r}")
-        counts_ok = all(isinstance(v, int) for v in (self.tree_iterations, self.tree_leaves, self.tree_bags))
-        if not (counts_ok and self.tree_iterations >= 1 and self.tree_leaves >= 2 and self.tree_l2 >= 0
+        if not (self.tree_iterations >= 1 and self.tree_leaves >= 2 and self.tree_l2 >= 0
                 and self.tree_bags >= 1):
             raise SettingsError("tree_iterations",
                                 f"({self.tree_iterations!r}) must be an integer >= 1, tree_leaves ({self.tree_leaves!r}) "

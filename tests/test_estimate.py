@@ -934,10 +934,12 @@ def test_residual_tree_settings_are_checked():
     from wbsa.training.settings import RenderSettings
     from wbsa.training.settings import TrainSettings
 
-    for bad in (dict(tree_l2=float("nan")), dict(tree_iterations=800.5), dict(tree_leaves=1), dict(tree_l2=-0.1),
-                dict(tree_bags=0), dict(tree_bags=2.5)):
+    for bad in (dict(tree_l2=float("nan")), dict(tree_leaves=1), dict(tree_l2=-0.1), dict(tree_bags=0)):
         with pytest.raises(WbsaError, match="tree_iterations .* must be an integer"):
             TrainSettings(**bad)
+    for name, value in (("tree_iterations", 800.5), ("tree_bags", 2.5)):  # the one type check, naming the field
+        with pytest.raises(WbsaError, match=f"^{name} must be an integer, got {value}$"):
+            TrainSettings(**{name: value})
     assert TrainSettings(tree_iterations=10, tree_leaves=2, tree_l2=0.0).tree_iterations == 10
     with pytest.raises(WbsaError, match="alone_share 1.5 must be a share"):
         TrainSettings(render=RenderSettings(alone_share=1.5))

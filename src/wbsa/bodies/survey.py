@@ -32,7 +32,8 @@ from wbsa.errors import WbsaError
 from wbsa.bodies.age import years_to_param
 from wbsa.bodies.anthropometry import DEFAULT_DENSITY_KG_M3
 from wbsa.bodies.composition import COMPOSITION_COLUMNS, CompositionSettings
-from wbsa.bodies.survey_match import MatchSettings, torch_threads
+from wbsa.bodies.survey_match import MatchSettings
+from wbsa.parallel import torch_threads
 from wbsa.settings_io import check_types
 
 #: Columns a survey population has beyond the random population's.

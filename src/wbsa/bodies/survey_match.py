@@ -35,9 +35,7 @@ who else is in the batch (up to floating-point rounding of the batched products)
 
 from __future__ import annotations
 
-from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
-from typing import Iterator
 
 import numpy as np
 import pandas as pd
@@ -47,6 +45,7 @@ from wbsa.bodies.body_model import ALL_LOCAL_CHANGE_COLUMNS, BODY_PARAMETER_COLU
 from wbsa.bodies.survey_measures import TorchMeasurer, fit_measures
 from wbsa.typing import SurveyMeasures
 from wbsa.bodies.survey_start import StartGrid, StartTable
+from wbsa.parallel import torch_threads
 from wbsa.progress import progress
 from wbsa.settings_io import check_types
 
@@ -245,20 +244,6 @@ def match_bodies(targets: pd.DataFrame, measurer: TorchMeasurer, settings: Match
     out["fit_iterations"] = iters
     out["fit_converged"] = done
     return out
-
-
-@contextmanager
-def torch_threads(n: int | None) -> Iterator[None]:
-    """Run the body with ``n`` torch intra-op threads (None: unchanged), then restore."""
-    import torch
-
-    previous = torch.get_num_threads()
-    if n is not None:
-        torch.set_num_threads(n)
-    try:
-        yield
-    finally:
-        torch.set_num_threads(previous)
 
 
 # -- the fit ---------------------------------------------------------------------------------

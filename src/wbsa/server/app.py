@@ -23,6 +23,7 @@ a 500 with a message and no traceback. The server keeps running after any of the
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import shutil
 import tempfile
 from contextlib import asynccontextmanager
@@ -142,7 +143,9 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
         A token every request must carry (:class:`wbsa.server.access.TokenGate`; 403 without it). None: no
         token (loopback only: ``wbsa serve`` makes one for any other address).
     body_fit : BodyFitSettings, optional
-        The settings of the body fit (methods ``body-fit`` and ``both``; None: the defaults).
+        The settings of the body fit (methods ``body-fit`` and ``both``; None: the defaults). Its ``threads`` is
+        torch's thread count for the whole server, set once when it starts (and restored when it stops): torch's
+        count is the process's and the estimates run in threads, so no fit changes it.
 
     Returns
     -------
@@ -165,6 +168,11 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
     from wbsa.server.progress import STREAM, stream_answer, wants_stream
     from wbsa.server.wording import page_words
 
+    from wbsa.estimation.methods.body_fit.settings import BodyFitSettings
+    from wbsa.parallel import torch_threads
+
+    fit_threads = (body_fit or BodyFitSettings()).threads
+    body_fit = dataclasses.replace(body_fit or BodyFitSettings(), threads=None)  # the fits keep the server's count
     if model is not None and not hasattr(model, "predict"):
         from wbsa.estimation.methods.regression.default_model import load_model
 
@@ -197,29 +205,19 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
         and then the answer (:mod:`wbsa.server.progress`). A bad request gets its one-line message, a failure of
         wbsa itself a 500 with no traceback."""
         try:
-            runner.reserve()
+            with runner.slot() as slot:
+                job = await prepare()
+                if wants_stream(request):
+                    return StreamingResponse(stream_answer(runner, job, results.add, internal_error, slot.hand_on()),
+                                             media_type=STREAM,
+                                             headers={"Cache-Control": "no-store", "X-Accel-Buffering": "no"})
+                result = await runner.run(job, None)
         except UploadError as exc:
-            return error(exc)
-        try:
-            job = await prepare()
-        except UploadError as exc:
-            runner.release()
             return error(exc)
         except ClientDisconnect:
-            runner.release()
             return Response(status_code=400)
-        except Exception as exc:  # a failure of wbsa itself
-            runner.release()
-            return JSONResponse({"error": internal_error(exc)}, status_code=500)
-        if wants_stream(request):
-            return StreamingResponse(stream_answer(runner, job, results.add, internal_error), media_type=STREAM,
-                                     headers={"Cache-Control": "no-store", "X-Accel-Buffering": "no"})
-        try:
-            result = await runner.run(job, None)
         except Exception as exc:  # a failure of wbsa itself: the server answers and keeps running
             return JSONResponse({"error": internal_error(exc)}, status_code=500)
-        finally:
-            runner.release()
         results.add(result)
         return JSONResponse(finite_or_none(result.answer), status_code=422 if "error" in result.answer else 200)
 
@@ -237,8 +235,6 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
         return await answered(request, prepare)
 
     async def pick(request: Request) -> Response:
-        import dataclasses
-
         from wbsa.cli_types import pick as parse_pick
 
         async def prepare():
@@ -275,25 +271,20 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
 
     async def batch_start(request: Request) -> Response:
         try:
-            runner.reserve()
+            with runner.slot() as slot:
+                form = await read_form(request, max_upload_bytes)
+                options = options_from_form(form, presets, methods, body_fit)
+                uploads = form.files.get("depth", [])
+                if not uploads:
+                    raise UploadError("no depth files were sent; choose or drop depth images")
+                batch = Batch(new_id(), [u.name for u in uploads])
+                batches.add(batch)
+                runner.submit(run_batch, batch, uploads, options, model, root, results).add_done_callback(
+                    slot.hand_on())
         except UploadError as exc:
-            return error(exc)
-        try:
-            form = await read_form(request, max_upload_bytes)
-            options = options_from_form(form, presets, methods, body_fit)
-            uploads = form.files.get("depth", [])
-            if not uploads:
-                raise UploadError("no depth files were sent; choose or drop depth images")
-        except UploadError as exc:
-            runner.release()
             return error(exc)
         except ClientDisconnect:
-            runner.release()
             return Response(status_code=400)
-        batch = Batch(new_id(), [u.name for u in uploads])
-        batches.add(batch)
-        runner.submit(run_batch, batch, uploads, options, model, root, results).add_done_callback(
-            lambda _: runner.release())
         return JSONResponse(batch.progress())
 
     async def batch_progress(request: Request) -> Response:
@@ -312,11 +303,12 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
 
     @asynccontextmanager
     async def lifespan(app):
-        try:
-            yield
-        finally:
-            runner.close()
-            shutil.rmtree(root, ignore_errors=True)
+        with torch_threads(fit_threads):  # once for the whole server
+            try:
+                yield
+            finally:
+                runner.close()
+                shutil.rmtree(root, ignore_errors=True)
 
     from starlette.middleware import Middleware
 

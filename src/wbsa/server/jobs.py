@@ -18,6 +18,7 @@ import tempfile
 import threading
 from collections import OrderedDict
 from concurrent.futures import ThreadPoolExecutor
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -239,6 +240,36 @@ def measure(upload: Upload | None, options: Options, model, root: Path, *, depth
     return result
 
 
+class Slot:
+    """One reserved place of a :class:`Runner` (:meth:`Runner.slot`), given back once.
+
+    Parameters
+    ----------
+    runner : Runner
+    """
+
+    def __init__(self, runner: Runner) -> None:
+        self._runner = runner
+        self._given_back = False
+        self._lock = threading.Lock()
+        self.handed_on = False
+
+    def release(self, *_) -> None:
+        """Give the place back (once; later calls do nothing). Takes and ignores any arguments, so it can be a
+        future's done callback."""
+        with self._lock:
+            if self._given_back:
+                return
+            self._given_back = True
+        self._runner.release()
+
+    def hand_on(self):
+        """The place now ends with the work it was reserved for: the block no longer gives it back; the returned
+        :meth:`release` does (call it when the work ends)."""
+        self.handed_on = True
+        return self.release
+
+
 class Runner:
     """Estimates in worker threads, at most ``max_pending`` waiting or running.
 
@@ -268,6 +299,23 @@ class Runner:
         """Count ``n`` estimates out."""
         with self._lock:
             self.pending -= n
+
+    @contextmanager
+    def slot(self):
+        """One estimate's place for the block (:meth:`reserve`, or the busy refusal): given back when the block
+        ends, however it ends, unless the block hands it on (:meth:`Slot.hand_on`) to the work it started.
+
+        Yields
+        ------
+        Slot
+        """
+        self.reserve()
+        slot = Slot(self)
+        try:
+            yield slot
+        finally:
+            if not slot.handed_on:
+                slot.release()
 
     async def run(self, fn, *args, **kwargs):
         """``fn(*args, **kwargs)`` in a worker thread, awaited without blocking the event loop."""

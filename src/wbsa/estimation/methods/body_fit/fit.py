@@ -82,24 +82,18 @@ def fit_body(depth_m: np.ndarray, mask: np.ndarray, camera, floor, *, clothing_m
         A depth image that is not (h, w) finite metres of the camera's size, an empty mask, fewer than 200
         returns above the floor, a layer of clothes that is not 0 to 5 cm.
     """
-    import torch
-
-    from wbsa.estimation.methods.body_fit.observation import check_inputs
-
     from wbsa.estimation.clothes import check_clothing
+    from wbsa.estimation.methods.body_fit.observation import check_inputs
+    from wbsa.parallel import torch_threads
 
     check_clothing(clothing_m)
     if azimuth_deg is not None and not math.isfinite(azimuth_deg):
         raise WbsaError(f"azimuth_deg must be a finite number of degrees, got {azimuth_deg!r}")
     depth, mask = check_inputs(depth_m, mask, camera)
     body_model, fit_model, meter = _models(settings.vertex_spacing_m)  # once per process, not timed
-    threads = torch.get_num_threads()
-    torch.set_num_threads(settings.threads)
-    try:
+    with torch_threads(settings.threads):
         return _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fit_model, meter, start,
                     float(clothing_m), progress, sensor)
-    finally:
-        torch.set_num_threads(threads)
 
 
 def _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fit_model, meter, start,

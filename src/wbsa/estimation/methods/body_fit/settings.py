@@ -71,9 +71,11 @@ class BodyFitSettings:
     composition : CompositionSettings
         Body composition for mass and BMI (:mod:`wbsa.bodies.composition`, its equation's value: no residual);
         the default is how the population tables' ``mass_kg`` is made by default.
-    threads : int
-        torch threads during the fit (restored after). The fit is thousands of small operations: one thread
-        is fastest, and far faster than two on a busy machine (measured: 18 ms against up to 1 s a step).
+    threads : int or None
+        torch threads during the fit (restored after; :func:`wbsa.parallel.torch_threads`). The fit is thousands
+        of small operations: one thread is fastest, and far faster than two on a busy machine (measured: 18 ms
+        against up to 1 s a step). None: the count the process has (``wbsa serve`` sets it once at its start,
+        as torch's count is the whole process's and its estimates run in threads).
     """
 
     vertex_spacing_m: float = 0.035
@@ -99,7 +101,7 @@ class BodyFitSettings:
     time_budget_s: float = 300.0
     tolerance: float = 0.0005
     composition: CompositionSettings = CompositionSettings()
-    threads: int = 1
+    threads: int | None = 1
 
     def __post_init__(self) -> None:
         check_types(self)
@@ -108,7 +110,7 @@ class BodyFitSettings:
             check_field(math.isfinite(value) and value > 0, name, f"must be a positive number, got {value!r}")
         for name in ("n_points", "restarts", "keep_restarts", "steps", "refresh_every", "threads"):
             value = getattr(self, name)
-            check_field(value >= 1, name, f"must be a whole number of at least 1, got {value!r}")
+            check_field(value is None or value >= 1, name, f"must be a whole number of at least 1, got {value!r}")
         for name in ("silhouette_tolerance_px", "silhouette_weight", "contour_weight", "free_space_weight", "phenotype_prior_weight",
                      "local_change_prior_weight"):
             value = getattr(self, name)

@@ -212,7 +212,10 @@ def record_for_image(depth_shape: tuple[int, int]) -> CameraRecord:
              if r.by_image_size and (r.intrinsics.width, r.intrinsics.height) == (w, h)]
     if len(found) != 1:
         have = ", ".join(found) if found else "none of the presets"
-        raise WbsaError(f"a {w}x{h} depth image fits {have}; give --camera PRESET or an intrinsics JSON")
+        raise WbsaError(f"a {w}x{h} depth image fits {have}; give --camera PRESET or an intrinsics JSON",
+                        code="camera_size", field="camera", value="auto",
+                        page=f"a {w}x{h} depth image fits {have}; choose the camera under Camera, or add its "
+                             "intrinsics file")
     return CAMERAS[found[0]]
 
 

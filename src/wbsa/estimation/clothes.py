@@ -2,7 +2,7 @@
 
 The camera sees the outside of the clothes, which encloses more area than the skin; nothing in a depth
 image tells cloth from skin, so the clothes are stated, never assumed. :data:`CLOTHES` is the one table of
-the layers a user can name (``--clothes NAME``, ``clothing="NAME"``): how far their outside stands off the
+the layers a user can name (``--clothes NAME``, ``clothes="NAME"``): how far their outside stands off the
 skin over the trunk, upper arms, legs and feet, on average, and how uncertain that is. The thicknesses are
 starting values, not measured: no published figure of clothing ease (the gap between a garment and the
 body) was found in the repository's references.
@@ -81,8 +81,10 @@ def check_clothing(clothing_m: float) -> None:
 
     ok = is_real_number(clothing_m) and math.isfinite(float(clothing_m)) and 0.0 <= float(clothing_m) <= MAX_CLOTHING_M
     if not ok:
-        raise WbsaError(f"the clothes' layer {clothing_m!r} m must be a thickness of 0 to {MAX_CLOTHING_M:g} m "
-                        "(0 for none or tight-fitting, 0.01 for 1 cm; on the command line --clothing-cm 1)")
+        said = (f"the clothes' layer {clothing_m!r} m must be a thickness of 0 to {MAX_CLOTHING_M:g} m (0 for none or "
+                "tight-fitting, 0.01 for 1 cm")
+        raise WbsaError(f"{said}; on the command line --clothing-cm 1)", code="out_of_range", field="clothing_m",
+                        value=clothing_m, page=f"{said})")
 
 
 def stated_clothes(clothes: str | None = None, clothing_m: float | None = None) -> Clothes:
@@ -105,11 +107,13 @@ def stated_clothes(clothes: str | None = None, clothing_m: float | None = None) 
         An unknown name, both a name and a thickness, or a thickness that is not 0 to 0.05 m.
     """
     if clothes is not None and clothing_m is not None:
-        raise WbsaError("give the clothes by name (clothing, --clothes) or as a thickness (clothing_m, "
-                        "--clothing-cm), not both")
+        raise WbsaError("give the clothes by name (clothes, --clothes) or as a thickness (clothing_m, "
+                        "--clothing-cm), not both", field="clothes",
+                        page="choose the clothes by name or give their thickness, not both")
     if clothes is not None:
         if not isinstance(clothes, str) or clothes not in CLOTHES:
-            raise WbsaError(f"unknown clothes {clothes!r}; give one of {clothes_help()}")
+            raise WbsaError(f"unknown clothes {clothes!r}; give one of {clothes_help()}", field="clothes",
+                            value=clothes)
         return CLOTHES[clothes]
     if clothing_m is not None:
         check_clothing(clothing_m)

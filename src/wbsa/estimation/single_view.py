@@ -14,9 +14,9 @@ from typing import TYPE_CHECKING, Callable
 
 import numpy as np
 
-from wbsa.errors import WbsaError
+from wbsa.errors import WbsaError, Worded, worded
 from wbsa.estimation.clothes import UNSTATED, Clothes, widened
-from wbsa.estimation.flags import FLAGS
+from wbsa.estimation.flags import CLOTHES_UNSTATED, FLAGS
 from wbsa.estimation.methods.base import Prediction, Request, Subject
 from wbsa.estimation.methods.dispatch import predictors_for
 from wbsa.estimation.methods.view import ViewEstimate, view_flags
@@ -167,42 +167,32 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
              depth_scale: float | None = None, segment: SegmentSettings | None = SegmentSettings(),
              body_fit: BodyFitSettings | None = None, progress: Callable[[str, int, int], None] | None = None,
              clothing: str | None = None) -> Estimate:
-    """Estimate WBSA from one depth image of a standing person.
-
-    The arguments are checked once, as an :class:`~wbsa.estimation.request.EstimateRequest` (the command line
-    and the server build theirs the same way), then :func:`estimate_request` runs it.
+    """Estimate WBSA from one depth image of a standing person (the arguments checked once, as an
+    :class:`~wbsa.estimation.request.EstimateRequest`, which :func:`estimate_request` runs).
 
     Parameters
     ----------
     depth : (h, w) float array (metres, 0 = no return) or path
         A path is read with :func:`wbsa.core.read_depth` (16-bit PNG, .npy, .tiff, .exr).
     camera : str, path, wbsa.camera.Intrinsics or wbsa.camera.CameraRecord
-        A preset name (``kinect-v2``, ``realsense-d435``, ...), an Open3D intrinsics JSON (a camera whose
-        technology is unknown: Kinect v1's depth noise is assumed), or ``auto``: the preset of the image's size
-        (:func:`wbsa.camera.presets.camera_for_image`), flagged ``camera_assumed``.
+        A preset name (``kinect-v2``, ...), an Open3D intrinsics JSON (its technology unknown: Kinect v1's depth
+        noise is assumed), or ``auto``: the preset of the image's size, flagged ``camera_assumed``.
     model : EstimatorModel, path or None
-        None: the model shipped with wbsa (:func:`wbsa.estimation.methods.regression.default_model.default_model`). A path: an
-        estimator model file (``.npz``, e.g. from ``wbsa train``) or a ``wbsa fit`` model file (``.json``).
+        None: the model shipped with wbsa. A path: an estimator model file (``.npz``, e.g. from ``wbsa train``)
+        or a ``wbsa fit`` model file (``.json``).
     method : {'regression', 'body-fit', 'both'}
-        The estimation route (:mod:`wbsa.estimation.methods`): the regression on the image's measures (the
-        default), the whole body fitted to the view (seconds, not milliseconds; a stated layer of clothes is taken
-        off the fitted body as an offset), or both side by
-        side (the regression's number leads; ``routes`` holds both).
+        The route (:mod:`wbsa.estimation.methods`): the regression on the image's measures, the whole body fitted
+        to the view (seconds), or both (the regression's number leads; ``routes`` holds both).
     azimuth_deg, elevation_deg : float, optional
         A stated view; it is used for the prediction and checked against the estimated one.
     clothes : str, optional
-        The clothes by name (:data:`wbsa.estimation.clothes.CLOTHES`: ``underwear``, ``thin-gown``, ``light``,
-        ``street``): a layer with its own uncertainty, which widens the interval. The camera sees the clothes'
-        outside, which encloses more area than the skin (a 1 cm layer read +8.6 % when not stated).
+        The clothes by name (:data:`wbsa.estimation.clothes.CLOTHES`): a layer with its own uncertainty, which
+        widens the interval. The camera sees the clothes' outside (a 1 cm layer not stated reads +8.6 %).
     clothing_m : float, optional
-        Or the clothes as an explicit thickness over the trunk, upper arms, legs and feet (m): how far their
-        outside stands off the skin, on average (0: none or tight-fitting); the default model was trained on
-        layers of 0–1.5 cm. Neither given: taken as 0, ``clothing_stated`` false and flagged
-        ``clothes_unstated``.
+        Or an explicit layer (m, 0–0.05: :data:`wbsa.estimation.limits.LIMITS`) over the trunk, upper arms, legs
+        and feet. Neither given: taken as 0, flagged ``clothes_unstated``.
     stature_m : float, optional
-        The subject's stature (m), stated. A subject whose feet are not seen (its lowest returns end at the
-        frame's bottom or over a band without returns, or stand over a seen floor) is refused
-        (``feet_not_seen``) unless it is given; then it takes the measured stature's place, flagged.
+        The stature (m), stated: needed, and used in place of the measured one, where the feet are not seen.
     level : float
         Coverage of the prediction interval, in (0, 1).
     depth_scale : float, optional
@@ -212,10 +202,8 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     body_fit : BodyFitSettings or None
         With ``method="body-fit"`` or ``"both"``: how the body is fitted (None: the defaults).
     progress : callable, optional
-        Called as ``progress(stage, done, total)`` as the work goes on: ``("subject", 0, 1)`` before the subject
-        is found and measured, then for each route ``(route, 0, 1)`` as it starts (``regression``, ``body-fit``),
-        the body fit also ``("body-fit", step, steps)`` after each of its steps (a fit that settles stops
-        early). For a page or a log; the estimate is the same with or without it.
+        ``progress(stage, done, total)``: ``("subject", 0, 1)``, then ``(route, 0, 1)`` as each route starts, the
+        body fit also ``("body-fit", step, steps)``. The estimate is the same with or without it.
     clothing : str, optional
         The old name of ``clothes`` (deprecated: a :class:`DeprecationWarning`).
 
@@ -226,10 +214,8 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     Raises
     ------
     WbsaError
-        Unreadable input, an image that is not the camera's size, no or several people without a pick,
-        a height that is not human (wrong depth scale), a broken model, an unknown method, unknown clothes or
-        a stated layer that is not 0–0.05 m (or one stated to a ``wbsa fit`` model), a stated stature that is
-        not a human height, or feet not seen without a stated stature.
+        Unreadable input, an image not of the camera's size, no or several people without a pick, a height that
+        is not human, a broken model, or an argument out of its range (one line naming it).
     """
     request = EstimateRequest.build(camera, method, azimuth_deg=azimuth_deg, elevation_deg=elevation_deg,
                                     clothes=_clothes_named(clothes, clothing), clothing_m=clothing_m,
@@ -294,7 +280,7 @@ def _servable(predictors: list, request: Request) -> tuple[list, dict[str, str]]
         except WbsaError as exc:
             if k == 0:
                 raise
-            flags["body_fit_failed"] = str(exc)  # both: the second route cannot serve this request
+            flags["body_fit_failed"] = worded(exc)  # both: the second route cannot serve this request
             out[k] = None
     return out, flags
 
@@ -332,13 +318,17 @@ def measure(depth_m: np.ndarray, mixed: np.ndarray, request: EstimateRequest) ->
         seg = segment_subject(depth_m, camera.intrinsics, request.segment, sensor=request.sensor)
         mask, floor = seg.mask, seg.floor
         if seg.others:
-            flags["several_people"] = (f"picked {seg.subject.describe()} ({request.segment.pick}); others: "
-                                       + "; ".join(c.describe() for c in seg.others))
+            pick = request.segment.pick
+            flags["several_people"] = Worded(
+                f"picked {seg.subject.describe()} ({pick}); others: " + "; ".join(c.describe() for c in seg.others),
+                f"picked {seg.subject.describe(True)} ({pick}); others: "
+                + "; ".join(c.describe(True) for c in seg.others))
         feet = feet_unseen(seg.subject, floor)
     if feet is not None and stature_m is None:
-        raise WbsaError(f"feet not seen: {feet}; without the feet the WBSA is not measured (a cut-off adult would "
-                        "read as a child): capture the whole person, feet on the floor, or state the stature "
-                        "(--stature-cm, stature_m)")
+        why = (f"feet not seen: {feet}; without the feet the WBSA is not measured (a cut-off adult would read as a "
+               "child): capture the whole person, feet on the floor, or state the stature")
+        raise WbsaError(f"{why} (--stature-cm, stature_m)", code="feet_not_seen", field="stature_m",
+                        page=f"{why} (type the height in cm under Height)")
     m = measure_subject(depth_m, mask, camera.intrinsics, floor, mixed)
     if feet is not None:
         flags["feet_not_seen"] = (f"{feet}; the stated stature {stature_m:.2f} m is used (measured "
@@ -395,7 +385,7 @@ def run_routes(predictors: list, subject: Subject, request: Request, clothes: Cl
         try:  # both: a body fit that fails leaves the regression's answer standing, flagged
             routes[predictor.name] = predictor.predict(subject, request)
         except WbsaError as exc:
-            flags["body_fit_failed"] = str(exc)
+            flags["body_fit_failed"] = worded(exc)
     for route in (prediction, *list(routes.values())[1:]):
         if not all(np.isfinite(v) for v in (route.wbsa_m2, route.wbsa_lo_m2, route.wbsa_hi_m2)):
             raise WbsaError(f"the {route.model_name} model gave no finite estimate ({route.wbsa_m2}); check the "
@@ -422,7 +412,7 @@ def assemble(request: EstimateRequest, subject: Subject, prediction: Prediction,
     """
     flags = dict(flags)
     if not request.clothes.stated:
-        flags["clothes_unstated"] = FLAGS["clothes_unstated"]
+        flags["clothes_unstated"] = CLOTHES_UNSTATED
     flags.update(view_flags((request.azimuth_deg, request.elevation_deg), prediction.view))
     for name, text in prediction.flags.items():  # the image's own checks keep their wording
         flags.setdefault(name, text)

@@ -138,8 +138,8 @@ def routes_json(est) -> dict | None:
     The route whose number is the estimate's leads; an estimate whose number is neither route's is their
     combination (``combined``). A body fit that failed is a route with its reason (``failed``).
     """
+    from wbsa.errors import page_text
     from wbsa.server.advice import flag_rows
-    from wbsa.server.wording import page_words
 
     if not est.routes:
         return None
@@ -153,7 +153,7 @@ def routes_json(est) -> dict | None:
                      "model": route["model"], "flags": flag_rows(route["flags"]), "leads": same})
     if "body_fit_failed" in est.flags and "body-fit" not in shown:
         rows.append({"name": "body-fit", "label": ROUTE_LABELS["body-fit"], "leads": False, "flags": [],
-                     "failed": page_words(est.flags["body_fit_failed"])})
+                     "failed": page_text(est.flags["body_fit_failed"])})
     lead = next((r["name"] for r in rows if r["leads"]), "combined")
     combined = None
     if lead == "combined":

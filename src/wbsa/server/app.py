@@ -166,7 +166,6 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
     from wbsa.estimation.clothes import CLOTHES
     from wbsa.estimation.limits import limits_json
     from wbsa.server.progress import STREAM, stream_answer, wants_stream
-    from wbsa.server.wording import page_words
 
     from wbsa.estimation.methods.body_fit.settings import BodyFitSettings
     from wbsa.parallel import torch_threads
@@ -186,7 +185,7 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
     batches = BoundedStore(16, "this batch is no longer kept; upload its files again")
 
     def error(exc: UploadError) -> JSONResponse:
-        return JSONResponse({"error": page_words(str(exc))}, status_code=exc.status)
+        return JSONResponse({"error": exc.page_words()}, status_code=exc.status)
 
     async def page(request: Request) -> Response:
         return FileResponse(STATIC / "index.html", media_type="text/html")

@@ -156,7 +156,7 @@ def camera_from_upload(upload: Upload) -> dict:
     try:
         Intrinsics.from_open3d_json(source)
     except WbsaError as exc:
-        raise UploadError(f"{upload.name}: {exc}") from None
+        raise UploadError(f"{upload.name}: {exc.page_words()}") from None
     return source
 
 
@@ -185,8 +185,8 @@ def measure(upload: Upload | None, options: Options, model, root: Path, *, depth
 
     Runs in a worker thread. Every :class:`~wbsa.errors.WbsaError` becomes the answer's ``error``
     (one line, the server's paths replaced by the upload's name, in the page's words:
-    :mod:`wbsa.server.wording`; ``choose_person`` when it asks for a click on a person); once the image is read, the answer
-    keeps its depth picture, so the operator can click the person meant.
+    :meth:`~wbsa.errors.WbsaError.page_words`; ``choose_person`` when its code asks for a click on a person); once
+    the image is read, the answer keeps its depth picture, so the operator can click the person meant.
 
     Parameters
     ----------
@@ -208,7 +208,6 @@ def measure(upload: Upload | None, options: Options, model, root: Path, *, depth
     Result
     """
     from wbsa.server import answer
-    from wbsa.server.wording import choose_person, page_words
 
     def report(stage: str, done: int = 0, total: int = 1) -> None:
         if progress is not None:
@@ -229,8 +228,8 @@ def measure(upload: Upload | None, options: Options, model, root: Path, *, depth
         result.files = answer.downloads(est, folder, name)
         result.answer = answer.answer_json(est, rid, name, options, result.files)
     except WbsaError as exc:
-        message = page_words(scrub(str(exc), folder, name or "the upload"))
-        result.answer = {"id": rid, "name": name, "error": message, "choose_person": choose_person(message)}
+        message = scrub(exc.page_words(), folder, name or "the upload")
+        result.answer = {"id": rid, "name": name, "error": message, "choose_person": exc.code == "choose_person"}
     finally:
         shutil.rmtree(folder, ignore_errors=True)
     if result.depth_m is not None:

@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from wbsa.errors import WbsaError
+from wbsa.errors import WbsaError, Worded
 from wbsa.estimation.limits import HUMAN_HEIGHT_M
 
 #: The silhouette of a standing person (:func:`person_shape_flags`): the share of its bounding box
@@ -51,8 +51,11 @@ def check_image_size(depth: np.ndarray, camera) -> None:
     check_two_dimensional(depth)
     h, w = np.shape(depth)
     if (w, h) != (camera.width, camera.height):
-        raise WbsaError(f"the depth image is {w}x{h} but camera {camera.name} is {camera.width}x{camera.height}; "
-                        "give the camera that took it (--camera PRESET or an intrinsics JSON)")
+        what = f"the depth image is {w}x{h} but camera {camera.name} is {camera.width}x{camera.height}"
+        raise WbsaError(f"{what}; give the camera that took it (--camera PRESET or an intrinsics JSON)",
+                        code="camera_size", field="camera", value=camera.name,
+                        page=f"{what}; give the camera that took it (choose it under Camera, or add its intrinsics "
+                             "file)")
 
 
 def person_shape_flags(stature_m: float, width_m: float, silhouette_m2: float) -> dict[str, str]:
@@ -78,8 +81,9 @@ def person_shape_flags(stature_m: float, width_m: float, silhouette_m2: float) -
             f"{100 * PERSON_MAX_FILL:.0f} %)" if fill > PERSON_MAX_FILL else
             f"is {width_m:.2f} m wide for {stature_m:.2f} m tall (a person at least {PERSON_MIN_WIDTH_PER_STATURE:g} "
             "of the height)")
-    return {"not_a_person": f"the object {what}: a board, post or wall? the estimate is not a person's; check the "
-                            "segmentation (--mask-out) and pick the subject"}
+    said = f"the object {what}: a board, post or wall? the estimate is not a person's"
+    return {"not_a_person": Worded(f"{said}; check the segmentation (--mask-out) and pick the subject",
+                                   f"{said}; check the white outline in the depth picture and click on the person")}
 
 
 def check_height(stature_m: float) -> None:
@@ -120,8 +124,9 @@ def check_stated_stature(stature_m: float) -> float:
     """
     lo, hi = HUMAN_HEIGHT_M
     if not (is_real_number(stature_m) and math.isfinite(float(stature_m)) and lo <= float(stature_m) <= hi):
-        raise WbsaError(f"the stated stature {stature_m!r} m must be a height of {lo:g} to {hi:g} m, e.g. 1.72 "
-                        "(on the command line --stature-cm 172)")
+        said = f"the stated stature {stature_m!r} m must be a height of {lo:g} to {hi:g} m, e.g. 1.72"
+        raise WbsaError(f"{said} (on the command line --stature-cm 172)", code="out_of_range", field="stature_m",
+                        value=stature_m, page=said)
     return float(stature_m)
 
 

@@ -17,7 +17,7 @@ import numpy as np
 
 from wbsa.estimation.methods.body_fit.result import BodyFit
 from wbsa.estimation.methods.body_fit.settings import ANGLE_LIMITS_DEG, BodyFitSettings
-from wbsa.errors import WbsaError
+from wbsa.errors import WbsaError, Worded
 
 #: Phenotypes whose value at 0 or 1 flags ``outside_model_range`` (the others are not measured by the view).
 _RANGE_CHECKED = ("p_age", "p_muscle", "p_weight", "p_height", "p_proportions")
@@ -96,6 +96,26 @@ def fit_body(depth_m: np.ndarray, mask: np.ndarray, camera, floor, *, clothing_m
                     float(clothing_m), progress, sensor)
 
 
+def model_edge_detail(parameters) -> Worded | None:
+    """The ``outside_model_range`` detail of a fitted body: its phenotypes within 0.01 of 0 or 1
+    (:data:`_RANGE_CHECKED`) and its local changes beyond ±0.99, as ``p_weight = 1.00`` (the page's words:
+    ``weight at the body model's highest``); None when none is.
+
+    Parameters
+    ----------
+    parameters : pandas.Series
+        The fitted body's anny parameters by name.
+    """
+    at_edge = [(f"{k} = {parameters[k]:.2f}",
+                f"{k[2:]} at the body model's {'lowest' if parameters[k] < 0.5 else 'highest'}")
+               for k in _RANGE_CHECKED if min(parameters[k], 1.0 - parameters[k]) < 0.01]
+    at_edge += [(f"{k} = {parameters[k]:+.2f}", f"{k[2:]} at the body model's {'least' if parameters[k] < 0 else 'most'}")
+                for k in parameters.index if k.startswith("l_") and abs(parameters[k]) > 0.99]
+    if not at_edge:
+        return None
+    return Worded(", ".join(c for c, _ in at_edge), ", ".join(p for _, p in at_edge))
+
+
 def _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fit_model, meter, start,
          clothing_m, progress, sensor) -> BodyFit:
     """:func:`fit_body` on checked inputs, with anny loaded."""
@@ -152,10 +172,9 @@ def _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fi
     if edge:
         flags["posture_at_limit"] = ", ".join(edge)
     table = body["table"].iloc[0]
-    at_edge = [f"{k} = {table[k]:.2f}" for k in _RANGE_CHECKED if min(table[k], 1.0 - table[k]) < 0.01]
-    at_edge += [f"{k} = {table[k]:+.2f}" for k in table.index if k.startswith("l_") and abs(table[k]) > 0.99]
+    at_edge = model_edge_detail(table)
     if at_edge:
-        flags["outside_model_range"] = ", ".join(at_edge)
+        flags["outside_model_range"] = at_edge
     if residual > POOR_RESIDUAL_M or inliers < POOR_INLIER_SHARE:
         flags["poor_fit"] = f"residual {1000 * residual:.1f} mm, {100 * inliers:.0f} % of points within 3 cm"
     if mask[0].any() or mask[-1].any() or mask[:, 0].any() or mask[:, -1].any():

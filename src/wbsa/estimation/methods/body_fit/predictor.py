@@ -37,8 +37,10 @@ class BodyFitPredictor:
 
         calibration = load()
         if calibration is not None and abs(request.level - calibration.level) > 1e-9:
-            raise WbsaError(f"the body fit's interval is calibrated at level {calibration.level:g} only; give "
-                            f"--level {calibration.level:g} or use --method regression")
+            said = f"the body fit's interval is calibrated at level {calibration.level:g} only"
+            raise WbsaError(f"{said}; give --level {calibration.level:g} or use --method regression",
+                            code="out_of_range", field="level", value=request.level,
+                            page=f"{said}; choose the method regression")
 
     def predict(self, subject: Subject, request: Request) -> Prediction:
         """WBSA of the fitted body at rest; its flags (``not_converged`` ...) become the estimate's.

@@ -74,8 +74,16 @@ class EstimateRequest:
               stature_m: float | None = None, level: float = 0.95,
               segment: SegmentSettings | None = SegmentSettings(),
               body_fit: BodyFitSettings | None = None) -> EstimateRequest:
-        """The checked request (the parameters as for :func:`wbsa.estimate`); ``camera="auto"`` is resolved by
-        :meth:`for_image`.
+        """The checked request; ``camera="auto"`` is resolved by :meth:`for_image`.
+
+        Parameters
+        ----------
+        camera, method, azimuth_deg, elevation_deg, clothes, clothing_m, stature_m, level, segment, body_fit
+            As for :func:`wbsa.estimate` (a camera may also be a :class:`~wbsa.camera.presets.CameraRecord`).
+
+        Returns
+        -------
+        EstimateRequest
 
         Raises
         ------
@@ -132,7 +140,14 @@ class EstimateRequest:
 
     def method_request(self, progress: Callable[[str, int, int], None] | None = None) -> Request:
         """What a method is told (:class:`wbsa.estimation.methods.base.Request`): the view, the clothes' layer,
-        the level, and the body fit's progress as ``progress("body-fit", step, steps)``."""
+        the level, and the body fit's progress.
+
+        Parameters
+        ----------
+        progress : callable, optional
+            ``progress(stage, done, total)`` of :func:`wbsa.estimate`; the body fit's steps reach it as
+            ``progress("body-fit", step, steps)``.
+        """
         from wbsa.estimation.methods.base import Request
 
         return Request(self.azimuth_deg, self.elevation_deg, self.clothes.layer_m, self.level,

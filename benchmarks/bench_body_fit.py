@@ -81,6 +81,7 @@ def fit_chunk(population: pd.DataFrame, others: pd.DataFrame, first: int, seed: 
     from wbsa.errors import WbsaError
     from wbsa.estimation.methods.body_fit import fit_body
     from wbsa.estimation.subject.segment import SegmentSettings, segment_subject
+    from wbsa.sensor.technology import envelope_model
     from wbsa.estimation.methods.view import azimuth_error_deg
     from wbsa.testing.testset import RoomTestSettings, rendered, room_test_captures
 
@@ -110,8 +111,9 @@ def fit_chunk(population: pd.DataFrame, others: pd.DataFrame, first: int, seed: 
                    distance_m=cap.view.distance_m, second_person=bool(people), displaced=displace)
         t0 = time.perf_counter()
         try:
-            seg = segment_subject(depth, camera, SegmentSettings(pick=settings.pick))
-            fit = fit_body(depth, seg.mask, camera, seg.floor, settings=fit_settings, seed=index)
+            sensor = envelope_model(camera)
+            seg = segment_subject(depth, camera, SegmentSettings(pick=settings.pick), sensor=sensor)
+            fit = fit_body(depth, seg.mask, camera, seg.floor, settings=fit_settings, seed=index, sensor=sensor)
         except WbsaError as exc:
             row.update(error=str(exc), seconds=time.perf_counter() - t0)
             rows.append(row)

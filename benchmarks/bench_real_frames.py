@@ -59,7 +59,7 @@ def main() -> None:
         ("render: the same, the woman picked", depth, "kinect-v2", dict(pick=woman_px)),
         ("render: the same, no pick", depth, "kinect-v2", {}),
         ("render: the man, clothes stated `light` (0.8 ± 0.4 cm)", depth, "kinect-v2",
-         dict(pick=man_px, clothing="light")),
+         dict(pick=man_px, clothes="light")),
         ("render: the man, clothes stated as 0.8 cm exactly", depth, "kinect-v2", dict(pick=man_px, clothing_m=0.008)),
         ("render: the frame's bottom blanked from the man's knees", knees, "kinect-v2", dict(pick=man_px)),
         (f"render: the same, stature stated ({stature_m:.2f} m)", knees, "kinect-v2",
@@ -74,7 +74,7 @@ def main() -> None:
     cases += [
         ("five_people.pcd: person 5 (cut at the knees), pick (530, 250)", five, "tum", dict(pick=(530, 250))),
         ("five_people.pcd: person 5, stature stated 1.80 m", five, "tum", dict(pick=(530, 250), stature_m=1.80)),
-        ("five_people.pcd: person 1, clothes stated `street`", five, "tum", dict(pick=(86, 250), clothing="street")),
+        ("five_people.pcd: person 1, clothes stated `street`", five, "tum", dict(pick=(86, 250), clothes="street")),
         ("five_people.pcd: pick on the corridor's far end (260, 150)", five, "tum", dict(pick=(260, 150))),
         ("five_people.pcd: pick on the cabinet by the right wall (590, 400)", five, "tum", dict(pick=(590, 400))),
         ("five_people.pcd: pick on the floor between people (262, 420)", five, "tum", dict(pick=(262, 420))),

@@ -64,6 +64,7 @@ def drift_chunk(population: pd.DataFrame, seed: int, draws: int, cameras: tuple[
     from wbsa.camera.views import View
     from wbsa.estimation.methods.body_fit import fit_body
     from wbsa.estimation.subject.cloud import Plane
+    from wbsa.sensor.technology import envelope_model
     from wbsa.training.capture import Capture, CaptureSettings, fits_frame, sensor_for
     from wbsa.training.room import capture_room, compose_room
 
@@ -107,7 +108,7 @@ def drift_chunk(population: pd.DataFrame, seed: int, draws: int, cameras: tuple[
                     normal = pose.R @ np.array([0.0, 0.0, 1.0])
                     floor = Plane(normal, float(normal @ pose.T))
                     fit = fit_body(depth, mask, camera, floor, settings=fit_settings, seed=b,
-                                   start=truth_start(params[b], angles, posed, pose))
+                                   start=truth_start(params[b], angles, posed, pose), sensor=envelope_model(camera))
                     rows.append(dict(subject=b, posture=name, camera=camera_name, band=f"{band[0]:g}-{band[1]:g} m",
                                      distance_m=distance, draw=k,
                                      azimuth_deg=az, wbsa_m2=float(t["wbsa_m2"]), fit_wbsa_m2=fit.wbsa_m2,

@@ -67,9 +67,9 @@ def test_a_subject_beyond_the_working_range_is_flagged():
 
     for record in CAMERAS.values():
         lo, hi = record.working_range_m
-        assert working_range_flags((lo + hi) / 2, record.intrinsics) == {}
-        assert "beyond_working_range" in working_range_flags(hi + 0.1, record.intrinsics)
-        assert "beyond_working_range" in working_range_flags(lo - 0.05, record.intrinsics)
+        assert working_range_flags((lo + hi) / 2, record) == {}
+        assert "beyond_working_range" in working_range_flags(hi + 0.1, record)
+        assert "beyond_working_range" in working_range_flags(lo - 0.05, record)
 
 
 def test_an_unknown_preset_is_one_line_naming_them():
@@ -83,11 +83,12 @@ def test_frames_beyond_where_a_camera_tells_the_feet_from_the_floor_are_flagged(
     """The phone LiDAR's segmentation keeps the feet apart from the floor within 3 m only (bench_estimate.py,
     segmentation by camera and band): its farther frames are flagged, other cameras' are not."""
     from wbsa.camera.intrinsics import Intrinsics
-    from wbsa.camera.presets import CAMERAS
+    from wbsa.camera.presets import CAMERAS, resolve_record
     from wbsa.estimation.subject.checks import feet_flags
 
-    lidar = CAMERAS["phone-lidar"].intrinsics
+    lidar = CAMERAS["phone-lidar"]
     assert feet_flags(2.9, lidar) == {} and "step closer" in feet_flags(3.4, lidar)["feet_unsure"]
-    assert all(feet_flags(r.working_range_m[1], r.intrinsics) == {} for n, r in CAMERAS.items() if n != "phone-lidar")
-    custom = Intrinsics(256, 192, 209.2, 209.2, 124.2, 96.4, name="phone-lidar", max_range_m=9.0)
-    assert feet_flags(4.0, custom) == {}  # a user's own calibration is not the preset's record
+    assert all(feet_flags(r.working_range_m[1], r) == {} for n, r in CAMERAS.items() if n != "phone-lidar")
+    custom = resolve_record(Intrinsics(256, 192, 209.2, 209.2, 124.2, 96.4, name="phone-lidar", max_range_m=9.0))
+    assert custom.technology is None  # a user's own calibration is not the preset's record
+    assert feet_flags(4.0, custom) == {}

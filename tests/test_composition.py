@@ -78,7 +78,7 @@ def test_mass_is_the_fixed_point_of_volume_times_density():
 
 
 def test_settings_are_checked():
-    with pytest.raises(WbsaError, match="density model"):
+    with pytest.raises(WbsaError, match="model must be one of 'constant'.*got 'siri'"):
         CompositionSettings(model="siri")
     with pytest.raises(WbsaError, match="must be positive"):
         CompositionSettings(density_kg_m3=0.0)

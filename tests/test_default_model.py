@@ -46,8 +46,8 @@ def test_the_run_time_estimator_imports_no_training_code():
     """``wbsa.estimate`` with the shipped model answers without importing wbsa.training or scikit-learn."""
     code = ("import sys, numpy as np, wbsa\n"
             "from wbsa.estimation.methods.regression.default_model import default_model\n"
-            "from wbsa.estimation.methods import predictor_for\n"
-            "predictor_for('regression', None)\n"
+            "from wbsa.estimation.methods import predictors_for\n"
+            "predictors_for('regression', None)\n"
             "bad = [m for m in sys.modules if m.startswith(('wbsa.training', 'wbsa.testing', 'sklearn'))]\n"
             "print(bad)\n")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)

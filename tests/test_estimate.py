@@ -573,7 +573,7 @@ def test_camera_presets_have_the_documented_fields_of_view():
 
 
 def test_checks_errors_and_flags():
-    from wbsa.camera import preset
+    from wbsa.camera import camera_record, preset
     from wbsa.estimation.subject import checks
     from wbsa.estimation.methods.view import ViewEstimate, view_flags
 
@@ -588,7 +588,7 @@ def test_checks_errors_and_flags():
     assert "view_disagrees" in view_flags((90.0, None), est)
     assert "view_disagrees" in view_flags((None, 50.0), est)
     assert checks.range_flags({"stature_m": 2.3}, {"stature_m": (1.0, 2.0)})["out_of_training_range"].startswith("stature")
-    assert checks.working_range_flags(4.3, preset("kinect-v1"))
+    assert checks.working_range_flags(4.3, camera_record("kinect-v1"))
 
 
 def test_trees_predict_like_scikit_learn():
@@ -934,10 +934,12 @@ def test_residual_tree_settings_are_checked():
     from wbsa.training.settings import RenderSettings
     from wbsa.training.settings import TrainSettings
 
-    for bad in (dict(tree_l2=float("nan")), dict(tree_iterations=800.5), dict(tree_leaves=1), dict(tree_l2=-0.1),
-                dict(tree_bags=0), dict(tree_bags=2.5)):
+    for bad in (dict(tree_l2=float("nan")), dict(tree_leaves=1), dict(tree_l2=-0.1), dict(tree_bags=0)):
         with pytest.raises(WbsaError, match="tree_iterations .* must be an integer"):
             TrainSettings(**bad)
+    for name, value in (("tree_iterations", 800.5), ("tree_bags", 2.5)):  # the one type check, naming the field
+        with pytest.raises(WbsaError, match=f"^{name} must be an integer, got {value}$"):
+            TrainSettings(**{name: value})
     assert TrainSettings(tree_iterations=10, tree_leaves=2, tree_l2=0.0).tree_iterations == 10
     with pytest.raises(WbsaError, match="alone_share 1.5 must be a share"):
         TrainSettings(render=RenderSettings(alone_share=1.5))

@@ -35,13 +35,15 @@ def test_the_dispatch_point_picks_one_predictor_per_method():
     from wbsa.estimation.methods.body_fit.predictor import BodyFitPredictor
     from wbsa.estimation.methods.regression.predictor import RegressionPredictor
 
-    assert isinstance(predictor_for("regression"), RegressionPredictor)
-    assert isinstance(predictor_for("body-fit"), BodyFitPredictor)
+    (regression,), (body_fit,) = predictors_for("regression"), predictors_for("body-fit")
+    assert isinstance(regression, RegressionPredictor) and isinstance(body_fit, BodyFitPredictor)
     assert [p.name for p in predictors_for("both")] == ["regression", "body-fit"]
     with pytest.raises(WbsaError, match="estimation method 'fit' is unknown; use one of regression, body-fit, both"):
-        predictor_for("fit")
+        predictors_for("fit")
     with pytest.raises(WbsaError, match="the body fit uses no estimator model"):
-        predictor_for("body-fit", "model.npz")
+        predictors_for("body-fit", "model.npz")
+    with pytest.warns(DeprecationWarning, match="use predictors_for"):
+        assert isinstance(predictor_for("body-fit"), BodyFitPredictor)  # the old name, for one release
 
 
 def test_the_regression_route_reads_the_shipped_model(person_view):
@@ -103,11 +105,11 @@ def test_what_a_route_cannot_serve_is_refused_before_any_work(person_view, tmp_p
 def test_the_body_fit_reads_its_shipped_interval_and_its_level():
     """The calibration ships in wbsa/data; a level it was not calibrated at is refused in one line."""
     from wbsa.estimation.methods.body_fit.interval import load
-    from wbsa.estimation.methods import Request, predictor_for
+    from wbsa.estimation.methods import Request, predictors_for
 
     calibration = load()
     assert calibration is not None and calibration.level == 0.95 and calibration.error_lo < 0 < calibration.error_hi
-    body_fit = predictor_for("body-fit")
+    (body_fit,) = predictors_for("body-fit")
     body_fit.check_request(Request(level=0.95))
     with pytest.raises(WbsaError, match="calibrated at level 0.95 only"):
         body_fit.check_request(Request(level=0.8))

@@ -162,7 +162,7 @@ def test_bad_posture_angles_are_one_line_errors(change, message):
 
 
 def test_bad_posture_settings_name_the_field():
-    with pytest.raises(WbsaError, match="posture 'dancing' is unknown; use one of a-pose, mixed, arms-down"):
+    with pytest.raises(WbsaError, match="posture must be one of 'a-pose', 'mixed', 'arms-down'.*got 'dancing'"):
         PostureSettings("dancing")
     with pytest.raises(WbsaError, match="posture mix"):
         PostureSettings("mixed", mix=("twirl",))

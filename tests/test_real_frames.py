@@ -169,7 +169,7 @@ def test_named_clothes_widen_the_interval_and_unstated_clothes_are_flagged(side_
     depth, man, _ = side_by_side
     kw = dict(segment=SegmentSettings(pick=_pick(man)))
     light = CLOTHES["light"]
-    named = wbsa.estimate(depth, "kinect-v2", clothing="light", **kw)
+    named = wbsa.estimate(depth, "kinect-v2", clothes="light", **kw)
     explicit = wbsa.estimate(depth, "kinect-v2", clothing_m=light.layer_m, **kw)
     thicker = wbsa.estimate(depth, "kinect-v2", clothing_m=light.layer_m + light.sd_m, **kw)
     delta = explicit.wbsa_m2 - thicker.wbsa_m2
@@ -185,8 +185,8 @@ def test_named_clothes_widen_the_interval_and_unstated_clothes_are_flagged(side_
     assert "clothes not stated" in fhir_observation(unstated)["method"]["text"]
     assert "clothes stated: light clothes" in fhir_observation(named)["method"]["text"]
     assert "0.0 cm layer" in fhir_observation(zero)["method"]["text"]
-    for bad, message in ((dict(clothing="coat"), "unknown clothes 'coat'"),
-                         (dict(clothing="light", clothing_m=0.01), "not both")):
+    for bad, message in ((dict(clothes="coat"), "unknown clothes 'coat'"),
+                         (dict(clothes="light", clothing_m=0.01), "not both")):
         with pytest.raises(WbsaError, match=message):
             wbsa.estimate(depth, "kinect-v2", **bad, **kw)
 

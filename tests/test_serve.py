@@ -90,7 +90,7 @@ def _estimate(path, model, pick=None, **kw):
     import wbsa
     from wbsa.estimation import SegmentSettings
 
-    kw.setdefault("clothing", "underwear")  # what the page's tests choose
+    kw.setdefault("clothes", "underwear")  # what the page's tests choose
     return wbsa.estimate(str(path), "kinect-v2", str(model), segment=SegmentSettings(pick=pick), **kw)
 
 
@@ -136,6 +136,19 @@ def _answer(driver) -> dict:
 #: Command-line words that must not reach the page (the page says what to do on the page).
 COMMAND_LINE_WORDS = re.compile(r"--[a-z]|\bp_[a-z]+ = |\bis an? [A-Z0-9;]+ (image|TIFF)\b|choose one with pick|"
                                 r"\bpick pixel\b|PRESET")
+
+
+def _fitted_at_the_model_edge():
+    """The body fit's ``outside_model_range`` detail of a body at its model's edges."""
+    import pandas as pd
+
+    from wbsa.estimation.methods.body_fit.fit import model_edge_detail
+
+    parameters = pd.Series({"p_age": 0.0, "p_muscle": 0.5, "p_weight": 1.0, "p_height": 0.5, "p_proportions": 0.5,
+                            "l_belly": 1.0, "l_waist": 0.2})
+    detail = model_edge_detail(parameters)
+    assert str(detail) == "p_age = 0.00, p_weight = 1.00, l_belly = +1.00"
+    return detail
 
 
 def _page_text(driver) -> str:
@@ -299,7 +312,7 @@ def test_method_both_shows_each_route_which_leads_and_the_progress_of_the_fit(se
     totals = {p["total"] for p in log if p["stage"] == "body-fit" and p["total"] > 1}
     assert steps and steps == sorted(steps) and 0 < steps[-1] <= FIT_STEPS and totals == {FIT_STEPS}  # in order
     est = wbsa.estimate(str(frames["one"]["path"]), "kinect-v2", str(small_estimator_model), method="both",
-                        clothing="underwear", segment=SegmentSettings(), body_fit=_fit_settings())
+                        clothes="underwear", segment=SegmentSettings(), body_fit=_fit_settings())
     routes = browser.execute_script("""return [...document.querySelectorAll('#route-list .route')].map(b => ({
         name: b.dataset.route, leads: b.classList.contains('leads'), text: b.innerText,
         flags: [...b.querySelectorAll('li')].map(li => li.dataset.flag)}))""")
@@ -332,7 +345,7 @@ def test_the_readme_picture_is_the_shipped_default_models_answer(browser, frames
     try:
         _upload(browser, url, frames["one"]["path"], height_cm="186", mass_kg="84")
         _wait(browser, "document.body.dataset.answer && document.getElementById('viewer').dataset.triangles > 0")
-        est = wbsa.estimate(str(frames["one"]["path"]), "kinect-v2", clothing="underwear")
+        est = wbsa.estimate(str(frames["one"]["path"]), "kinect-v2", clothes="underwear")
         shown = _answer(browser)
         assert float(shown["wbsa"]) == pytest.approx(est.wbsa_m2, abs=5e-4) and shown["flagNames"] == list(est.flags)
         assert browser.execute_script("return current.model") == est.model  # the default model's name
@@ -367,7 +380,7 @@ def test_clothes_are_a_choice_the_page_requires_and_states(server, browser, fram
         stated = json.loads(r.read())
     assert stated["clothes"] == "street" and stated["clothing_stated"] is True
     assert "clothes_unstated" not in _answer(browser)["flagNames"]
-    est = wbsa.estimate(str(frames["one"]["path"]), "kinect-v2", str(small_estimator_model), clothing="street",
+    est = wbsa.estimate(str(frames["one"]["path"]), "kinect-v2", str(small_estimator_model), clothes="street",
                         segment=SegmentSettings())
     assert float(_answer(browser)["wbsa"]) == pytest.approx(est.wbsa_m2, abs=5e-4)
     assert not COMMAND_LINE_WORDS.search(_page_text(browser))
@@ -402,7 +415,7 @@ def test_intrinsics_chosen_after_the_depth_file_run_it_again(server, browser, fr
 
 def test_messages_reach_the_page_in_its_own_words(server, browser, frames, tmp_path, small_estimator_model):
     """The library's messages carry command-line words; the page shows every one of them in its own words
-    (wbsa.server.wording): real messages from the library, and an 8-bit picture dropped on the page."""
+    (wbsa.errors.page_text): real messages from the library, and an 8-bit picture dropped on the page."""
     from PIL import Image
 
     import wbsa
@@ -411,13 +424,14 @@ def test_messages_reach_the_page_in_its_own_words(server, browser, frames, tmp_p
     from wbsa.estimation.methods.base import Request
     from wbsa.estimation.methods.body_fit.predictor import BodyFitPredictor
     from wbsa.estimation.methods.view import ViewEstimate, view_used
+    from wbsa.estimation.clothes import check_clothing
     from wbsa.estimation.subject import checks
-    from wbsa.server.wording import choose_person, page_words
+    from wbsa.errors import page_text
 
-    def message(call, *args) -> str:
+    def message(call, *args) -> WbsaError:
         with pytest.raises(WbsaError) as err:
             call(*args)
-        return str(err.value)
+        return err.value
 
     grey = tmp_path / "photo.png"
     Image.fromarray(np.full((424, 512), 128, np.uint8)).save(grey)
@@ -426,17 +440,17 @@ def test_messages_reach_the_page_in_its_own_words(server, browser, frames, tmp_p
     cli = [
         message(checks.check_image_size, np.zeros((424, 512)), preset("kinect-v1")),
         message(read_depth, grey),
-        message(checks.check_clothing, 0.2),
+        message(check_clothing, 0.2),
         message(BodyFitPredictor().check_request, Request(level=0.8)),
         message(wbsa.estimate, str(frames["two"]["path"]), "kinect-v2", str(small_estimator_model)),
         view_used(ViewEstimate(131.0, 49.0, 12.0, 1.0, 0.41), None, None)[1]["uncertain_view"],
         checks.person_shape_flags(1.0, 2.0, 1.9)["not_a_person"],
-        "p_weight = 1.00, p_age = 0.00, l_belly = +1.00",  # the body fit's outside_model_range detail, as it writes it
+        _fitted_at_the_model_edge(),  # the body fit's outside_model_range detail, as it writes it
     ]
     for text in cli:
-        assert COMMAND_LINE_WORDS.search(text), text  # the library's own words: the command line's
-        assert not COMMAND_LINE_WORDS.search(page_words(text)), (text, page_words(text))
-    assert choose_person(page_words(cli[4])) and not choose_person(page_words(cli[0]))
+        assert COMMAND_LINE_WORDS.search(str(text)), text  # the library's own words: the command line's
+        assert not COMMAND_LINE_WORDS.search(page_text(text)), (str(text), page_text(text))
+    assert cli[4].code == "choose_person" and "click on the person" in page_text(cli[4]) and cli[0].code != "choose_person"
     url, _ = server
     _upload(browser, url, grey)
     _wait(browser, "!document.getElementById('error').hidden && document.body.dataset.busy === '0'")
@@ -611,7 +625,7 @@ def test_a_batch_gives_one_row_per_file_and_a_csv(server, frames, small_estimato
     assert batch["done_count"] == 3
     with urllib.request.urlopen(url + batch["csv"]) as r:
         rows = list(csv.DictReader(io.StringIO(r.read().decode())))
-    est = _estimate(frames["one"]["path"], small_estimator_model, clothing=None)  # a script that states none
+    est = _estimate(frames["one"]["path"], small_estimator_model, clothes=None)  # a script that states none
     assert [r["file"] for r in rows] == ["a.png", "b.txt", "c.png"]
     assert float(rows[0]["wbsa_m2"]) == pytest.approx(est.wbsa_m2, abs=5e-4) and rows[0]["flags"] == ";".join(est.flags)
     assert rows[1]["wbsa_m2"] == "" and "not a depth file type" in rows[1]["error"]

@@ -51,6 +51,8 @@ if TYPE_CHECKING:  # pragma: no cover - real types for IDEs and type checkers
     from wbsa.core.mesh import TriangleMesh
     from wbsa.errors import WbsaError
     from wbsa.estimation import Estimate, estimate
+    from wbsa.estimation.methods.regression.model import EstimatorModel
+    from wbsa.estimation.subject.settings import SegmentSettings
     from wbsa.estimation.methods.body_fit.settings import BodyFitSettings
     from wbsa.formulae.compute import bsa
     from wbsa.sensor.settings import SensorSettings
@@ -66,6 +68,8 @@ _EXPORTS = {
     "SimulatedView": "wbsa.simulate.view",
     "estimate": "wbsa.estimation",
     "Estimate": "wbsa.estimation",
+    "EstimatorModel": "wbsa.estimation.methods.regression.model",
+    "SegmentSettings": "wbsa.estimation.subject.settings",
     "BodyFitSettings": "wbsa.estimation.methods.body_fit.settings",
     "bsa": "wbsa.formulae.compute",
     "Study": "wbsa.study.study",

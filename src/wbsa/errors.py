@@ -1,11 +1,27 @@
-"""The one exception type the CLI turns into a one-line message and exit status 2."""
+"""The one exception type the CLI turns into a one-line message and exit status 2, and the page into its words."""
+
+from __future__ import annotations
 
 
 class WbsaError(ValueError):
     """A user-facing error: bad input, bad settings, unreadable files.
 
-    The message is one line that names the problem and, where possible, the fix.
-    The CLI prints ``error: <message>`` and exits with status 2; it never shows a traceback.
+    The message is one line that names the problem and, where possible, the fix, in the command line's and the
+    library's words (``--stature-cm``, ``stature_m``). The CLI prints ``error: <message>`` and exits with status 2;
+    it never shows a traceback. The page (``wbsa serve``) shows :meth:`page_words`: the same line in its own words
+    where the fix names a command-line option.
+
+    Parameters
+    ----------
+    message : str
+        The one line.
+    code : str
+        What kind of problem it is, for code that acts on it (``choose_person``: a click on a person in the
+        depth picture answers it; ``settings``: a settings field); empty when nothing acts on it.
+    field, value : str and object, optional
+        The argument or settings field at fault and its value.
+    page : str, optional
+        The line in the page's words (None: the message says it as the page would).
     A subclass of :class:`ValueError`, so code that handles bad values generically catches it::
 
         >>> from wbsa.formulae import bsa
@@ -20,6 +36,63 @@ class WbsaError(ValueError):
     Likewise an argparse ``type=`` function must raise ``argparse.ArgumentTypeError``, not this class:
     argparse replaces the message of any ``ValueError`` by "invalid ... value".
     """
+
+    def __init__(self, message: str = "", *, code: str = "", field: str | None = None, value: object = None,
+                 page: str | None = None) -> None:
+        super().__init__(message)
+        self.code = code
+        self.field = field
+        self.value = value
+        self.page = page
+
+    def page_words(self) -> str:
+        """The line the page shows: :attr:`page`, else the message."""
+        return str(self) if self.page is None else self.page
+
+
+class Worded(str):
+    """A flag's detail: the text itself in the command line's words, :attr:`page` in the page's.
+
+    It is a ``str`` (JSON, the terminal and every comparison see the command line's text); the page reads
+    :attr:`page` through :func:`page_text`.
+
+    >>> detail = Worded("give --azimuth if you know it", "type the azimuth if you know it")
+    >>> detail, page_text(detail)
+    ('give --azimuth if you know it', 'type the azimuth if you know it')
+    """
+
+    page: str
+
+    def __new__(cls, text: str, page: str) -> Worded:
+        obj = super().__new__(cls, text)
+        obj.page = page
+        return obj
+
+    def __reduce__(self):
+        return Worded, (str(self), self.page)
+
+
+def page_text(message: object) -> str:
+    """The page's words of an error or a flag's detail (:meth:`WbsaError.page_words`, :attr:`Worded.page`), or
+    its text where it has none of its own.
+
+    Parameters
+    ----------
+    message : WbsaError, Worded or str
+    """
+    if isinstance(message, WbsaError):
+        return message.page_words()
+    return message.page if isinstance(message, Worded) else str(message)
+
+
+def worded(exc: WbsaError) -> str:
+    """An error's message as a flag's detail that keeps its page words (:class:`Worded`).
+
+    Parameters
+    ----------
+    exc : WbsaError
+    """
+    return Worded(str(exc), exc.page_words()) if exc.page is not None else str(exc)
 
 
 class SettingsError(WbsaError):
@@ -38,7 +111,7 @@ class SettingsError(WbsaError):
     """
 
     def __init__(self, field: str, problem: str) -> None:
-        super().__init__(f"{field} {problem}")
+        super().__init__(f"{field} {problem}", code="settings", field=field)
         self.field = field
         self.problem = problem
 

@@ -156,6 +156,30 @@ def keep_large_allocations() -> None:
 
 
 @contextmanager
+def torch_threads(n: int | None) -> Iterator[None]:
+    """``n`` torch intra-op threads inside the block (None: as the process has it), restored after.
+
+    torch's thread count is the process's, not the thread's: only code that owns the process (a command, a
+    worker process) may change it. The server sets it once at its start and gives its fits ``None``.
+
+    Parameters
+    ----------
+    n : int or None
+    """
+    import torch
+
+    if n is None:
+        yield
+        return
+    before = torch.get_num_threads()
+    torch.set_num_threads(n)
+    try:
+        yield
+    finally:
+        torch.set_num_threads(before)
+
+
+@contextmanager
 def single_threaded_math() -> Iterator[None]:
     """One torch thread and one BLAS thread inside the block, as in a dask worker.
 
@@ -163,16 +187,10 @@ def single_threaded_math() -> Iterator[None]:
     bit of a vertex or an area would depend on whether a chunk ran in a worker (one thread each, dask's
     default) or in this process. Every chunk of work (population, scan) runs inside this block.
     """
-    import torch
     from threadpoolctl import threadpool_limits
 
-    before = torch.get_num_threads()
-    torch.set_num_threads(1)
-    try:
-        with threadpool_limits(limits=1, user_api="blas"):
-            yield
-    finally:
-        torch.set_num_threads(before)
+    with torch_threads(1), threadpool_limits(limits=1, user_api="blas"):
+        yield
 
 
 #: Subjects per scan chunk by default (one Parquet part, one dask task, the unit of resuming).

@@ -164,17 +164,28 @@ def type_name(tp: Any) -> str:
         if len(args) == 2 and args[1] is Ellipsis:
             return f"a list of {type_name(args[0])}"
         return f"a list of {len(args)} values ({', '.join(type_name(a) for a in args)})"
-    return {bool: "true or false", int: "an integer", float: "a number", str: "a string"}.get(tp, str(tp))
+    names = {bool: "true or false", int: "an integer", float: "a number", str: "a string"}
+    return names.get(tp, f"a {tp.__name__}" if isinstance(tp, type) else str(tp))
 
 
 def _coerce(value: Any, tp: Any) -> Any:
     """``value`` (from TOML) as type ``tp``; raises :class:`_TypeMismatch` with 'must be ...'."""
     origin = get_origin(tp)
+    bad = _TypeMismatch(f"must be {type_name(tp)}, got {value!r}")
     if origin in (Union, types.UnionType):
         args = [a for a in get_args(tp) if a is not type(None)]
         if len(args) == 1:
             return _coerce(value, args[0])
-    bad = _TypeMismatch(f"must be {type_name(tp)}, got {value!r}")
+        for arg in args:  # the first of the choices that takes it
+            try:
+                return _coerce(value, arg)
+            except _TypeMismatch:
+                pass
+        raise bad
+    if isinstance(tp, type) and dataclasses.is_dataclass(tp):  # a record given whole (a camera's, from Python)
+        if not isinstance(value, tp):
+            raise bad
+        return value
     if origin is Literal:
         if value not in get_args(tp):
             raise bad

@@ -30,6 +30,7 @@ from wbsa.analysis.formulae_comparison import formula_labels, formula_values
 from wbsa.analysis.groups import CLAIM_GROUPS, GROUP_NAMES, GroupSpec, assign_groups, check_group_names
 from wbsa.analysis.hw_law import hw_law_fit, hw_law_oof
 from wbsa.errors import WbsaError
+from wbsa.settings_io import check_types
 
 #: Comparator key and label of the refitted height/weight law.
 HW_KEY = "hw_refit"
@@ -88,6 +89,7 @@ class ClaimSettings:
     min_subjects: int = 10
 
     def __post_init__(self) -> None:
+        check_types(self)
         if int(self.resamples) < 200:
             raise WbsaError(f"resamples = {self.resamples} is too few for a 95 % interval; use 200 or more (e.g. 2000)")
         if not 0.5 < float(self.level) < 1.0:

@@ -39,7 +39,8 @@ import numpy as np
 
 from wbsa.bodies.settings import DEFAULT_DENSITY_KG_M3 as ANNY_DENSITY_KG_M3
 from wbsa.errors import WbsaError
-from wbsa.typing import DENSITY_MODELS, DensityModel
+from wbsa.typing import DensityModel
+from wbsa.settings_io import check_types
 
 #: Columns a composition model adds to a population table (absent with ``constant``): the fat
 #: fraction, the density, and the subject's standard-normal residual deviate (drawn from its stream,
@@ -91,8 +92,7 @@ class CompositionSettings:
     residual_scale: float = 1.0
 
     def __post_init__(self) -> None:
-        if self.model not in DENSITY_MODELS:
-            raise WbsaError(f"density model {self.model!r} is unknown; use one of {', '.join(DENSITY_MODELS)}")
+        check_types(self)
         if not (np.isfinite(self.density_kg_m3) and self.density_kg_m3 > 0):
             raise WbsaError(f"density {self.density_kg_m3} kg/m³ must be positive (human tissue is ~950–1100)")
         if not (np.isfinite(self.residual_scale) and self.residual_scale >= 0):

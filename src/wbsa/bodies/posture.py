@@ -46,7 +46,7 @@ passing through it), and legs that sink into each other are spread the same way.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Callable, get_args
+from typing import Callable
 
 import numpy as np
 import pandas as pd
@@ -54,6 +54,7 @@ import pandas as pd
 from wbsa.bodies.posing import JOINT_MOTIONS, SIDES, SinkTest, pose_vertices, segment_transforms
 from wbsa.typing import PostureChoice
 from wbsa.errors import WbsaError
+from wbsa.settings_io import check_types
 
 #: Angle columns of a postured population table, degrees, changes from the rest A-pose.
 ANGLE_COLUMNS = tuple(f"{m.split('_')[0]}_{s}_{m.split('_')[1]}_deg" for s in SIDES for m in JOINT_MOTIONS)
@@ -131,10 +132,8 @@ class PostureSettings:
     mix: tuple[str, ...] = tuple(POSTURES)
 
     def __post_init__(self) -> None:
-        choices = get_args(PostureChoice)
-        if self.posture not in choices:
-            raise WbsaError(f"posture {self.posture!r} is unknown; use one of {', '.join(choices)}")
-        if not isinstance(self.seed, (int, np.integer)) or self.seed < 0:
+        check_types(self)
+        if self.seed < 0:
             raise WbsaError(f"posture seed must be an integer >= 0, got {self.seed!r}")
         unknown = [name for name in self.mix if name not in POSTURES]
         if unknown or not self.mix:

@@ -18,6 +18,7 @@ import pandas as pd
 from wbsa.errors import WbsaError
 from wbsa.bodies.age import param_to_years, years_to_param
 from wbsa.bodies.body_model import LOCAL_CHANGE_COLUMNS
+from wbsa.settings_io import check_types
 
 Shape = Literal["paper", "varied"]
 #: The fat depot each local change follows in the varied shape (abdominal or gluteal).
@@ -103,10 +104,9 @@ class RandomPopulationSettings:
                    height=(0.0, 1.0), proportions=(0.0, 1.0), cupsize=(0.0, 1.0), shape="varied")
 
     def __post_init__(self) -> None:
-        if not isinstance(self.n, (int, np.integer)) or self.n <= 0:
+        check_types(self)
+        if self.n <= 0:
             raise WbsaError(f"population size n = {self.n} must be a positive integer; e.g. 100")
-        if self.age_sampling not in ("parameter", "years"):
-            raise WbsaError(f"age_sampling {self.age_sampling!r} is unknown; use parameter or years")
         lo, hi = self.age_years
         if not 0 <= lo <= hi <= 110:
             raise WbsaError(f"age range {lo}–{hi} years is invalid; anny covers 0–110 years")
@@ -115,8 +115,6 @@ class RandomPopulationSettings:
             lo, hi = getattr(self, name)
             if not 0.0 <= lo <= hi <= 1.0:
                 raise WbsaError(f"{name} range ({lo}, {hi}) must lie within [0, 1] with low ≤ high")
-        if self.shape not in ("paper", "varied"):
-            raise WbsaError(f"shape {self.shape!r} is unknown; use paper or varied")
         if not 0.0 <= self.heavy_fraction <= 1.0:
             raise WbsaError(f"heavy_fraction = {self.heavy_fraction} must be a fraction in [0, 1]")
         for name in ("local_change_amplitude", "child_local_change_amplitude", "local_change_shared"):

@@ -32,7 +32,9 @@ from wbsa.errors import WbsaError
 from wbsa.bodies.age import years_to_param
 from wbsa.bodies.anthropometry import DEFAULT_DENSITY_KG_M3
 from wbsa.bodies.composition import COMPOSITION_COLUMNS, CompositionSettings
-from wbsa.bodies.survey_match import MatchSettings, torch_threads
+from wbsa.bodies.survey_match import MatchSettings
+from wbsa.parallel import torch_threads
+from wbsa.settings_io import check_types
 
 #: Columns a survey population has beyond the random population's.
 SURVEY_COLUMNS = (
@@ -95,6 +97,7 @@ class SurveyPopulationSettings:
     girth_rescue: bool | None = None
 
     def __post_init__(self) -> None:
+        check_types(self)
         for name in ("weight_spread", "muscle_spread"):
             if not 0.0 <= getattr(self, name) <= 1.0:
                 raise WbsaError(f"{name} = {getattr(self, name)} must lie in [0, 1]")

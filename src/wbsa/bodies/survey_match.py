@@ -35,9 +35,7 @@ who else is in the batch (up to floating-point rounding of the batched products)
 
 from __future__ import annotations
 
-from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
-from typing import Iterator
 
 import numpy as np
 import pandas as pd
@@ -47,7 +45,9 @@ from wbsa.bodies.body_model import ALL_LOCAL_CHANGE_COLUMNS, BODY_PARAMETER_COLU
 from wbsa.bodies.survey_measures import TorchMeasurer, fit_measures
 from wbsa.typing import SurveyMeasures
 from wbsa.bodies.survey_start import StartGrid, StartTable
+from wbsa.parallel import torch_threads
 from wbsa.progress import progress
+from wbsa.settings_io import check_types
 
 #: Target columns :func:`match_bodies` reads (NaN waist, hip or limb measure = not measured), in the order
 #: of :data:`~wbsa.bodies.survey_measures.FIT_MEASURES`; the last three only with seven measures.
@@ -144,10 +144,7 @@ class MatchSettings:
     threads: int | None = 1
 
     def __post_init__(self) -> None:
-        from wbsa.typing import SURVEY_MEASURES
-
-        if self.measures not in SURVEY_MEASURES:
-            raise WbsaError(f"match measures {self.measures!r} must be one of {', '.join(SURVEY_MEASURES)}")
+        check_types(self)
         lo, hi = self.bounds
         if not 0.0 <= lo < hi <= 1.0:
             raise WbsaError(f"match bounds {self.bounds} must satisfy 0 <= low < high <= 1")
@@ -247,20 +244,6 @@ def match_bodies(targets: pd.DataFrame, measurer: TorchMeasurer, settings: Match
     out["fit_iterations"] = iters
     out["fit_converged"] = done
     return out
-
-
-@contextmanager
-def torch_threads(n: int | None) -> Iterator[None]:
-    """Run the body with ``n`` torch intra-op threads (None: unchanged), then restore."""
-    import torch
-
-    previous = torch.get_num_threads()
-    if n is not None:
-        torch.set_num_threads(n)
-    try:
-        yield
-    finally:
-        torch.set_num_threads(previous)
 
 
 # -- the fit ---------------------------------------------------------------------------------

@@ -54,7 +54,9 @@ class StartGrid:
 
     def __post_init__(self) -> None:
         from wbsa.errors import WbsaError
+        from wbsa.settings_io import check_types
 
+        check_types(self)
         if len(self.age_nodes_years) < 2 or np.any(np.diff(self.age_nodes_years) <= 0):
             raise WbsaError("start grid age nodes must be at least two increasing ages")
         if 0.5 not in self.heights or np.any(np.diff(self.heights) <= 0):

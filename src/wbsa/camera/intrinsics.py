@@ -164,7 +164,9 @@ class Intrinsics:
             where = str(path)
             if not path.is_file():
                 raise WbsaError(f"camera file {path} does not exist; give a camera preset name (wbsa estimate "
-                                f"--help lists them) or an Open3D intrinsics JSON file")
+                                f"--help lists them) or an Open3D intrinsics JSON file", field="camera",
+                                page=f"camera file {path} does not exist; choose a camera under Camera or add its "
+                                     "intrinsics file")
             try:
                 source = json.loads(path.read_text())
             except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:

@@ -37,7 +37,8 @@ class CameraRecord:
     intrinsics : Intrinsics
         Image size, focal lengths, principal point (pixels) and the nominal working range
         (``min_range_m``, ``max_range_m``).
-    technology : {'structured-light', 'time-of-flight', 'active-stereo', 'lidar'}
+    technology : {'structured-light', 'time-of-flight', 'active-stereo', 'lidar'} or None
+        None: unknown (a camera of the user's own calibration, :func:`own_camera`).
     disparity : (float, float) or None
         Baseline (m) and disparity step (pixels) of a structured-light or stereo camera, whose depth is
         quantised in disparity; None for time of flight and LiDAR.
@@ -55,7 +56,7 @@ class CameraRecord:
     """
 
     intrinsics: Intrinsics
-    technology: DepthTechnology
+    technology: DepthTechnology | None
     disparity: tuple[float, float] | None
     trained: bool
     note: str
@@ -123,6 +124,27 @@ AUTO_CAMERA = "auto"
 TRAINED_CAMERAS: tuple[str, ...] = tuple(name for name, r in CAMERAS.items() if r.trained)
 
 
+def own_camera(intrinsics: Intrinsics) -> CameraRecord:
+    """The record of a camera of the user's own calibration: its intrinsics, its technology unknown.
+
+    Parameters
+    ----------
+    intrinsics : Intrinsics
+    """
+    return CameraRecord(intrinsics, None, None, False, "own calibration")
+
+
+def record_of(intrinsics: Intrinsics) -> CameraRecord:
+    """The preset record whose intrinsics ``intrinsics`` is (name and numbers), else :func:`own_camera`.
+
+    Parameters
+    ----------
+    intrinsics : Intrinsics
+    """
+    record = CAMERAS.get(getattr(intrinsics, "name", None))
+    return record if record is not None and record.intrinsics == intrinsics else own_camera(intrinsics)
+
+
 def camera_record(name: str) -> CameraRecord:
     """The record of a preset; a one-line :class:`WbsaError` naming the presets otherwise.
 
@@ -162,6 +184,17 @@ def preset(name: PresetName) -> Intrinsics:
 
 
 def camera_for_image(depth_shape: tuple[int, int]) -> Intrinsics:
+    """The intrinsics of :func:`record_for_image`.
+
+    Parameters
+    ----------
+    depth_shape : (int, int)
+        The depth image's (h, w).
+    """
+    return record_for_image(depth_shape).intrinsics
+
+
+def record_for_image(depth_shape: tuple[int, int]) -> CameraRecord:
     """The one preset told by its image size (:attr:`CameraRecord.by_image_size`) whose image is ``depth_shape``.
 
     Parameters
@@ -179,32 +212,52 @@ def camera_for_image(depth_shape: tuple[int, int]) -> Intrinsics:
              if r.by_image_size and (r.intrinsics.width, r.intrinsics.height) == (w, h)]
     if len(found) != 1:
         have = ", ".join(found) if found else "none of the presets"
-        raise WbsaError(f"a {w}x{h} depth image fits {have}; give --camera PRESET or an intrinsics JSON")
-    return CAMERAS[found[0]].intrinsics
+        raise WbsaError(f"a {w}x{h} depth image fits {have}; give --camera PRESET or an intrinsics JSON",
+                        code="camera_size", field="camera", value="auto",
+                        page=f"a {w}x{h} depth image fits {have}; choose the camera under Camera, or add its "
+                             "intrinsics file")
+    return CAMERAS[found[0]]
 
 
 def resolve_camera(spec: str | os.PathLike | Intrinsics, depth_shape: tuple[int, int] | None = None) -> Intrinsics:
-    """A preset name, the path of an Open3D intrinsics JSON file, or an Open3D ``PinholeCameraIntrinsic`` object,
-    as intrinsics; ``auto``: the preset of the image's size (:func:`camera_for_image` of ``depth_shape``).
+    """The intrinsics of :func:`resolve_record`.
 
     Parameters
     ----------
-    spec : str, path, Intrinsics or open3d.camera.PinholeCameraIntrinsic
+    spec : str, path, Intrinsics, CameraRecord or open3d.camera.PinholeCameraIntrinsic
     depth_shape : (int, int), optional
         The depth image's (h, w), for ``auto``.
     """
+    return resolve_record(spec, depth_shape).intrinsics
+
+
+def resolve_record(spec, depth_shape: tuple[int, int] | None = None) -> CameraRecord:
+    """A preset name, the path of an Open3D intrinsics JSON file, an Open3D ``PinholeCameraIntrinsic`` object,
+    intrinsics or a record, as the camera's record (a preset's, or :func:`own_camera` for intrinsics that are no
+    preset's: :func:`record_of`); ``auto``: the preset of the image's size (:func:`record_for_image` of
+    ``depth_shape``).
+
+    Parameters
+    ----------
+    spec : str, path, Intrinsics, CameraRecord or open3d.camera.PinholeCameraIntrinsic
+    depth_shape : (int, int), optional
+        The depth image's (h, w), for ``auto``.
+    """
+    if isinstance(spec, CameraRecord):
+        return spec
     if isinstance(spec, str) and spec == AUTO_CAMERA:
         if depth_shape is None:
             raise WbsaError("camera auto is found from the depth image's size; give the image, or a preset")
-        return camera_for_image(depth_shape)
+        return record_for_image(depth_shape)
     if isinstance(spec, Intrinsics):
-        return spec
+        return record_of(spec)
     if hasattr(spec, "intrinsic_matrix") and hasattr(spec, "width"):  # open3d.camera.PinholeCameraIntrinsic
-        return Intrinsics.from_open3d_json({"width": spec.width, "height": spec.height,
-                                            "intrinsic_matrix": np.asarray(spec.intrinsic_matrix).T.ravel().tolist()})
+        return record_of(Intrinsics.from_open3d_json({
+            "width": spec.width, "height": spec.height,
+            "intrinsic_matrix": np.asarray(spec.intrinsic_matrix).T.ravel().tolist()}))
     text = str(spec)
     if text in CAMERAS:
-        return CAMERAS[text].intrinsics
+        return CAMERAS[text]
     if text.lower().endswith(".json") or os.sep in text or Path(text).exists():
-        return Intrinsics.from_open3d_json(text)
-    return preset(text)  # raises the "unknown preset" message
+        return record_of(Intrinsics.from_open3d_json(text))
+    return camera_record(text)  # raises the "unknown preset" message

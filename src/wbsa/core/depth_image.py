@@ -146,7 +146,9 @@ def read_depth_png(path: str | os.PathLike, *, depth_scale: float = MM_PER_M) ->
         raise WbsaError(f"{path} is not a readable image ({type(exc).__name__}); give a 16-bit depth PNG") from None
     if mode not in ("I;16", "I;16B", "I;16L", "I") or units.ndim != 2:
         raise WbsaError(f"{path} is a {mode} image, not a single-channel 16-bit depth image; "
-                        "save depth as 16-bit PNG in millimetres")
+                        "save depth as 16-bit PNG in millimetres", code="not_depth", field="depth",
+                        page=f"{path} {_picture_words(mode)}; export the depth frame from the camera's software as a "
+                             "16-bit PNG in millimetres")
     if units.min(initial=0) < 0 or units.max(initial=0) > _UINT16_MAX:
         raise WbsaError(f"{path} holds values outside the 16-bit range; it is not a depth PNG")
     return png_mm_to_depth(units.astype(np.uint16), depth_scale=depth_scale)
@@ -154,6 +156,16 @@ def read_depth_png(path: str | os.PathLike, *, depth_scale: float = MM_PER_M) ->
 
 #: Depth file types :func:`read_depth` reads.
 DEPTH_SUFFIXES = (".png", ".npy", ".tif", ".tiff", ".exr")
+
+
+#: Image modes of ordinary pictures (PIL's), in the page's words: a grey or colour picture, a colour one.
+_PICTURE_MODES = ((("L", "LA", "P", "PA", "1"), "is an ordinary grey or colour picture, not a depth image"),
+                  (("RGB", "RGBA", "RGBX", "CMYK", "YCbCr", "HSV", "LAB"), "is a colour picture, not a depth image"))
+
+
+def _picture_words(mode: str) -> str:
+    """What an image of PIL mode ``mode`` is, in the page's words (``is a colour picture, not a depth image``)."""
+    return next((words for modes, words in _PICTURE_MODES if mode in modes), "is not a depth image")
 
 
 def check_depth_path(path: Path) -> None:
@@ -327,7 +339,9 @@ def _read_tiff(path: Path) -> np.ndarray:
         with _open_image(path) as img:
             if img.mode not in ("F", "I", "I;16", "I;16B", "I;16L"):
                 raise WbsaError(f"{path} is a {img.mode} TIFF, not single-channel depth; save 32-bit float metres "
-                                "or 16-bit millimetres")
+                                "or 16-bit millimetres", code="not_depth", field="depth",
+                                page=f"{path} is a TIFF picture, not a depth image; save 32-bit float metres or "
+                                     "16-bit millimetres")
             return np.asarray(img)
     except (UnidentifiedImageError, OSError) as exc:
         raise WbsaError(f"{path} is not a readable TIFF ({type(exc).__name__}); save depth as 32-bit float "

@@ -2,9 +2,11 @@
 
 ``subject``      image → measured subject: mixed pixels, segmentation, measures, the input checks
                  (:func:`segment_subject`, :func:`measure_subject`)
-``methods``      the method slot: :class:`Predictor` (``methods.base``), one dispatch point (:func:`predictor_for`),
+``methods``      the method slot: :class:`Predictor` (``methods.base``), one dispatch point (``predictors_for``),
                  the methods ``regression`` (the estimator model, the shipped default model) and ``body_fit``
-``single_view``  :func:`estimate`, the entry point (``wbsa.estimate`` calls it)
+``request``      :class:`EstimateRequest`: what was asked, checked once (the camera's record, clothes, stature, ...)
+``single_view``  :func:`estimate`, the entry point (``wbsa.estimate`` calls it): request → subject → routes → answer
+``limits``       the one table of limits (human height, clothing thickness, depth range)
 ``flags``        every flag: its meaning, the page's advice, the routes that raise it
 ``clothes``      the clothes a user states: the table of named layers and their uncertainty
 ``fhir``         the FHIR R4 Observation
@@ -21,6 +23,9 @@ from wbsa.lazy import lazy_exports
 _EXPORTS = {
     "Estimate": "wbsa.estimation.single_view",
     "estimate": "wbsa.estimation.single_view",
+    "estimate_request": "wbsa.estimation.single_view",
+    "EstimateRequest": "wbsa.estimation.request",
+    "LIMITS": "wbsa.estimation.limits",
     "repair_mixed_pixels": "wbsa.estimation.subject.mixed_pixels",
     "SegmentSettings": "wbsa.estimation.subject.settings",
     "Segmentation": "wbsa.estimation.subject.segment",

@@ -2,12 +2,13 @@
 
 The camera sees the outside of the clothes, which encloses more area than the skin; nothing in a depth
 image tells cloth from skin, so the clothes are stated, never assumed. :data:`CLOTHES` is the one table of
-the layers a user can name (``--clothes NAME``, ``clothing="NAME"``): how far their outside stands off the
+the layers a user can name (``--clothes NAME``, ``clothes="NAME"``): how far their outside stands off the
 skin over the trunk, upper arms, legs and feet, on average, and how uncertain that is. The thicknesses are
 starting values, not measured: no published figure of clothing ease (the gap between a garment and the
 body) was found in the repository's references.
 
-:func:`stated_clothes` resolves what was stated; :func:`widened` adds a layer's uncertainty to a
+:func:`stated_clothes` resolves what was stated (an explicit thickness checked by :func:`check_clothing`
+against the one table of limits, :data:`wbsa.estimation.limits.LIMITS`); :func:`widened` adds a layer's uncertainty to a
 prediction interval: the change of the estimate when the layer is thicker by its uncertainty, taken off
 the lower bound and added to the upper one.
 """
@@ -18,6 +19,7 @@ import math
 from dataclasses import dataclass
 
 from wbsa.errors import WbsaError
+from wbsa.estimation.limits import MAX_CLOTHING_M
 
 
 @dataclass(frozen=True)
@@ -67,15 +69,33 @@ def clothes_help() -> str:
     return ", ".join(f"{c.name} ({100 * c.layer_m:g} ± {100 * c.sd_m:g} cm)" for c in CLOTHES.values())
 
 
-def stated_clothes(clothing: str | None = None, clothing_m: float | None = None) -> Clothes:
+def check_clothing(clothing_m: float) -> None:
+    """Raise if a stated layer of clothes is not a thickness of 0 to :data:`MAX_CLOTHING_M` metres.
+
+    Parameters
+    ----------
+    clothing_m : float
+        The stated layer (m).
+    """
+    from wbsa.estimation.subject.checks import is_real_number
+
+    ok = is_real_number(clothing_m) and math.isfinite(float(clothing_m)) and 0.0 <= float(clothing_m) <= MAX_CLOTHING_M
+    if not ok:
+        said = (f"the clothes' layer {clothing_m!r} m must be a thickness of 0 to {MAX_CLOTHING_M:g} m (0 for none or "
+                "tight-fitting, 0.01 for 1 cm")
+        raise WbsaError(f"{said}; on the command line --clothing-cm 1)", code="out_of_range", field="clothing_m",
+                        value=clothing_m, page=f"{said})")
+
+
+def stated_clothes(clothes: str | None = None, clothing_m: float | None = None) -> Clothes:
     """The clothes stated by name (:data:`CLOTHES`) or as an explicit thickness (m), or :data:`UNSTATED`.
 
     Parameters
     ----------
-    clothing : str, optional
+    clothes : str, optional
         A name of :data:`CLOTHES`.
     clothing_m : float, optional
-        Or an explicit layer (m), 0 to 0.05.
+        Or an explicit layer (m), 0 to :data:`MAX_CLOTHING_M` (:func:`check_clothing`).
 
     Returns
     -------
@@ -86,15 +106,15 @@ def stated_clothes(clothing: str | None = None, clothing_m: float | None = None)
     WbsaError
         An unknown name, both a name and a thickness, or a thickness that is not 0 to 0.05 m.
     """
-    from wbsa.estimation.subject.checks import check_clothing
-
-    if clothing is not None and clothing_m is not None:
-        raise WbsaError("give the clothes by name (clothing, --clothes) or as a thickness (clothing_m, "
-                        "--clothing-cm), not both")
-    if clothing is not None:
-        if not isinstance(clothing, str) or clothing not in CLOTHES:
-            raise WbsaError(f"unknown clothes {clothing!r}; give one of {clothes_help()}")
-        return CLOTHES[clothing]
+    if clothes is not None and clothing_m is not None:
+        raise WbsaError("give the clothes by name (clothes, --clothes) or as a thickness (clothing_m, "
+                        "--clothing-cm), not both", field="clothes",
+                        page="choose the clothes by name or give their thickness, not both")
+    if clothes is not None:
+        if not isinstance(clothes, str) or clothes not in CLOTHES:
+            raise WbsaError(f"unknown clothes {clothes!r}; give one of {clothes_help()}", field="clothes",
+                            value=clothes)
+        return CLOTHES[clothes]
     if clothing_m is not None:
         check_clothing(clothing_m)
         return Clothes("", float(clothing_m), 0.0, "an explicit layer")

@@ -17,7 +17,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     from wbsa.camera.presets import presets_help
     from wbsa.cli_types import number_in, pick
     from wbsa.estimation.clothes import CLOTHES, clothes_help
+    from wbsa.estimation.limits import LIMITS
     from wbsa.typing import METHODS
+
+    stature_cm, clothing_cm, depth = LIMITS["stature"].scaled(100), LIMITS["clothing"].scaled(100), LIMITS["depth"]
 
     p = sub.add_parser("estimate", help="estimate WBSA from one depth image of a standing person",
                        description="Find the person in a depth image of a room, measure the visible surface and "
@@ -42,20 +45,21 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--clothes", default=None, choices=tuple(CLOTHES), metavar="NAME",
                    help="the clothes worn, a layer with its own uncertainty (widens the interval): "
                         + clothes_help() + "; not given (nor --clothing-cm): taken as none, flagged clothes_unstated")
-    p.add_argument("--clothing-cm", type=number_in(0, 5), default=None,
-                   help="or the clothes as an explicit thickness over the trunk, upper arms, legs and feet in cm, how "
-                        "far their outside stands off the skin on average (0: none or tight-fitting; the default "
-                        "model is trained on 0-1.5)")
-    p.add_argument("--stature-cm", type=number_in(50, 250), default=None,
-                   help="the subject's stature in cm; needed when the feet are not in the frame (cut off or "
-                        "hidden), where it takes the measured stature's place")
+    p.add_argument("--clothing-cm", type=number_in(*clothing_cm), default=None,
+                   help="or the clothes as an explicit thickness over the trunk, upper arms, legs and feet in cm, "
+                        f"{clothing_cm[0]:g}-{clothing_cm[1]:g}, how far their outside stands off the skin on average "
+                        "(0: none or tight-fitting; the default model is trained on 0-1.5)")
+    p.add_argument("--stature-cm", type=number_in(*stature_cm), default=None,
+                   help=f"the subject's stature in cm, {stature_cm[0]:g}-{stature_cm[1]:g}; needed when the feet are "
+                        "not in the frame (cut off or hidden), where it takes the measured stature's place")
     p.add_argument("--level", type=number_in(0, 1, low_open=True, high_open=True), default=0.95,
                    help="prediction interval coverage (default 0.95)")
     p.add_argument("--depth-scale", type=number_in(0, low_open=True), default=None,
                    help="depth units per metre (default 1000 for integer files, 1 for float files)")
-    p.add_argument("--min-depth", type=number_in(0), default=0.3, help="nearest return kept, metres (default 0.3)")
-    p.add_argument("--max-depth", type=number_in(0, low_open=True), default=8.0,
-                   help="farthest return kept, metres (default 8)")
+    p.add_argument("--min-depth", type=number_in(0), default=depth.low,
+                   help=f"nearest return kept, metres (default {depth.low:g})")
+    p.add_argument("--max-depth", type=number_in(0, low_open=True), default=depth.high,
+                   help=f"farthest return kept, metres (default {depth.high:g})")
     p.add_argument("--body-fit-steps", type=int, default=None,
                    help="with --method body-fit or both: most optimiser steps of the fit (default 200)")
     p.add_argument("--body-fit-restarts", type=int, default=None,
@@ -84,17 +88,19 @@ def run_estimate(args: argparse.Namespace) -> int:
     args : argparse.Namespace
         The parsed options of ``wbsa estimate``.
     """
-    from wbsa.estimation.single_view import estimate
+    from wbsa.estimation.request import EstimateRequest
+    from wbsa.estimation.single_view import estimate_request
     from wbsa.estimation.subject.segment import SegmentSettings
 
     _check_outputs(args)
     segment = None if args.no_segment else SegmentSettings(min_depth_m=args.min_depth, max_depth_m=args.max_depth,
                                                            pick=args.pick)
-    est = estimate(args.depth, args.camera, args.model, args.method, azimuth_deg=args.azimuth,
-                   elevation_deg=args.elevation, clothing=args.clothes,
-                   clothing_m=None if args.clothing_cm is None else args.clothing_cm / 100.0,
-                   stature_m=None if args.stature_cm is None else args.stature_cm / 100.0, level=args.level,
-                   depth_scale=args.depth_scale, segment=segment, body_fit=_body_fit_settings(args))
+    request = EstimateRequest.build(
+        args.camera, args.method, azimuth_deg=args.azimuth, elevation_deg=args.elevation, clothes=args.clothes,
+        clothing_m=None if args.clothing_cm is None else args.clothing_cm / 100.0,
+        stature_m=None if args.stature_cm is None else args.stature_cm / 100.0, level=args.level, segment=segment,
+        body_fit=_body_fit_settings(args))
+    est = estimate_request(request, args.depth, args.model, depth_scale=args.depth_scale)
     _write_outputs(args, est)
     for name, text in est.flags.items():
         sys.stderr.write(f"warning: {name}: {text}\n")

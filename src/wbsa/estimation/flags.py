@@ -12,6 +12,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from wbsa.errors import Worded
+
+_UNSTATED = ("no clothes were stated; they were taken as none or tight-fitting (clothes worn read high, about 9 % per "
+             "cm of layer)")
+#: The meaning (and detail) of ``clothes_unstated``, with the page's words for how to state them.
+CLOTHES_UNSTATED = Worded(f"{_UNSTATED}: state them (--clothes underwear, thin-gown, light or street)",
+                          f"{_UNSTATED}: choose them under Clothes")
+
 
 @dataclass(frozen=True)
 class Flag:
@@ -147,13 +155,13 @@ FLAG_RECORDS: dict[str, Flag] = {
         "down, so that the whole body and the floor under the feet show, and take the picture again.",
         ("image",)),
     "clothes_unstated": Flag(
-        "no clothes were stated; they were taken as none or tight-fitting (clothes worn read high, about 9 % per cm "
-        "of layer): state them (--clothes underwear, thin-gown, light or street)",
+        CLOTHES_UNSTATED,
         "Say what the person wears (underwear, a thin gown, light clothes or street clothes): clothes make the "
         "answer read high.",
         ("image",)),
 }
 #: Flag name -> its meaning (``wbsa.estimation.FLAGS``).
 FLAGS: dict[str, str] = {name: flag.meaning for name, flag in FLAG_RECORDS.items()}
+
 #: What the page advises for a flag it does not know.
 DEFAULT_ADVICE = "Check the picture and take it again if in doubt."

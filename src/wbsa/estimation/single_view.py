@@ -14,10 +14,18 @@ from typing import TYPE_CHECKING, Callable
 
 import numpy as np
 
-from wbsa.errors import WbsaError
-from wbsa.estimation.clothes import UNSTATED, Clothes
-from wbsa.estimation.methods.view import ViewEstimate
-from wbsa.estimation.subject.segment import SegmentSettings
+from wbsa.errors import WbsaError, Worded, worded
+from wbsa.estimation.clothes import UNSTATED, Clothes, widened
+from wbsa.estimation.flags import CLOTHES_UNSTATED, FLAGS
+from wbsa.estimation.methods.base import Prediction, Request, Subject
+from wbsa.estimation.methods.dispatch import predictors_for
+from wbsa.estimation.methods.view import ViewEstimate, view_flags
+from wbsa.estimation.request import EstimateRequest
+from wbsa.estimation.subject import checks
+from wbsa.estimation.subject.measure import measure_subject
+from wbsa.estimation.subject.mixed_pixels import repair_mixed_pixels
+from wbsa.estimation.subject.people import feet_unseen, open_feet
+from wbsa.estimation.subject.segment import SegmentSettings, segment_subject
 from wbsa.typing import Method
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -140,7 +148,6 @@ def _depth_array(depth, depth_scale: float | None) -> np.ndarray:
 
         return read_depth(depth, depth_scale=depth_scale)
     from wbsa.core.depth_image import metres_from_units
-    from wbsa.estimation.subject.checks import is_real_number
 
     raw = np.asarray(depth) if not isinstance(depth, np.ndarray) else depth
     if raw.dtype.kind not in "iuf":
@@ -149,49 +156,43 @@ def _depth_array(depth, depth_scale: float | None) -> np.ndarray:
                                                      if raw.dtype.kind == "c" else ""))
     if depth_scale is None:
         return raw.astype(np.float64)
-    if not (is_real_number(depth_scale) and np.isfinite(depth_scale) and depth_scale > 0):
+    if not (checks.is_real_number(depth_scale) and np.isfinite(depth_scale) and depth_scale > 0):
         raise WbsaError(f"depth_scale must be a positive number of units per metre, e.g. 1000, got {depth_scale!r}")
     return metres_from_units(raw, float(depth_scale)).astype(np.float64)
 
 
 def estimate(depth, camera, model=None, method: Method = "regression", *, azimuth_deg: float | None = None,
-             elevation_deg: float | None = None, clothing: str | None = None, clothing_m: float | None = None,
+             elevation_deg: float | None = None, clothes: str | None = None, clothing_m: float | None = None,
              stature_m: float | None = None, level: float = 0.95,
              depth_scale: float | None = None, segment: SegmentSettings | None = SegmentSettings(),
-             body_fit: BodyFitSettings | None = None, show_progress: bool | None = None,
-             progress: Callable[[str, int, int], None] | None = None) -> Estimate:
-    """Estimate WBSA from one depth image of a standing person.
+             body_fit: BodyFitSettings | None = None, progress: Callable[[str, int, int], None] | None = None,
+             clothing: str | None = None) -> Estimate:
+    """Estimate WBSA from one depth image of a standing person (the arguments checked once, as an
+    :class:`~wbsa.estimation.request.EstimateRequest`, which :func:`estimate_request` runs).
 
     Parameters
     ----------
     depth : (h, w) float array (metres, 0 = no return) or path
         A path is read with :func:`wbsa.core.read_depth` (16-bit PNG, .npy, .tiff, .exr).
-    camera : str, path or wbsa.camera.Intrinsics
-        A preset name (``kinect-v2``, ``realsense-d435``, ...), an Open3D intrinsics JSON, or ``auto``: the preset
-        of the image's size (:func:`wbsa.camera.presets.camera_for_image`), flagged ``camera_assumed``.
+    camera : str, path, wbsa.camera.Intrinsics or wbsa.camera.CameraRecord
+        A preset name (``kinect-v2``, ...), an Open3D intrinsics JSON (its technology unknown: Kinect v1's depth
+        noise is assumed), or ``auto``: the preset of the image's size, flagged ``camera_assumed``.
     model : EstimatorModel, path or None
-        None: the model shipped with wbsa (:func:`wbsa.estimation.methods.regression.default_model.default_model`). A path: an
-        estimator model file (``.npz``, e.g. from ``wbsa train``) or a ``wbsa fit`` model file (``.json``).
+        None: the model shipped with wbsa. A path: an estimator model file (``.npz``, e.g. from ``wbsa train``)
+        or a ``wbsa fit`` model file (``.json``).
     method : {'regression', 'body-fit', 'both'}
-        The estimation route (:mod:`wbsa.estimation.methods`): the regression on the image's measures (the
-        default), the whole body fitted to the view (seconds, not milliseconds; a stated layer of clothes is taken
-        off the fitted body as an offset), or both side by
-        side (the regression's number leads; ``routes`` holds both).
+        The route (:mod:`wbsa.estimation.methods`): the regression on the image's measures, the whole body fitted
+        to the view (seconds), or both (the regression's number leads; ``routes`` holds both).
     azimuth_deg, elevation_deg : float, optional
         A stated view; it is used for the prediction and checked against the estimated one.
-    clothing : str, optional
-        The clothes by name (:data:`wbsa.estimation.clothes.CLOTHES`: ``underwear``, ``thin-gown``, ``light``,
-        ``street``): a layer with its own uncertainty, which widens the interval. The camera sees the clothes'
-        outside, which encloses more area than the skin (a 1 cm layer read +8.6 % when not stated).
+    clothes : str, optional
+        The clothes by name (:data:`wbsa.estimation.clothes.CLOTHES`): a layer with its own uncertainty, which
+        widens the interval. The camera sees the clothes' outside (a 1 cm layer not stated reads +8.6 %).
     clothing_m : float, optional
-        Or the clothes as an explicit thickness over the trunk, upper arms, legs and feet (m): how far their
-        outside stands off the skin, on average (0: none or tight-fitting); the default model was trained on
-        layers of 0–1.5 cm. Neither given: taken as 0, ``clothing_stated`` false and flagged
-        ``clothes_unstated``.
+        Or an explicit layer (m, 0–0.05: :data:`wbsa.estimation.limits.LIMITS`) over the trunk, upper arms, legs
+        and feet. Neither given: taken as 0, flagged ``clothes_unstated``.
     stature_m : float, optional
-        The subject's stature (m), stated. A subject whose feet are not seen (its lowest returns end at the
-        frame's bottom or over a band without returns, or stand over a seen floor) is refused
-        (``feet_not_seen``) unless it is given; then it takes the measured stature's place, flagged.
+        The stature (m), stated: needed, and used in place of the measured one, where the feet are not seen.
     level : float
         Coverage of the prediction interval, in (0, 1).
     depth_scale : float, optional
@@ -201,10 +202,10 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     body_fit : BodyFitSettings or None
         With ``method="body-fit"`` or ``"both"``: how the body is fitted (None: the defaults).
     progress : callable, optional
-        Called as ``progress(stage, done, total)`` as the work goes on: ``("subject", 0, 1)`` before the subject
-        is found and measured, then for each route ``(route, 0, 1)`` as it starts (``regression``, ``body-fit``),
-        the body fit also ``("body-fit", step, steps)`` after each of its steps (a fit that settles stops
-        early). For a page or a log; the estimate is the same with or without it.
+        ``progress(stage, done, total)``: ``("subject", 0, 1)``, then ``(route, 0, 1)`` as each route starts, the
+        body fit also ``("body-fit", step, steps)``. The estimate is the same with or without it.
+    clothing : str, optional
+        The old name of ``clothes`` (deprecated: a :class:`DeprecationWarning`).
 
     Returns
     -------
@@ -213,76 +214,122 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     Raises
     ------
     WbsaError
-        Unreadable input, an image that is not the camera's size, no or several people without a pick,
-        a height that is not human (wrong depth scale), a broken model, an unknown method, unknown clothes or
-        a stated layer that is not 0–0.05 m (or one stated to a ``wbsa fit`` model), a stated stature that is
-        not a human height, or feet not seen without a stated stature.
+        Unreadable input, an image not of the camera's size, no or several people without a pick, a height that
+        is not human, a broken model, or an argument out of its range (one line naming it).
     """
-    from wbsa.camera.presets import AUTO_CAMERA, resolve_camera
-    from wbsa.camera.views import check_angle
-    from wbsa.estimation.flags import FLAGS
-    from wbsa.estimation.subject import checks
-    from wbsa.estimation.subject.measure import measure_subject
-    from wbsa.estimation.methods.base import Request, Subject
-    from wbsa.estimation.methods.dispatch import check_method, predictors_for
-    from wbsa.estimation.methods.view import view_flags
-    from wbsa.estimation.subject.mixed_pixels import repair_mixed_pixels
-    from wbsa.estimation.clothes import stated_clothes
-    from wbsa.estimation.subject.people import feet_unseen, open_feet
-    from wbsa.estimation.subject.segment import segment_subject
-    from wbsa.sensor.technology import envelope_model
+    request = EstimateRequest.build(camera, method, azimuth_deg=azimuth_deg, elevation_deg=elevation_deg,
+                                    clothes=_clothes_named(clothes, clothing), clothing_m=clothing_m,
+                                    stature_m=stature_m, level=level, segment=segment, body_fit=body_fit)
+    return estimate_request(request, depth, model, depth_scale=depth_scale, progress=progress)
 
-    check_method(method)
-    if not (checks.is_real_number(level) and 0 < level < 1):
-        raise WbsaError(f"interval level {level!r} must be a number in (0, 1), e.g. 0.95")
-    if segment is not None and not isinstance(segment, SegmentSettings):
-        raise WbsaError(f"segment must be SegmentSettings or None, got {type(segment).__name__}")
-    if azimuth_deg is not None:
-        azimuth_deg = check_angle(azimuth_deg, "azimuth", "azimuth_deg")
-    if elevation_deg is not None:
-        elevation_deg = check_angle(elevation_deg, "elevation", "elevation_deg")
-    clothes = stated_clothes(clothing, clothing_m)
-    if stature_m is not None:
-        stature_m = checks.check_stated_stature(stature_m)
-    request = Request(azimuth_deg, elevation_deg, clothes.layer_m, level,
-                      progress=None if progress is None else lambda step, steps: progress("body-fit", step, steps))
-    auto = isinstance(camera, str) and camera == AUTO_CAMERA
-    intrinsics = None if auto else resolve_camera(camera)  # a bad camera is refused before the image is read
+
+def estimate_request(request: EstimateRequest, depth, model=None, *, depth_scale: float | None = None,
+                     progress: Callable[[str, int, int], None] | None = None) -> Estimate:
+    """The estimate of a checked request (:class:`~wbsa.estimation.request.EstimateRequest`): the image is read
+    and checked against the camera, the subject found and measured, the routes run, and the answer assembled.
+
+    Parameters
+    ----------
+    request : EstimateRequest
+    depth, model, depth_scale, progress
+        As for :func:`estimate`.
+
+    Returns
+    -------
+    Estimate
+    """
     depth_m = _depth_array(depth, depth_scale)
-    if auto:
-        checks.check_two_dimensional(depth_m)
-        intrinsics = resolve_camera(camera, depth_m.shape)
-    checks.check_image_size(depth_m, intrinsics)
-    predictors = list(predictors_for(method, model, body_fit))  # a model is read (and refused) before any measure
-    depth_m, mixed = repair_mixed_pixels(depth_m, intrinsics.fx, envelope_model(intrinsics))
+    request = request.for_image(depth_m)
+    predictors = list(predictors_for(request.method, model, request.body_fit))  # a model is read (and refused) first
+    depth_m, mixed = repair_mixed_pixels(depth_m, request.camera.intrinsics.fx, request.sensor)
+    asked = request.method_request(progress)
+    predictors, flags = _servable(predictors, asked)
+    _report(progress, "subject")
+    subject, subject_flags = measure(depth_m, mixed, request)
+    flags.update(subject_flags)
+    prediction, routes, route_flags = run_routes(predictors, subject, asked, request.clothes, progress)
+    flags.update(route_flags)
+    return assemble(request, subject, prediction, routes, flags)
+
+
+def _clothes_named(clothes: str | None, clothing: str | None) -> str | None:
+    """``clothes``, or the deprecated ``clothing`` with a :class:`DeprecationWarning`."""
+    if clothing is None:
+        return clothes
+    import warnings
+
+    warnings.warn("estimate(clothing=...) is deprecated; use clothes=...", DeprecationWarning, stacklevel=3)
+    if clothes is not None:
+        raise WbsaError("give the clothes once, as clothes (clothing is its old name)")
+    return clothing
+
+
+def _report(progress, stage: str) -> None:
+    if progress is not None:
+        progress(stage, 0, 1)
+
+
+def _servable(predictors: list, request: Request) -> tuple[list, dict[str, str]]:
+    """The predictors that can serve ``request`` (a second route that cannot is None, flagged
+    ``body_fit_failed``; the first one's refusal is raised)."""
     flags: dict[str, str] = {}
+    out = list(predictors)
     for k, predictor in enumerate(predictors):
         try:
             predictor.check_request(request)
         except WbsaError as exc:
             if k == 0:
                 raise
-            flags["body_fit_failed"] = str(exc)  # both: the second route cannot serve this request
-            predictors[k] = None
-    if progress is not None:
-        progress("subject", 0, 1)
-    if segment is None:
+            flags["body_fit_failed"] = worded(exc)  # both: the second route cannot serve this request
+            out[k] = None
+    return out, flags
+
+
+def measure(depth_m: np.ndarray, mixed: np.ndarray, request: EstimateRequest) -> tuple[Subject, dict[str, str]]:
+    """The subject of a repaired depth image (segmented and measured) and the flags of the image's checks.
+
+    Parameters
+    ----------
+    depth_m : (h, w) float64
+        The depth image (metres), mixed returns repaired (:func:`repair_mixed_pixels`).
+    mixed : (h, w) bool
+        The repaired returns.
+    request : EstimateRequest
+        Checked and resolved for this image (:meth:`EstimateRequest.for_image`).
+
+    Returns
+    -------
+    subject : Subject
+    flags : dict of str to str
+
+    Raises
+    ------
+    WbsaError
+        No returns, no or several people without a pick, feet not seen without a stated stature, a height
+        that is not human.
+    """
+    camera, stature_m, flags = request.camera, request.stature_m, {}
+    if request.segment is None:
         mask, floor = np.isfinite(depth_m) & (depth_m > 0), None
         if not mask.any():
             raise WbsaError("the depth image has no returns; check the depth scale and the file")
         feet = open_feet(mask)
     else:
-        seg = segment_subject(depth_m, intrinsics, segment)
+        seg = segment_subject(depth_m, camera.intrinsics, request.segment, sensor=request.sensor)
         mask, floor = seg.mask, seg.floor
         if seg.others:
-            flags["several_people"] = (f"picked {seg.subject.describe()} ({segment.pick}); others: "
-                                       + "; ".join(c.describe() for c in seg.others))
+            pick = request.segment.pick
+            flags["several_people"] = Worded(
+                f"picked {seg.subject.describe()} ({pick}); others: " + "; ".join(c.describe() for c in seg.others),
+                f"picked {seg.subject.describe(True)} ({pick}); others: "
+                + "; ".join(c.describe(True) for c in seg.others))
         feet = feet_unseen(seg.subject, floor)
     if feet is not None and stature_m is None:
-        raise WbsaError(f"feet not seen: {feet}; without the feet the WBSA is not measured (a cut-off adult would "
-                        "read as a child): capture the whole person, feet on the floor, or state the stature "
-                        "(--stature-cm, stature_m)")
-    m = measure_subject(depth_m, mask, intrinsics, floor, mixed)
+        why = (f"feet not seen: {feet}; without the feet the WBSA is not measured (a cut-off adult would read as a "
+               "child): capture the whole person, feet on the floor, or state the stature")
+        raise WbsaError(f"{why} (--stature-cm, stature_m)", code="feet_not_seen", field="stature_m",
+                        page=f"{why} (type the height in cm under Height)")
+    m = measure_subject(depth_m, mask, camera.intrinsics, floor, mixed)
     if feet is not None:
         flags["feet_not_seen"] = (f"{feet}; the stated stature {stature_m:.2f} m is used (measured "
                                   f"{m.stature_m:.2f} m); the legs' area is not seen, so the estimate may read low")
@@ -294,44 +341,94 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
         flags["cut_off"] = "subject pixels on the image border; step back or re-aim the camera"
     if floor is None:
         flags["no_floor"] = FLAGS["no_floor"]
-    flags.update(checks.working_range_flags(m.distance_m, intrinsics))
-    flags.update(checks.feet_flags(m.distance_m, intrinsics))
-    subject = Subject(depth_m, mask, intrinsics, floor, m)
-    if progress is not None:
-        progress(predictors[0].name, 0, 1)
+    flags.update(checks.working_range_flags(m.distance_m, camera))
+    flags.update(checks.feet_flags(m.distance_m, camera))
+    return Subject(depth_m, mask, camera, floor, m, request.sensor), flags
+
+
+def run_routes(predictors: list, subject: Subject, request: Request, clothes: Clothes,
+               progress: Callable[[str, int, int], None] | None = None) -> tuple[Prediction, dict, dict[str, str]]:
+    """Every route's prediction of ``subject``, their intervals widened by the clothes' uncertainty.
+
+    Parameters
+    ----------
+    predictors : list of Predictor or None
+        The lead route first; a second that cannot serve the request is None (:func:`_servable`).
+    subject : Subject
+    request : Request
+    clothes : Clothes
+    progress : callable, optional
+        As for :func:`estimate`.
+
+    Returns
+    -------
+    prediction : Prediction
+        The lead route's.
+    routes : dict of str to Prediction
+        With two routes, each one's by name (else empty).
+    flags : dict of str to str
+        ``body_fit_failed`` when the second route fails.
+
+    Raises
+    ------
+    WbsaError
+        The lead route fails, or a route gives no finite estimate.
+    """
+    flags: dict[str, str] = {}
+    _report(progress, predictors[0].name)
     prediction = predictors[0].predict(subject, request)
     routes = {predictors[0].name: prediction} if len(predictors) > 1 else {}
     for predictor in predictors[1:]:
         if predictor is None:
             continue
-        if progress is not None:
-            progress(predictor.name, 0, 1)
+        _report(progress, predictor.name)
         try:  # both: a body fit that fails leaves the regression's answer standing, flagged
             routes[predictor.name] = predictor.predict(subject, request)
         except WbsaError as exc:
-            flags["body_fit_failed"] = str(exc)
+            flags["body_fit_failed"] = worded(exc)
     for route in (prediction, *list(routes.values())[1:]):
         if not all(np.isfinite(v) for v in (route.wbsa_m2, route.wbsa_lo_m2, route.wbsa_hi_m2)):
             raise WbsaError(f"the {route.model_name} model gave no finite estimate ({route.wbsa_m2}); check the "
                             "model file, or rebuild it")
     if clothes.sd_m > 0:  # the layer's own uncertainty widens every route's interval that can take it
         prediction, routes = _clothes_widened(prediction, routes, predictors, subject, request, clothes)
-    if not clothes.stated:
-        flags["clothes_unstated"] = FLAGS["clothes_unstated"]
-    view = prediction.view
-    flags.update(view_flags((azimuth_deg, elevation_deg), view))
+    return prediction, routes, flags
+
+
+def assemble(request: EstimateRequest, subject: Subject, prediction: Prediction, routes: dict,
+             flags: dict[str, str]) -> Estimate:
+    """The :class:`Estimate`: the lead prediction, the subject's measures and every flag (the image's checks
+    first, then the clothes, the view, the routes' own and their agreement, the camera assumed).
+
+    Parameters
+    ----------
+    request : EstimateRequest
+    subject : Subject
+    prediction : Prediction
+        The lead route's.
+    routes : dict of str to Prediction
+    flags : dict of str to str
+        The flags so far (the image's and the routes'); the estimate's own copy is made here.
+    """
+    flags = dict(flags)
+    if not request.clothes.stated:
+        flags["clothes_unstated"] = CLOTHES_UNSTATED
+    flags.update(view_flags((request.azimuth_deg, request.elevation_deg), prediction.view))
     for name, text in prediction.flags.items():  # the image's own checks keep their wording
         flags.setdefault(name, text)
     for name, text in _agreement_flags(routes).items():
         flags.setdefault(name, text)
-    if auto:
-        flags["camera_assumed"] = (f"no camera was given; the {intrinsics.name} preset fits the image size "
+    depth_m, m, camera = subject.depth_m, subject.measures, subject.camera
+    if request.camera_assumed:
+        flags["camera_assumed"] = (f"no camera was given; the {camera.name} preset fits the image size "
                                    f"({depth_m.shape[1]} x {depth_m.shape[0]})")
     return Estimate(wbsa_m2=prediction.wbsa_m2, wbsa_lo_m2=prediction.wbsa_lo_m2, wbsa_hi_m2=prediction.wbsa_hi_m2,
-                    level=level, vbsa_m2=m.vbsa_m2, stature_m=m.stature_m, distance_m=m.distance_m, n_pixels=m.n_pixels,
-                    view=view, view_used=prediction.view_used, flags=flags, method=method, model=prediction.model_name,
-                    camera=intrinsics.name, clothing_m=clothes.layer_m, clothes=clothes, stature_stated_m=stature_m,
-                    mask=mask & np.isfinite(depth_m) & (depth_m > 0), surface=m.surface, measured_mask=m.mask,
+                    level=request.level, vbsa_m2=m.vbsa_m2, stature_m=m.stature_m, distance_m=m.distance_m,
+                    n_pixels=m.n_pixels, view=prediction.view, view_used=prediction.view_used, flags=flags,
+                    method=request.method, model=prediction.model_name, camera=camera.name,
+                    clothing_m=request.clothes.layer_m, clothes=request.clothes, stature_stated_m=request.stature_m,
+                    mask=subject.mask & np.isfinite(depth_m) & (depth_m > 0), surface=m.surface,
+                    measured_mask=m.mask,
                     body=next((p.body for p in (prediction, *routes.values()) if p.body is not None), None),
                     routes=routes)
 
@@ -341,8 +438,6 @@ def _clothes_widened(prediction, routes: dict, predictors: list, subject, reques
     (:func:`wbsa.estimation.clothes.widened`): each predictor predicts again with the layer thicker by it; a
     route that refuses a layer that thick keeps its interval (the body fit takes it: it fits again, dressed thicker;
     that second fit reports no steps, so the progress shown is the answer's own fit)."""
-    from wbsa.estimation.clothes import widened
-
     thicker = dataclasses.replace(request, clothing_m=clothes.layer_m + clothes.sd_m, progress=None)
     by_name = {p.name: p for p in predictors if p is not None}
     out = {}

@@ -185,19 +185,33 @@ def preset_record(camera):
 
 
 def envelope_model(camera) -> SensorModel:
-    """The model whose :func:`envelope_m` the estimator assumes for a depth image of ``camera``: the camera
-    preset's own (:func:`camera_model`), or Kinect v1's for a camera without a preset (its technology unknown).
+    """The model whose :func:`envelope_m` the estimator assumes for a depth image of ``camera``: the camera's
+    own (:func:`camera_model` of its record), or Kinect v1's for a camera whose technology is unknown (one of the
+    user's own calibration, or None).
 
     Parameters
     ----------
-    camera : wbsa.camera.Intrinsics or None
+    camera : wbsa.camera.presets.CameraRecord, wbsa.camera.Intrinsics or None
+        A record (as :func:`wbsa.camera.presets.resolve_record` gives it), or intrinsics: a preset's if they are
+        one's (:func:`wbsa.camera.presets.record_of`).
 
     Returns
     -------
     SensorModel
     """
-    record = preset_record(camera)
-    return camera_model(record if record is not None else "kinect-v1")
+    from wbsa.camera.presets import CameraRecord, record_of
+
+    record = None
+    if isinstance(camera, CameraRecord):
+        record = camera
+    elif camera is not None:
+        record = record_of(camera)
+    return camera_model(record) if record is not None and record.technology is not None else unknown_camera_model()
+
+
+def unknown_camera_model() -> SensorModel:
+    """The model assumed for a camera whose technology is unknown: Kinect v1's (:func:`camera_model`)."""
+    return camera_model("kinect-v1")
 
 
 def _namespace(*xs):

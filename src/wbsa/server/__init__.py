@@ -7,7 +7,6 @@
 ``answer``    an Estimate as the page shows it: number (each route's with ``both``), flags, view, meshes,
               formulae, downloads, depth picture
 ``advice``    the page's rows of an estimate's flags (from :data:`wbsa.estimation.flags.FLAG_RECORDS`)
-``wording``   the page's words for the library's command-line words (one table)
 ``batch``     several files: rows, progress, CSV
 ``command``   the ``wbsa serve`` subcommand (uvicorn on 127.0.0.1 and a free port by default)
 ``static/``   the page: HTML, CSS and JavaScript (the page, the view sketch, a small canvas 3-D viewer), no

@@ -25,18 +25,21 @@ DEPTH_PERCENTILES = (1.0, 99.0)
 
 
 def run_estimate(depth_m: np.ndarray, camera, model, options, progress=None):
-    """:func:`wbsa.estimate` of ``depth_m`` with the page's ``options`` (:class:`wbsa.server.jobs.Options`),
-    reporting to ``progress(stage, done, total)`` (or None)."""
-    import wbsa
-    from wbsa.estimation import SegmentSettings
+    """The estimate of ``depth_m`` with the page's ``options`` (:class:`wbsa.server.jobs.Options`), its request
+    built as :func:`wbsa.estimate` builds it (:class:`wbsa.estimation.request.EstimateRequest`), reporting to
+    ``progress(stage, done, total)`` (or None)."""
+    from wbsa.estimation.request import EstimateRequest
+    from wbsa.estimation.single_view import estimate_request
+    from wbsa.estimation.subject.settings import SegmentSettings
 
     model = None if options.method == "body-fit" else model  # the body fit has no estimator model
-    body_fit = None if options.method == "regression" else options.body_fit
-    return wbsa.estimate(depth_m, camera, model, method=options.method, body_fit=body_fit,
-                         azimuth_deg=options.azimuth_deg, elevation_deg=options.elevation_deg,
-                         clothing=options.clothes, clothing_m=options.clothing_m,
-                         stature_m=None if options.height_cm is None else options.height_cm / 100.0,
-                         segment=SegmentSettings(pick=options.pick), progress=progress)
+    request = EstimateRequest.build(
+        camera, options.method, azimuth_deg=options.azimuth_deg, elevation_deg=options.elevation_deg,
+        clothes=options.clothes, clothing_m=options.clothing_m,
+        stature_m=None if options.height_cm is None else options.height_cm / 100.0,
+        segment=SegmentSettings(pick=options.pick),
+        body_fit=None if options.method == "regression" else options.body_fit)
+    return estimate_request(request, depth_m, model, progress=progress)
 
 
 def _stem(name: str) -> str:
@@ -135,8 +138,8 @@ def routes_json(est) -> dict | None:
     The route whose number is the estimate's leads; an estimate whose number is neither route's is their
     combination (``combined``). A body fit that failed is a route with its reason (``failed``).
     """
+    from wbsa.errors import page_text
     from wbsa.server.advice import flag_rows
-    from wbsa.server.wording import page_words
 
     if not est.routes:
         return None
@@ -150,7 +153,7 @@ def routes_json(est) -> dict | None:
                      "model": route["model"], "flags": flag_rows(route["flags"]), "leads": same})
     if "body_fit_failed" in est.flags and "body-fit" not in shown:
         rows.append({"name": "body-fit", "label": ROUTE_LABELS["body-fit"], "leads": False, "flags": [],
-                     "failed": page_words(est.flags["body_fit_failed"])})
+                     "failed": page_text(est.flags["body_fit_failed"])})
     lead = next((r["name"] for r in rows if r["leads"]), "combined")
     combined = None
     if lead == "combined":

@@ -23,6 +23,7 @@ a 500 with a message and no traceback. The server keeps running after any of the
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import shutil
 import tempfile
 from contextlib import asynccontextmanager
@@ -82,6 +83,7 @@ def options_from_form(form, presets, methods, body_fit=None) -> "Options":
     settings of the body fit)."""
     from wbsa.cli_types import pick as parse_pick
     from wbsa.estimation.clothes import CLOTHES, clothes_help
+    from wbsa.estimation.limits import LIMITS
     from wbsa.server.jobs import Options, camera_from_upload
 
     check_fields(form, FIELDS, FILES)
@@ -105,14 +107,14 @@ def options_from_form(form, presets, methods, body_fit=None) -> "Options":
             pick = parse_pick(f["pick"].strip())
         except argparse.ArgumentTypeError as exc:
             raise UploadError(f"pick: {exc}") from None
-    clothing_cm = _number(f, "clothing_cm", 0, 5, "a thickness of clothes in cm")
+    clothing_cm = _number(f, "clothing_cm", *LIMITS["clothing"].scaled(100), "a thickness of clothes in cm")
     clothes = f.get("clothes", "").strip() or None
     if clothes is not None and clothes not in CLOTHES:
         raise UploadError(f"clothes {clothes!r} is unknown; choose one of {clothes_help()}")
     return Options(camera=camera, intrinsics=camera_from_upload(intrinsics[0]) if intrinsics else None,
                    intrinsics_name=intrinsics[0].name if intrinsics else "", clothes=clothes,
                    clothing_m=None if clothing_cm is None else clothing_cm / 100.0,
-                   pick=pick, method=method, height_cm=_number(f, "height_cm", 1, 300, "a height in cm"),
+                   pick=pick, method=method, height_cm=_number(f, "height_cm", *LIMITS["stature"].scaled(100), "a height in cm"),
                    mass_kg=_number(f, "mass_kg", 0.1, 700, "a mass in kg"), sex=sex,
                    azimuth_deg=_number(f, "azimuth_deg", -360, 360, "an azimuth in degrees"),
                    elevation_deg=_number(f, "elevation_deg", -90, 90, "an elevation in degrees"), body_fit=body_fit)
@@ -141,7 +143,9 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
         A token every request must carry (:class:`wbsa.server.access.TokenGate`; 403 without it). None: no
         token (loopback only: ``wbsa serve`` makes one for any other address).
     body_fit : BodyFitSettings, optional
-        The settings of the body fit (methods ``body-fit`` and ``both``; None: the defaults).
+        The settings of the body fit (methods ``body-fit`` and ``both``; None: the defaults). Its ``threads`` is
+        torch's thread count for the whole server, set once when it starts (and restored when it stops): torch's
+        count is the process's and the estimates run in threads, so no fit changes it.
 
     Returns
     -------
@@ -160,9 +164,14 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
     from wbsa.server.batch import Batch, run_batch
     from wbsa.server.jobs import BoundedStore, Runner, internal_error, measure, new_id
     from wbsa.estimation.clothes import CLOTHES
+    from wbsa.estimation.limits import limits_json
     from wbsa.server.progress import STREAM, stream_answer, wants_stream
-    from wbsa.server.wording import page_words
 
+    from wbsa.estimation.methods.body_fit.settings import BodyFitSettings
+    from wbsa.parallel import torch_threads
+
+    fit_threads = (body_fit or BodyFitSettings()).threads
+    body_fit = dataclasses.replace(body_fit or BodyFitSettings(), threads=None)  # the fits keep the server's count
     if model is not None and not hasattr(model, "predict"):
         from wbsa.estimation.methods.regression.default_model import load_model
 
@@ -176,7 +185,7 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
     batches = BoundedStore(16, "this batch is no longer kept; upload its files again")
 
     def error(exc: UploadError) -> JSONResponse:
-        return JSONResponse({"error": page_words(str(exc))}, status_code=exc.status)
+        return JSONResponse({"error": exc.page_words()}, status_code=exc.status)
 
     async def page(request: Request) -> Response:
         return FileResponse(STATIC / "index.html", media_type="text/html")
@@ -184,7 +193,7 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
     async def info(request: Request) -> Response:
         return JSONResponse({
             "presets": [{"name": k, "width": CAMERAS[k].intrinsics.width, "height": CAMERAS[k].intrinsics.height} for k in presets],
-            "methods": methods, "max_upload_bytes": max_upload_bytes, "max_clothing_cm": 5,
+            "methods": methods, "max_upload_bytes": max_upload_bytes, "limits": limits_json(),
             "clothes": [{"name": c.name, "words": c.words, "layer_cm": round(100 * c.layer_m, 2),
                          "sd_cm": round(100 * c.sd_m, 2)} for c in CLOTHES.values()],
             "model": "default" if model is None else str(getattr(model, "meta", {}).get("name", "given"))})
@@ -195,29 +204,19 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
         and then the answer (:mod:`wbsa.server.progress`). A bad request gets its one-line message, a failure of
         wbsa itself a 500 with no traceback."""
         try:
-            runner.reserve()
+            with runner.slot() as slot:
+                job = await prepare()
+                if wants_stream(request):
+                    return StreamingResponse(stream_answer(runner, job, results.add, internal_error, slot.hand_on()),
+                                             media_type=STREAM,
+                                             headers={"Cache-Control": "no-store", "X-Accel-Buffering": "no"})
+                result = await runner.run(job, None)
         except UploadError as exc:
-            return error(exc)
-        try:
-            job = await prepare()
-        except UploadError as exc:
-            runner.release()
             return error(exc)
         except ClientDisconnect:
-            runner.release()
             return Response(status_code=400)
-        except Exception as exc:  # a failure of wbsa itself
-            runner.release()
-            return JSONResponse({"error": internal_error(exc)}, status_code=500)
-        if wants_stream(request):
-            return StreamingResponse(stream_answer(runner, job, results.add, internal_error), media_type=STREAM,
-                                     headers={"Cache-Control": "no-store", "X-Accel-Buffering": "no"})
-        try:
-            result = await runner.run(job, None)
         except Exception as exc:  # a failure of wbsa itself: the server answers and keeps running
             return JSONResponse({"error": internal_error(exc)}, status_code=500)
-        finally:
-            runner.release()
         results.add(result)
         return JSONResponse(finite_or_none(result.answer), status_code=422 if "error" in result.answer else 200)
 
@@ -235,8 +234,6 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
         return await answered(request, prepare)
 
     async def pick(request: Request) -> Response:
-        import dataclasses
-
         from wbsa.cli_types import pick as parse_pick
 
         async def prepare():
@@ -273,25 +270,20 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
 
     async def batch_start(request: Request) -> Response:
         try:
-            runner.reserve()
+            with runner.slot() as slot:
+                form = await read_form(request, max_upload_bytes)
+                options = options_from_form(form, presets, methods, body_fit)
+                uploads = form.files.get("depth", [])
+                if not uploads:
+                    raise UploadError("no depth files were sent; choose or drop depth images")
+                batch = Batch(new_id(), [u.name for u in uploads])
+                batches.add(batch)
+                runner.submit(run_batch, batch, uploads, options, model, root, results).add_done_callback(
+                    slot.hand_on())
         except UploadError as exc:
-            return error(exc)
-        try:
-            form = await read_form(request, max_upload_bytes)
-            options = options_from_form(form, presets, methods, body_fit)
-            uploads = form.files.get("depth", [])
-            if not uploads:
-                raise UploadError("no depth files were sent; choose or drop depth images")
-        except UploadError as exc:
-            runner.release()
             return error(exc)
         except ClientDisconnect:
-            runner.release()
             return Response(status_code=400)
-        batch = Batch(new_id(), [u.name for u in uploads])
-        batches.add(batch)
-        runner.submit(run_batch, batch, uploads, options, model, root, results).add_done_callback(
-            lambda _: runner.release())
         return JSONResponse(batch.progress())
 
     async def batch_progress(request: Request) -> Response:
@@ -310,11 +302,12 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
 
     @asynccontextmanager
     async def lifespan(app):
-        try:
-            yield
-        finally:
-            runner.close()
-            shutil.rmtree(root, ignore_errors=True)
+        with torch_threads(fit_threads):  # once for the whole server
+            try:
+                yield
+            finally:
+                runner.close()
+                shutil.rmtree(root, ignore_errors=True)
 
     from starlette.middleware import Middleware
 

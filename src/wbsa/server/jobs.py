@@ -18,6 +18,7 @@ import tempfile
 import threading
 from collections import OrderedDict
 from concurrent.futures import ThreadPoolExecutor
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -155,7 +156,7 @@ def camera_from_upload(upload: Upload) -> dict:
     try:
         Intrinsics.from_open3d_json(source)
     except WbsaError as exc:
-        raise UploadError(f"{upload.name}: {exc}") from None
+        raise UploadError(f"{upload.name}: {exc.page_words()}") from None
     return source
 
 
@@ -184,8 +185,8 @@ def measure(upload: Upload | None, options: Options, model, root: Path, *, depth
 
     Runs in a worker thread. Every :class:`~wbsa.errors.WbsaError` becomes the answer's ``error``
     (one line, the server's paths replaced by the upload's name, in the page's words:
-    :mod:`wbsa.server.wording`; ``choose_person`` when it asks for a click on a person); once the image is read, the answer
-    keeps its depth picture, so the operator can click the person meant.
+    :meth:`~wbsa.errors.WbsaError.page_words`; ``choose_person`` when its code asks for a click on a person); once
+    the image is read, the answer keeps its depth picture, so the operator can click the person meant.
 
     Parameters
     ----------
@@ -207,7 +208,6 @@ def measure(upload: Upload | None, options: Options, model, root: Path, *, depth
     Result
     """
     from wbsa.server import answer
-    from wbsa.server.wording import choose_person, page_words
 
     def report(stage: str, done: int = 0, total: int = 1) -> None:
         if progress is not None:
@@ -228,8 +228,8 @@ def measure(upload: Upload | None, options: Options, model, root: Path, *, depth
         result.files = answer.downloads(est, folder, name)
         result.answer = answer.answer_json(est, rid, name, options, result.files)
     except WbsaError as exc:
-        message = page_words(scrub(str(exc), folder, name or "the upload"))
-        result.answer = {"id": rid, "name": name, "error": message, "choose_person": choose_person(message)}
+        message = scrub(exc.page_words(), folder, name or "the upload")
+        result.answer = {"id": rid, "name": name, "error": message, "choose_person": exc.code == "choose_person"}
     finally:
         shutil.rmtree(folder, ignore_errors=True)
     if result.depth_m is not None:
@@ -237,6 +237,36 @@ def measure(upload: Upload | None, options: Options, model, root: Path, *, depth
                                                           else result.estimate.mask), "image/png", "depth.png")
         result.answer.setdefault("depth", answer.depth_info(result.depth_m, rid))
     return result
+
+
+class Slot:
+    """One reserved place of a :class:`Runner` (:meth:`Runner.slot`), given back once.
+
+    Parameters
+    ----------
+    runner : Runner
+    """
+
+    def __init__(self, runner: Runner) -> None:
+        self._runner = runner
+        self._given_back = False
+        self._lock = threading.Lock()
+        self.handed_on = False
+
+    def release(self, *_) -> None:
+        """Give the place back (once; later calls do nothing). Takes and ignores any arguments, so it can be a
+        future's done callback."""
+        with self._lock:
+            if self._given_back:
+                return
+            self._given_back = True
+        self._runner.release()
+
+    def hand_on(self):
+        """The place now ends with the work it was reserved for: the block no longer gives it back; the returned
+        :meth:`release` does (call it when the work ends)."""
+        self.handed_on = True
+        return self.release
 
 
 class Runner:
@@ -268,6 +298,23 @@ class Runner:
         """Count ``n`` estimates out."""
         with self._lock:
             self.pending -= n
+
+    @contextmanager
+    def slot(self):
+        """One estimate's place for the block (:meth:`reserve`, or the busy refusal): given back when the block
+        ends, however it ends, unless the block hands it on (:meth:`Slot.hand_on`) to the work it started.
+
+        Yields
+        ------
+        Slot
+        """
+        self.reserve()
+        slot = Slot(self)
+        try:
+            yield slot
+        finally:
+            if not slot.handed_on:
+                slot.release()
 
     async def run(self, fn, *args, **kwargs):
         """``fn(*args, **kwargs)`` in a worker thread, awaited without blocking the event loop."""

@@ -33,13 +33,13 @@ def _line(obj: dict) -> bytes:
     return (json.dumps(finite_or_none(obj), ensure_ascii=False, separators=(",", ":")) + "\n").encode()
 
 
-async def stream_answer(runner, job, keep, failed):
+async def stream_answer(runner, job, keep, failed, release):
     """The progress lines of ``job`` run in one of ``runner``'s threads, then its answer.
 
     Parameters
     ----------
     runner : wbsa.server.jobs.Runner
-        Its place is already reserved; it is released when the job ends (also if the page went away).
+        Its place is already reserved (:meth:`~wbsa.server.jobs.Runner.slot`).
     job : callable
         ``job(progress)`` -> :class:`wbsa.server.jobs.Result`, run in a worker thread; ``progress(stage, done,
         total)`` may be called from that thread.
@@ -47,6 +47,9 @@ async def stream_answer(runner, job, keep, failed):
         ``keep(result)``: keeps the result (for its downloads and picks), called when the job ends.
     failed : callable
         ``failed(exc)`` -> the one-line message of a failure of wbsa itself (no traceback).
+    release : callable
+        Gives the place back (:meth:`wbsa.server.jobs.Slot.hand_on`); called when the job ends (also if the
+        page went away).
 
     Yields
     ------
@@ -60,7 +63,7 @@ async def stream_answer(runner, job, keep, failed):
         loop.call_soon_threadsafe(queue.put_nowait, {"stage": stage, "done": int(done), "total": int(total)})
 
     def ended(future) -> None:
-        runner.release()
+        release()
         if not future.cancelled() and future.exception() is None:
             keep(future.result())
         queue.put_nowait(None)

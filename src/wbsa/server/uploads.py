@@ -302,4 +302,10 @@ def scrub(message: str, folder, name: str) -> str:
     'frame.png is not a readable image'
     """
     folder = str(folder)
-    return re.sub(re.escape(folder) + r"[^\s;,:)]*", name, message)
+    out, rest = [], message
+    while folder in rest:  # the folder and the rest of its path, up to a space or a mark that ends a path
+        before, _, after = rest.partition(folder)
+        end = next((i for i, ch in enumerate(after) if ch.isspace() or ch in ";,:)"), len(after))
+        out.append(before + name)
+        rest = after[end:]
+    return "".join(out) + rest

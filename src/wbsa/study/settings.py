@@ -40,6 +40,7 @@ from wbsa.scan.settings import ScanJob, ScanSettings
 from wbsa.sensor.settings import SensorSettings
 from wbsa.settings_io import dump_toml, from_table, to_table
 from wbsa.surface.settings import ReconstructionSettings
+from wbsa.settings_io import check_types
 
 #: Shipped study files (``wbsa run --config NAME``), in ``wbsa/configs/NAME.toml``.
 SHIPPED_CONFIGS: tuple[str, ...] = ("default", "paper", "distance-sweep", "reconstruction", "varied")
@@ -71,6 +72,9 @@ class StudyInfo:
     name: str = "wbsa study"
     description: str = ""
 
+    def __post_init__(self) -> None:
+        check_types(self)
+
 
 @dataclass(frozen=True, kw_only=True)
 class StudySettings:
@@ -99,6 +103,9 @@ class StudySettings:
     run: RunSettings = field(default_factory=RunSettings)
     source: str = "default"
     base_dir: str = "."
+
+    def __post_init__(self) -> None:
+        check_types(self)
 
     def __repr__(self) -> str:
         s = self.scan

@@ -16,9 +16,10 @@ import numpy as np
 import pandas as pd
 
 from wbsa.training.capture import CaptureSettings, sample_capture
-from wbsa.estimation.subject.checks import MAX_CLOTHING_M
+from wbsa.estimation.limits import MAX_CLOTHING_M
 from wbsa.errors import WbsaError
-from wbsa.typing import EDGE_PIXELS, TEST_RENDERERS, TEST_SCENES, EdgePixels, TestRenderer, TestScene
+from wbsa.typing import EdgePixels, TestRenderer, TestScene
+from wbsa.settings_io import check_types
 
 #: Stream tag of the plain renderer's noise (independent of the capture's streams).
 PLAIN_NOISE_STREAM = 0x91A1
@@ -90,14 +91,9 @@ class RoomTestSettings:
     seed: int = 1000
 
     def __post_init__(self) -> None:
-        if self.edge_pixels not in EDGE_PIXELS:
-            raise WbsaError(f"edge_pixels {self.edge_pixels!r} is unknown; use one of {', '.join(EDGE_PIXELS)}")
+        check_types(self)
         if not 0.0 <= self.edge_share <= 1.0:
             raise WbsaError(f"edge_share {self.edge_share} must be a share of the depth edges in [0, 1]")
-        if self.scene not in TEST_SCENES:
-            raise WbsaError(f"scene {self.scene!r} is unknown; use one of {', '.join(TEST_SCENES)}")
-        if self.renderer not in TEST_RENDERERS:
-            raise WbsaError(f"renderer {self.renderer!r} is unknown; use one of {', '.join(TEST_RENDERERS)}")
         if not 0.0 <= self.clothing_m <= MAX_CLOTHING_M:
             raise WbsaError(f"clothing_m {self.clothing_m} must be a layer of 0–{MAX_CLOTHING_M:g} m (0.01 for 1 cm "
                             "of clothes)")

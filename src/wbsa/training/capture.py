@@ -17,6 +17,7 @@ from wbsa.camera.presets import TRAINED_CAMERAS, CameraRecord, camera_record
 from wbsa.errors import WbsaError
 from wbsa.sensor.settings import KINECT_V1_BASELINE_M, KINECT_V1_DISPARITY_STEP_PX, SensorSettings
 from wbsa.typing import EDGE_PIXELS, EdgePixels, NoiseModel
+from wbsa.settings_io import check_types
 
 #: Camera-to-subject distances (m) a training world may span: nearer, a standing adult does not fit the frame
 #: of any preset; farther, beyond every preset's working range.
@@ -73,11 +74,12 @@ class CaptureSettings:
     edge_pixels: tuple[EdgePixels, ...] = EDGE_PIXELS  # type: ignore[assignment]
 
     def __post_init__(self) -> None:
-        if isinstance(self.edge_pixels, str) or not self.edge_pixels or not set(self.edge_pixels) <= set(EDGE_PIXELS):
+        check_types(self)
+        if not self.edge_pixels:
             raise WbsaError(f"edge_pixels {self.edge_pixels!r} must be a tuple of some of {', '.join(EDGE_PIXELS)}, "
                             "e.g. ('kept',)")
 
-        if isinstance(self.cameras, (str, CameraRecord)) or not self.cameras:
+        if not self.cameras:
             raise WbsaError(f"cameras {self.cameras!r} must be a non-empty tuple of presets or camera records")
         for c in self.cameras:
             if not isinstance(c, CameraRecord):
@@ -89,9 +91,6 @@ class CaptureSettings:
         lo, hi = self.camera_height_m
         if not 0.0 <= lo <= hi:
             raise WbsaError(f"camera_height_m {self.camera_height_m} must be (low, high) metres with 0 <= low <= high")
-        if self.noise_model not in ("camera", "nguyen2012"):
-            raise WbsaError(f"noise_model {self.noise_model!r} must be 'camera' or 'nguyen2012' "
-                            "(noise=False for none)")
         lo, hi = self.noise_scale
         if not 0.0 <= lo <= hi <= 10.0:
             raise WbsaError(f"noise_scale {self.noise_scale} must be (low, high) factors with 0 <= low <= high <= 10")

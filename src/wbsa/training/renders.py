@@ -134,10 +134,11 @@ def _room_capture(mesh, cap, alone: bool, rng: np.random.Generator, edge_rng: np
     else:
         room = compose_room(mesh, cap.view.azimuth_deg, wall_behind_m=float(rng.uniform(*settings.wall_behind_m)))
     _, depth = capture_room(room, cap, seed=seed, subject_id=sample)
+    sensor = envelope_model(cap.camera)
     depth, mixed = repair_mixed_pixels(with_edge_pixels(depth, cap.edge_pixels, cap.edge_share, edge_rng),
-                                        cap.camera.fx, envelope_model(cap.camera))
+                                        cap.camera.fx, sensor)
     try:
-        seg = segment_subject(depth, cap.camera, SegmentSettings(pick="center"))
+        seg = segment_subject(depth, cap.camera, SegmentSettings(pick="center"), sensor=sensor)
     except WbsaError:
         return depth, mixed, None, None
     if np.count_nonzero(seg.mask) < 200:

@@ -7,7 +7,8 @@ from dataclasses import dataclass, field
 
 from wbsa.errors import SettingsError
 from wbsa.training.capture import CaptureSettings
-from wbsa.typing import SURVEY_MEASURES, SurveyMeasures
+from wbsa.settings_io import check_types
+from wbsa.typing import SurveyMeasures
 
 @dataclass(frozen=True)
 class RenderSettings:
@@ -57,8 +58,9 @@ class RenderSettings:
     clothing_m: tuple[float, float] = (0.0, 0.015)
 
     def __post_init__(self) -> None:
+        check_types(self)
         check_clothing_settings(self.clothed_share, self.clothing_m)
-        if not isinstance(self.views_per_subject, int) or self.views_per_subject < 1:
+        if self.views_per_subject < 1:
             raise SettingsError("views_per_subject", f"must be an integer >= 1, got {self.views_per_subject!r}")
         if not 0.0 <= self.alone_share <= 1.0:
             raise SettingsError("alone_share", f"{self.alone_share} must be a share of the captures in [0, 1]")
@@ -68,7 +70,7 @@ class RenderSettings:
 
 def check_clothing_settings(clothed_share: float, clothing_m: tuple[float, float]) -> None:
     """Refuse a share of dressed captures outside [0, 1] or a thickness range outside 0–5 cm (one-line SettingsError)."""
-    from wbsa.estimation.subject.checks import MAX_CLOTHING_M
+    from wbsa.estimation.limits import MAX_CLOTHING_M
 
     if not 0.0 <= clothed_share <= 1.0:
         raise SettingsError("clothed_share", f"{clothed_share} must be a share of the captures in [0, 1]")
@@ -124,18 +126,14 @@ class TrainSettings:
     seed: int = 0
 
     def __post_init__(self) -> None:
+        check_types(self)
         if self.n_random < 0 or self.n_survey < 0 or self.n_random + self.n_survey < 8:
             raise SettingsError("n_random", "+ n_survey must be at least 8 subjects")
-        if self.survey_measures not in SURVEY_MEASURES:
-            raise SettingsError("survey_measures", f"{self.survey_measures!r} must be one of {', '.join(SURVEY_MEASURES)}")
         if not 0.05 <= self.calibration_fraction <= 0.5:
             raise SettingsError("calibration_fraction", f"{self.calibration_fraction} must lie in [0.05, 0.5]")
-        if not isinstance(self.render, RenderSettings):
-            raise SettingsError("render", f"must be a RenderSettings, got {type(self.render).__name__}")
-        if not isinstance(self.folds, int) or self.folds < 2:
+        if self.folds < 2:
             raise SettingsError("folds", f"must be an integer >= 2, got {self.folds!r}")
-        counts_ok = all(isinstance(v, int) for v in (self.tree_iterations, self.tree_leaves, self.tree_bags))
-        if not (counts_ok and self.tree_iterations >= 1 and self.tree_leaves >= 2 and self.tree_l2 >= 0
+        if not (self.tree_iterations >= 1 and self.tree_leaves >= 2 and self.tree_l2 >= 0
                 and self.tree_bags >= 1):
             raise SettingsError("tree_iterations",
                                 f"({self.tree_iterations!r}) must be an integer >= 1, tree_leaves ({self.tree_leaves!r}) "

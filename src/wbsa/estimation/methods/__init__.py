@@ -2,12 +2,12 @@
 
 ``base``        :class:`Subject`, :class:`Request`, :class:`Prediction`, the :class:`Predictor` interface
 ``view``        the view every method shares (mirror-equivalent azimuth, the view used, the stated-view check)
-``dispatch``    :func:`predictor_for`, the one place a method is picked
+``dispatch``    :func:`predictors_for`, the one place a method is picked (``predictor_for`` deprecated)
 ``regression``  the estimator model (and a ``wbsa fit`` model file's per-view fits)
 ``body_fit``    anny fitted to the view and measured at rest
 
 A new method is a package here with a :class:`Predictor`, its name in :data:`wbsa.typing.METHODS` and one branch
-in :func:`predictor_for`. Names are imported lazily.
+in :func:`predictors_for`. Names are imported lazily.
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 :class:`Predictor` interface (the role :mod:`wbsa.camera.backends`' protocol plays for the ray casters).
 
 A method is a :class:`Predictor` in a package of its own under :mod:`wbsa.estimation.methods`;
-:func:`~wbsa.estimation.methods.dispatch.predictor_for` is the one place that picks it.
+:func:`~wbsa.estimation.methods.dispatch.predictors_for` is the one place that picks it.
 """
 
 from __future__ import annotations
@@ -13,7 +13,8 @@ from typing import TYPE_CHECKING, Callable, Protocol
 import numpy as np
 
 if TYPE_CHECKING:  # pragma: no cover
-    from wbsa.camera.intrinsics import Intrinsics
+    from wbsa.camera.presets import CameraRecord
+    from wbsa.sensor.technology import SensorModel
     from wbsa.estimation.subject.cloud import Plane
     from wbsa.estimation.subject.measure import SubjectMeasures
     from wbsa.estimation.methods.view import ViewEstimate
@@ -29,17 +30,23 @@ class Subject:
         The depth image (metres, 0 = no return), mixed returns repaired.
     mask : (h, w) bool
         The subject's pixels (the segmentation).
-    camera : Intrinsics
+    camera : CameraRecord
+        The camera's record (its intrinsics, working range, technology), as the request resolved it
+        (:class:`wbsa.estimation.request.EstimateRequest`).
     floor : Plane or None
         The detected floor in the camera frame.
     measures : SubjectMeasures
+    sensor : SensorModel or None
+        The depth-noise model assumed for the camera (the request's); None: that of a camera whose technology is
+        unknown.
     """
 
     depth_m: np.ndarray
     mask: np.ndarray
-    camera: Intrinsics
+    camera: CameraRecord
     floor: Plane | None
     measures: SubjectMeasures
+    sensor: SensorModel | None = None
 
 
 @dataclass(frozen=True)

@@ -1,7 +1,8 @@
 """Which method answers: one question (WBSA of a segmented, measured subject) behind one interface.
 
 Modelled on the ray-casting back ends (:mod:`wbsa.camera.backends`): every method is a :class:`Predictor`
-in a module of its own, and :func:`predictor_for` is the one place that picks it.
+in a module of its own, and :func:`predictors_for` is the one place that picks it (:func:`predictor_for`, one
+method's, is deprecated).
 
 ``regression`` (:mod:`.regression`)
     The estimator model (:class:`~wbsa.estimation.methods.regression.model.EstimatorModel`): the subject's measures and the view
@@ -53,7 +54,8 @@ def predictors_for(method: Method, model=None, body_fit: BodyFitSettings | None 
     ----------
     method : {'regression', 'body-fit', 'both'}
     model : EstimatorModel, WbsaModel, path or None
-        The regression's model (see :func:`predictor_for`).
+        The regression's model (the body fit has its own). None: the shipped default model. A path: an
+        estimator model file (``.npz``) or a ``wbsa fit`` model file (``.json``), read and checked at once.
     body_fit : BodyFitSettings or None
         The body fit's settings (None: the defaults); only with ``body-fit`` or ``both``.
 
@@ -68,7 +70,8 @@ def predictors_for(method: Method, model=None, body_fit: BodyFitSettings | None 
 
 
 def predictor_for(method: Method, model=None, body_fit: BodyFitSettings | None = None) -> Predictor:
-    """The predictor of one method with ``model`` (the one dispatch point).
+    """The predictor of one method with ``model``; deprecated (a :class:`DeprecationWarning`): use
+    :func:`predictors_for`, the one dispatch point.
 
     Parameters
     ----------
@@ -84,6 +87,10 @@ def predictor_for(method: Method, model=None, body_fit: BodyFitSettings | None =
     -------
     Predictor
     """
+    import warnings
+
+    warnings.warn("predictor_for is deprecated; use predictors_for(method, model, body_fit)", DeprecationWarning,
+                  stacklevel=2)
     check_method(method)
     if method == "both":
         raise WbsaError("predictor_for takes one method; use predictors_for for both")

@@ -13,6 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from wbsa.errors import Worded
+
 #: A stated view further than this (degrees) from the estimated one is flagged.
 VIEW_TOLERANCE_DEG = 30.0
 
@@ -89,8 +91,10 @@ def view_used(view: ViewEstimate, azimuth_deg: float | None,
     el = view.elevation_deg if elevation_deg is None else float(elevation_deg)
     flags: dict[str, str] = {}
     if azimuth_deg is None and not view.azimuth_sd_deg <= UNCERTAIN_AZIMUTH_SD_DEG:
-        flags["uncertain_view"] = (f"azimuth {view.azimuth_deg:.0f}° ± {view.azimuth_sd_deg:.0f}° (camera in front "
-                                   f"with probability {view.p_front:.2f}); give --azimuth if you know it")
+        said = (f"azimuth {view.azimuth_deg:.0f}° ± {view.azimuth_sd_deg:.0f}° (camera in front with probability "
+                f"{view.p_front:.2f})")
+        flags["uncertain_view"] = Worded(f"{said}; give --azimuth if you know it",
+                                         f"{said}; type the azimuth if you know it")
     return (az, el), flags
 
 

@@ -12,7 +12,8 @@ import math
 
 import numpy as np
 
-from wbsa.errors import WbsaError
+from wbsa.errors import WbsaError, Worded
+from wbsa.estimation.limits import HUMAN_HEIGHT_M
 
 #: The silhouette of a standing person (:func:`person_shape_flags`): the share of its bounding box
 #: (width × stature) it fills, and its width per metre of stature. Measured on rendered bodies in a room
@@ -21,14 +22,10 @@ from wbsa.errors import WbsaError
 #: edge-on), a 1.7 m post of 0.12 m 0.82–0.84 (width 0.08 of its stature), a wall piece edge-on 0.06.
 PERSON_MAX_FILL = 0.75
 PERSON_MIN_WIDTH_PER_STATURE = 0.10
-#: Heights from the point cloud outside this range (m) mean a wrong depth scale or units.
-HUMAN_HEIGHT_M = (0.5, 2.5)
 #: Mixed returns beside the subject per pixel of its outline above which the estimate is flagged: on the
 #: benchmark's clean images (edges kept) 1 of 299 is above; with 10 % of the depth edges mixed the median
 #: is about 0.09, with all of them 0.5 (docs/estimate.md, "Depth edges").
 MIXED_PER_OUTLINE_PIXEL = 0.1
-#: Thickest layer of clothes (m) that can be stated; the default model is trained on 0–1.5 cm (flagged beyond).
-MAX_CLOTHING_M = 0.05
 
 
 def check_two_dimensional(depth: np.ndarray) -> None:
@@ -54,8 +51,11 @@ def check_image_size(depth: np.ndarray, camera) -> None:
     check_two_dimensional(depth)
     h, w = np.shape(depth)
     if (w, h) != (camera.width, camera.height):
-        raise WbsaError(f"the depth image is {w}x{h} but camera {camera.name} is {camera.width}x{camera.height}; "
-                        "give the camera that took it (--camera PRESET or an intrinsics JSON)")
+        what = f"the depth image is {w}x{h} but camera {camera.name} is {camera.width}x{camera.height}"
+        raise WbsaError(f"{what}; give the camera that took it (--camera PRESET or an intrinsics JSON)",
+                        code="camera_size", field="camera", value=camera.name,
+                        page=f"{what}; give the camera that took it (choose it under Camera, or add its intrinsics "
+                             "file)")
 
 
 def person_shape_flags(stature_m: float, width_m: float, silhouette_m2: float) -> dict[str, str]:
@@ -81,8 +81,9 @@ def person_shape_flags(stature_m: float, width_m: float, silhouette_m2: float) -
             f"{100 * PERSON_MAX_FILL:.0f} %)" if fill > PERSON_MAX_FILL else
             f"is {width_m:.2f} m wide for {stature_m:.2f} m tall (a person at least {PERSON_MIN_WIDTH_PER_STATURE:g} "
             "of the height)")
-    return {"not_a_person": f"the object {what}: a board, post or wall? the estimate is not a person's; check the "
-                            "segmentation (--mask-out) and pick the subject"}
+    said = f"the object {what}: a board, post or wall? the estimate is not a person's"
+    return {"not_a_person": Worded(f"{said}; check the segmentation (--mask-out) and pick the subject",
+                                   f"{said}; check the white outline in the depth picture and click on the person")}
 
 
 def check_height(stature_m: float) -> None:
@@ -123,23 +124,10 @@ def check_stated_stature(stature_m: float) -> float:
     """
     lo, hi = HUMAN_HEIGHT_M
     if not (is_real_number(stature_m) and math.isfinite(float(stature_m)) and lo <= float(stature_m) <= hi):
-        raise WbsaError(f"the stated stature {stature_m!r} m must be a height of {lo:g} to {hi:g} m, e.g. 1.72 "
-                        "(on the command line --stature-cm 172)")
+        said = f"the stated stature {stature_m!r} m must be a height of {lo:g} to {hi:g} m, e.g. 1.72"
+        raise WbsaError(f"{said} (on the command line --stature-cm 172)", code="out_of_range", field="stature_m",
+                        value=stature_m, page=said)
     return float(stature_m)
-
-
-def check_clothing(clothing_m: float) -> None:
-    """Raise if a stated layer of clothes is not a thickness of 0 to :data:`MAX_CLOTHING_M` metres.
-
-    Parameters
-    ----------
-    clothing_m : float
-        The stated layer (m).
-    """
-    ok = is_real_number(clothing_m) and math.isfinite(float(clothing_m)) and 0.0 <= float(clothing_m) <= MAX_CLOTHING_M
-    if not ok:
-        raise WbsaError(f"the clothes' layer {clothing_m!r} m must be a thickness of 0 to {MAX_CLOTHING_M:g} m "
-                        "(0 for none or tight-fitting, 0.01 for 1 cm; on the command line --clothing-cm 1)")
 
 
 def check_finite_model(arrays: dict, source: str) -> None:
@@ -185,9 +173,9 @@ def working_range_flags(distance_m: float, camera) -> dict[str, str]:
     ----------
     distance_m : float
         The subject's distance from the camera (m).
-    camera : Intrinsics
+    camera : wbsa.camera.presets.CameraRecord
     """
-    lo, hi = float(camera.min_range_m), float(camera.max_range_m)
+    lo, hi = (float(v) for v in camera.working_range_m)
     if lo <= distance_m <= hi:
         return {}
     return {"beyond_working_range": f"subject at {distance_m:.2f} m, camera {camera.name} works {lo:g}–{hi:g} m; "
@@ -202,15 +190,12 @@ def feet_flags(distance_m: float, camera) -> dict[str, str]:
     ----------
     distance_m : float
         The subject's distance from the camera (m).
-    camera : Intrinsics
+    camera : wbsa.camera.presets.CameraRecord
     """
-    from wbsa.camera.presets import CAMERAS
-
-    record = CAMERAS.get(camera.name)
-    if record is None or record.feet_within_m is None or record.intrinsics != camera or distance_m <= record.feet_within_m:
+    if camera.feet_within_m is None or distance_m <= camera.feet_within_m:
         return {}
     return {"feet_unsure": f"subject at {distance_m:.2f} m; the {camera.name} tells the feet from the floor within "
-                           f"{record.feet_within_m:g} m: step closer"}
+                           f"{camera.feet_within_m:g} m: step closer"}
 
 
 def mixed_pixel_flags(mixed_share: float) -> dict[str, str]:

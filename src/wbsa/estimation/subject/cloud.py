@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from wbsa.sensor.technology import SensorModel, envelope_m, envelope_model
+from wbsa.sensor.technology import SensorModel, envelope_m, unknown_camera_model
 
 
 def depth_noise_m(z: np.ndarray, sensor: SensorModel | None = None) -> np.ndarray:
@@ -31,7 +31,7 @@ def depth_noise_m(z: np.ndarray, sensor: SensorModel | None = None) -> np.ndarra
     (...) float64
         σ in metres.
     """
-    return envelope_m(envelope_model(None) if sensor is None else sensor, z)
+    return envelope_m(unknown_camera_model() if sensor is None else sensor, z)
 
 
 @dataclass(frozen=True)

@@ -103,10 +103,17 @@ class Cluster:
     top_cut: bool = False
     bottom_cut: bool = False
 
-    def describe(self) -> str:
-        """``1.72 m tall at pixel (312, 240), 2.9 m away`` for messages."""
-        return (f"{self.height_m:.2f} m tall at pixel ({self.pixel_xy[0]}, {self.pixel_xy[1]}), "
-                f"{self.distance_m:.1f} m away")
+    def describe(self, page: bool = False) -> str:
+        """``1.72 m tall at pixel (312, 240), 2.9 m away`` for messages.
+
+        Parameters
+        ----------
+        page : bool
+            In the page's words: ``at (312, 240) in the picture``.
+        """
+        x, y = self.pixel_xy
+        where = f"at ({x}, {y}) in the picture" if page else f"at pixel ({x}, {y})"
+        return f"{self.height_m:.2f} m tall {where}, {self.distance_m:.1f} m away"
 
 
 def describe_clusters(pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarray, shape: tuple[int, int],

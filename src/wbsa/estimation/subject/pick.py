@@ -37,16 +37,22 @@ def choose(people: list[Cluster], clusters: list[Cluster], pick, image_label: np
     """
     h, w = image_label.shape
     if is_pixel(pick) and not (0 <= pick[0] < w and 0 <= pick[1] < h):  # refused with one person in view too
-        raise WbsaError(f"pick pixel ({pick[0]}, {pick[1]}) lies outside the {w} x {h} depth image; "
-                        "give x,y of a pixel on the subject")
+        where = f"({pick[0]}, {pick[1]}) lies outside the {w} x {h} depth image"
+        raise WbsaError(f"pick pixel {where}; give x,y of a pixel on the subject", code="choose_person",
+                        field="pick", value=pick,
+                        page=f"the point clicked {where}; click on the person in the depth picture")
     if is_pixel(pick):
         return _at_pixel(people, clusters, (int(pick[0]), int(pick[1])), image_label, limits)
     if len(people) == 1:
         return people[0]
     if pick is None:
-        listing = "; ".join(f"{i + 1}: {c.describe()}" for i, c in enumerate(sorted(people, key=lambda c: c.pixel_xy)))
+        ordered = sorted(people, key=lambda c: c.pixel_xy)
+        listing = "; ".join(f"{i + 1}: {c.describe()}" for i, c in enumerate(ordered))
+        shown = "; ".join(f"{i + 1}: {c.describe(page=True)}" for i, c in enumerate(ordered))
         raise WbsaError(f"{len(people)} people in the depth image ({listing}); "
-                        "choose one with pick nearest, largest, center or x,y")
+                        "choose one with pick nearest, largest, center or x,y", code="choose_person", field="pick",
+                        page=f"{len(people)} people in the depth image ({shown}): click on the person to measure "
+                             "in the depth picture")
     if pick == "nearest":
         return min(people, key=lambda c: c.distance_m)
     if pick == "largest":
@@ -76,7 +82,9 @@ def _at_pixel(people: list[Cluster], clusters: list[Cluster], xy: tuple[int, int
             return behind
         why = why_not_a_person(under, *limits) or "it is seen past a nearer object"
         raise WbsaError(f"pick pixel ({x}, {y}) lies on an object that is not a person ({under.describe()}: {why}); "
-                        f"{_people_hint(people)}")
+                        f"{_people_hint(people)}", code="choose_person", field="pick", value=xy,
+                        page=f"the point clicked ({x}, {y}) lies on an object that is not a person "
+                             f"({under.describe(page=True)}: {why}); {_people_hint(people, page=True)}")
     r = PICK_REACH_PX
     y0, x0 = max(y - r, 0), max(x - r, 0)
     window = image_label[y0:y + r + 1, x0:x + r + 1]
@@ -86,10 +94,13 @@ def _at_pixel(people: list[Cluster], clusters: list[Cluster], xy: tuple[int, int
     if near:
         return min(near, key=lambda t: t[:2])[2]
     raise WbsaError(f"no person at pick pixel ({x}, {y}) or within {PICK_REACH_PX} pixels of it; "
-                    f"{_people_hint(people)}")
+                    f"{_people_hint(people)}", code="choose_person", field="pick", value=xy,
+                    page=f"no person at the point clicked ({x}, {y}) or within {PICK_REACH_PX} pixels of it; "
+                         f"{_people_hint(people, page=True)}")
 
 
-def _people_hint(people: list[Cluster]) -> str:
-    """``people found: 1.72 m tall at pixel (312, 240), 2.9 m away; ...; pick a pixel on one``."""
-    return ("people found: " + "; ".join(c.describe() for c in sorted(people, key=lambda c: c.pixel_xy))
-            + "; pick a pixel on one")
+def _people_hint(people: list[Cluster], page: bool = False) -> str:
+    """``people found: 1.72 m tall at pixel (312, 240), 2.9 m away; ...; pick a pixel on one`` (``page``: in the
+    page's words)."""
+    found = "people found: " + "; ".join(c.describe(page) for c in sorted(people, key=lambda c: c.pixel_xy))
+    return found + (": click on one of them" if page else "; pick a pixel on one")

@@ -13,7 +13,7 @@ import numpy as np
 from wbsa.estimation.subject.cloud import Plane, ransac_plane
 from wbsa.estimation.subject.frame import Frame
 from wbsa.estimation.subject.settings import SegmentSettings
-from wbsa.sensor.technology import envelope_model
+from wbsa.sensor.technology import SensorModel
 
 #: The floor's normal lies within this angle of the image's up. A camera looking down by ε sees it ε away,
 #: a wall behind the subject 90° + ε and a side wall 90° (plus the camera's roll); at 50° a camera 2 m up
@@ -21,8 +21,8 @@ from wbsa.sensor.technology import envelope_model
 FLOOR_MAX_TILT_DEG = 75.0
 
 
-def find_room(cloud: np.ndarray, settings: SegmentSettings, intrinsics,
-              frame: Frame) -> tuple[Plane | None, list[Plane]]:
+def find_room(cloud: np.ndarray, settings: SegmentSettings, intrinsics, frame: Frame,
+              sensor: SensorModel | None = None) -> tuple[Plane | None, list[Plane]]:
     """Floor and walls among the largest planes of a thinned (v, 3) cloud of an image with this frame (see the
     module doc).
 
@@ -35,6 +35,9 @@ def find_room(cloud: np.ndarray, settings: SegmentSettings, intrinsics,
     frame : Frame
         The image's frame (:func:`wbsa.estimation.subject.frame.image_frame`): its border moved in past bands
         without returns.
+    sensor : SensorModel, optional
+        The camera's depth-noise model (:func:`wbsa.sensor.technology.envelope_model`); None: that of a camera
+        whose technology is unknown.
 
     Returns
     -------
@@ -42,7 +45,6 @@ def find_room(cloud: np.ndarray, settings: SegmentSettings, intrinsics,
     walls : list of Plane
     """
     rng = np.random.default_rng(settings.seed)
-    sensor = envelope_model(intrinsics)
     free = np.ones(len(cloud), dtype=bool)
     surfaces: list[Plane] = []
     for _ in range(settings.max_planes):

@@ -84,7 +84,8 @@ def _voxelise(points: np.ndarray, voxel_m: float) -> tuple[np.ndarray, np.ndarra
     return sums / counts[:, None], inverse
 
 
-def segment_subject(depth_m: np.ndarray, intrinsics, settings: SegmentSettings = SegmentSettings()) -> Segmentation:
+def segment_subject(depth_m: np.ndarray, intrinsics, settings: SegmentSettings = SegmentSettings(), *,
+                    sensor=None) -> Segmentation:
     """Find the subject in a depth image (see the module doc): the people (:func:`find_people`), the one
     ``settings.pick`` chooses (:func:`~wbsa.estimation.subject.pick.choose`), its feet down to the floor.
 
@@ -94,6 +95,9 @@ def segment_subject(depth_m: np.ndarray, intrinsics, settings: SegmentSettings =
         z-depth in metres, 0 = no return.
     intrinsics : wbsa.camera.Intrinsics
     settings : SegmentSettings
+    sensor : SensorModel, optional
+        The camera's depth-noise model (:func:`wbsa.sensor.technology.envelope_model`, as the estimate's request
+        resolved it); None: that of a camera whose technology is unknown.
 
     Returns
     -------
@@ -104,7 +108,7 @@ def segment_subject(depth_m: np.ndarray, intrinsics, settings: SegmentSettings =
     WbsaError
         No returns in the depth range, no person, several without a ``pick``, or a pick on no person.
     """
-    scene = find_people(depth_m, intrinsics, settings)
+    scene = find_people(depth_m, intrinsics, settings, sensor=sensor)
     chosen = choose(scene.people, scene.clusters, settings.pick, scene.image_label, scene.limits)
     h, w = scene.image_label.shape
     mask = np.zeros(h * w, dtype=bool)
@@ -150,7 +154,8 @@ class Scene:
     limits: tuple[float, float, float] = (0.45, 2.6, 2.6)
 
 
-def find_people(depth_m: np.ndarray, intrinsics, settings: SegmentSettings = SegmentSettings()) -> Scene:
+def find_people(depth_m: np.ndarray, intrinsics, settings: SegmentSettings = SegmentSettings(), *,
+                sensor=None) -> Scene:
     """The room, the objects and the people of a depth image (steps 1–4 of the module doc).
 
     Parameters
@@ -160,6 +165,9 @@ def find_people(depth_m: np.ndarray, intrinsics, settings: SegmentSettings = Seg
     intrinsics : wbsa.camera.Intrinsics
     settings : SegmentSettings
         Its ``pick`` is not used here.
+    sensor : SensorModel, optional
+        The camera's depth-noise model (:func:`wbsa.sensor.technology.envelope_model`, as the estimate's request
+        resolved it); None: that of a camera whose technology is unknown.
 
     Returns
     -------
@@ -186,7 +194,7 @@ def find_people(depth_m: np.ndarray, intrinsics, settings: SegmentSettings = Seg
     points = backproject_depth(np.where(ok, depth, 0.0), intrinsics).reshape(-1, 3)[pix].astype(np.float64)
     cloud, voxel_of = _voxelise(points, settings.voxel_m)
     frame = image_frame(ok)
-    floor, walls = find_room(cloud, settings, intrinsics, frame)
+    floor, walls = find_room(cloud, settings, intrinsics, frame, sensor)
     keep = np.ones(len(cloud), dtype=bool) if floor is None else floor.height(cloud) > floor.tolerance(cloud)
     for wall in walls:
         keep &= wall.height(cloud) > wall.tolerance(cloud)

@@ -7,7 +7,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from wbsa.errors import check_field
+from wbsa.estimation.limits import DEPTH_RANGE_M
 from wbsa.typing import PICK_RULES, PickRule
+from wbsa.settings_io import check_types
 
 
 @dataclass(frozen=True)
@@ -17,7 +19,7 @@ class SegmentSettings:
     Attributes
     ----------
     min_depth_m, max_depth_m : float
-        Returns outside this z-range are background.
+        Returns outside this z-range are background (default :data:`wbsa.estimation.limits.DEPTH_RANGE_M`).
     voxel_m : float
         Voxel size of the thinned cloud used for planes and clusters.
     max_planes : int
@@ -40,8 +42,8 @@ class SegmentSettings:
         Seed of the RANSAC plane search (same seed, same mask).
     """
 
-    min_depth_m: float = 0.3
-    max_depth_m: float = 8.0
+    min_depth_m: float = DEPTH_RANGE_M[0]
+    max_depth_m: float = DEPTH_RANGE_M[1]
     voxel_m: float = 0.03
     max_planes: int = 5
     min_plane_fraction: float = 0.04
@@ -54,6 +56,7 @@ class SegmentSettings:
     seed: int = 0
 
     def __post_init__(self) -> None:
+        check_types(self)
         check_field(0 <= self.min_depth_m < self.max_depth_m, "min_depth_m",
                     f"must be 0 or more and below max_depth_m (the depth range {self.min_depth_m}–"
                     f"{self.max_depth_m} m is empty)")

@@ -32,6 +32,7 @@ async function loadInfo() {
   info = await (await fetch("api/info")).json();
   for (const p of info.presets) $("camera").append(el("option", { value: p.name }, `${p.name} (${p.width} × ${p.height})`));
   for (const m of info.methods) $("method").append(el("option", { value: m }, m));
+  [$("height").min, $("height").max] = info.limits.height_cm;  // the library's table of limits
   for (const c of info.clothes) {
     const words = c.words.charAt(0).toUpperCase() + c.words.slice(1);
     $("clothes").append(el("option", { value: c.name }, `${words} (${fmt(c.layer_cm, 1)} ± ${fmt(c.sd_cm, 1)} cm)`));

@@ -17,7 +17,7 @@ import numpy as np
 
 from wbsa.estimation.methods.body_fit.result import BodyFit
 from wbsa.estimation.methods.body_fit.settings import ANGLE_LIMITS_DEG, BodyFitSettings
-from wbsa.errors import WbsaError
+from wbsa.errors import WbsaError, Worded
 
 #: Phenotypes whose value at 0 or 1 flags ``outside_model_range`` (the others are not measured by the view).
 _RANGE_CHECKED = ("p_age", "p_muscle", "p_weight", "p_height", "p_proportions")
@@ -41,7 +41,7 @@ def _models(spacing_m: float):
 
 def fit_body(depth_m: np.ndarray, mask: np.ndarray, camera, floor, *, clothing_m: float = 0.0,
              azimuth_deg: float | None = None, settings: BodyFitSettings = BodyFitSettings(),
-             seed: int = 0, start=None, progress=None) -> BodyFit:
+             seed: int = 0, start=None, progress=None, sensor=None) -> BodyFit:
     """Fit anny to one depth view of a standing person and measure the fitted body.
 
     Parameters
@@ -68,6 +68,9 @@ def fit_body(depth_m: np.ndarray, mask: np.ndarray, camera, floor, *, clothing_m
         how far the fit drifts from it.
     progress : callable or None
         Called as ``progress(step, steps)`` after each optimiser step (:func:`optimise`).
+    sensor : SensorModel, optional
+        The camera's depth-noise model (:func:`wbsa.sensor.technology.envelope_model`): the data term weighs each
+        reading by it. None: that of a camera whose technology is unknown.
 
     Returns
     -------
@@ -79,28 +82,42 @@ def fit_body(depth_m: np.ndarray, mask: np.ndarray, camera, floor, *, clothing_m
         A depth image that is not (h, w) finite metres of the camera's size, an empty mask, fewer than 200
         returns above the floor, a layer of clothes that is not 0 to 5 cm.
     """
-    import torch
-
+    from wbsa.estimation.clothes import check_clothing
     from wbsa.estimation.methods.body_fit.observation import check_inputs
-
-    from wbsa.estimation.subject.checks import check_clothing
+    from wbsa.parallel import torch_threads
 
     check_clothing(clothing_m)
     if azimuth_deg is not None and not math.isfinite(azimuth_deg):
         raise WbsaError(f"azimuth_deg must be a finite number of degrees, got {azimuth_deg!r}")
     depth, mask = check_inputs(depth_m, mask, camera)
     body_model, fit_model, meter = _models(settings.vertex_spacing_m)  # once per process, not timed
-    threads = torch.get_num_threads()
-    torch.set_num_threads(settings.threads)
-    try:
+    with torch_threads(settings.threads):
         return _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fit_model, meter, start,
-                    float(clothing_m), progress)
-    finally:
-        torch.set_num_threads(threads)
+                    float(clothing_m), progress, sensor)
+
+
+def model_edge_detail(parameters) -> Worded | None:
+    """The ``outside_model_range`` detail of a fitted body: its phenotypes within 0.01 of 0 or 1
+    (:data:`_RANGE_CHECKED`) and its local changes beyond ±0.99, as ``p_weight = 1.00`` (the page's words:
+    ``weight at the body model's highest``); None when none is.
+
+    Parameters
+    ----------
+    parameters : pandas.Series
+        The fitted body's anny parameters by name.
+    """
+    at_edge = [(f"{k} = {parameters[k]:.2f}",
+                f"{k[2:]} at the body model's {'lowest' if parameters[k] < 0.5 else 'highest'}")
+               for k in _RANGE_CHECKED if min(parameters[k], 1.0 - parameters[k]) < 0.01]
+    at_edge += [(f"{k} = {parameters[k]:+.2f}", f"{k[2:]} at the body model's {'least' if parameters[k] < 0 else 'most'}")
+                for k in parameters.index if k.startswith("l_") and abs(parameters[k]) > 0.99]
+    if not at_edge:
+        return None
+    return Worded(", ".join(c for c, _ in at_edge), ", ".join(p for _, p in at_edge))
 
 
 def _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fit_model, meter, start,
-         clothing_m, progress) -> BodyFit:
+         clothing_m, progress, sensor) -> BodyFit:
     """:func:`fit_body` on checked inputs, with anny loaded."""
     import torch
 
@@ -112,15 +129,13 @@ def _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fi
     from wbsa.estimation.methods.body_fit.objective import Objective
     from wbsa.estimation.methods.body_fit.observation import observe
     from wbsa.estimation.methods.body_fit.optimize import optimise
-    from wbsa.sensor.technology import camera_model, preset_record
 
     t0 = time.perf_counter()
     deadline = t0 + settings.time_budget_s
     rng = np.random.default_rng(np.random.SeedSequence([int(seed), 0xB0D7]))
-    obs = observe(depth, mask, camera, floor, settings.n_points, rng)
-    record = preset_record(camera)  # the data term weighs each reading by the camera technology's own noise
+    obs = observe(depth, mask, camera, floor, settings.n_points, rng, sensor)
     objective = Objective(obs, settings.robust_loss, settings.robust_scale_m, settings.silhouette_tolerance_px,
-                          camera_model(record if record is not None else "kinect-v1"))
+                          obs.sensor)
     with torch.no_grad():
         starts = (first_guesses(fit_model, objective, settings.restarts, azimuth_deg, settings.child_starts)
                   if start is None else start(obs, fit_model))
@@ -157,10 +172,9 @@ def _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fi
     if edge:
         flags["posture_at_limit"] = ", ".join(edge)
     table = body["table"].iloc[0]
-    at_edge = [f"{k} = {table[k]:.2f}" for k in _RANGE_CHECKED if min(table[k], 1.0 - table[k]) < 0.01]
-    at_edge += [f"{k} = {table[k]:+.2f}" for k in table.index if k.startswith("l_") and abs(table[k]) > 0.99]
+    at_edge = model_edge_detail(table)
     if at_edge:
-        flags["outside_model_range"] = ", ".join(at_edge)
+        flags["outside_model_range"] = at_edge
     if residual > POOR_RESIDUAL_M or inliers < POOR_INLIER_SHARE:
         flags["poor_fit"] = f"residual {1000 * residual:.1f} mm, {100 * inliers:.0f} % of points within 3 cm"
     if mask[0].any() or mask[-1].any() or mask[:, 0].any() or mask[:, -1].any():

@@ -32,7 +32,7 @@ from __future__ import annotations
 import numpy as np
 
 from wbsa.estimation.methods.body_fit.observation import Observation
-from wbsa.sensor.technology import envelope_m, envelope_model
+from wbsa.sensor.technology import envelope_m, unknown_camera_model
 
 #: Scale (m) of the silhouette and free-space residuals; depth tolerance of the free-space term (m), to which
 #: :data:`FREE_SPACE_NOISE_K` times the depth-noise envelope at the vertex's depth is added
@@ -65,8 +65,8 @@ class Objective:
     robust_loss : {'geman-mcclure', 'huber'}
     robust_scale_m, silhouette_tolerance_px : float
     reading : wbsa.sensor.technology.SensorModel, optional
-        The camera technology's noise model, whose σ(z, θ) weighs the along-ray residuals
-        (:func:`wbsa.sensor.technology.camera_model` of the camera's preset; default Kinect v1's).
+        The camera technology's noise model, whose σ(z, θ) weighs the along-ray residuals (the request's,
+        :func:`wbsa.sensor.technology.envelope_model`; default that of a camera whose technology is unknown).
     """
 
     def __init__(self, obs: Observation, robust_loss: str, robust_scale_m: float, silhouette_tolerance_px: float,
@@ -74,12 +74,10 @@ class Objective:
         import torch
 
         from wbsa.estimation.methods.body_fit.rays import RayTerm
-        from wbsa.sensor.technology import camera_model
-
         self.torch = torch
         f32 = torch.float32
         self.obs = obs
-        self.sensor = envelope_model(None) if obs.sensor is None else obs.sensor
+        self.sensor = unknown_camera_model() if obs.sensor is None else obs.sensor
         self.points = torch.as_tensor(obs.points, dtype=f32)
         self.basis = torch.as_tensor(obs.basis, dtype=f32)
         self.origin = torch.as_tensor(obs.origin, dtype=f32)
@@ -97,7 +95,7 @@ class Objective:
         self.tolerance_px = float(silhouette_tolerance_px)
         #: the along-ray term of the observed points
         self.rays = RayTerm(obs.points, obs.camera_position, obs.basis[:, 2],
-                            camera_model("kinect-v1") if reading is None else reading)
+                            unknown_camera_model() if reading is None else reading)
 
     # -- geometry ---------------------------------------------------------------------------
     def project(self, v):

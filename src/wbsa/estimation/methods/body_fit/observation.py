@@ -177,7 +177,7 @@ def view_frame(points_cam: np.ndarray, floor) -> tuple[np.ndarray, np.ndarray]:
 
 
 def observe(depth_m: np.ndarray, mask: np.ndarray, camera, floor, n_points: int,
-            rng: np.random.Generator) -> Observation:
+            rng: np.random.Generator, sensor=None) -> Observation:
     """The :class:`Observation` of a checked depth image and subject mask (:func:`check_inputs`).
 
     Returns on the floor (within its noise, :func:`wbsa.estimation.subject.cloud.above_floor`) are dropped from
@@ -197,6 +197,9 @@ def observe(depth_m: np.ndarray, mask: np.ndarray, camera, floor, n_points: int,
         Most points kept (a seeded even subsample beyond it).
     rng : numpy.random.Generator
         Draws the point and outline subsamples.
+    sensor : SensorModel, optional
+        The camera's depth-noise model (:func:`wbsa.sensor.technology.envelope_model`); None: that of a camera
+        whose technology is unknown.
 
     Raises
     ------
@@ -208,7 +211,6 @@ def observe(depth_m: np.ndarray, mask: np.ndarray, camera, floor, n_points: int,
     from wbsa.core.backproject import ray_directions
     from wbsa.estimation.subject.cloud import above_floor
     from wbsa.estimation.subject.measure import measured_depth_noise
-    from wbsa.sensor.technology import envelope_model
 
     valid = mask & (depth_m > 0)
     rows, cols = np.nonzero(valid)
@@ -238,7 +240,7 @@ def observe(depth_m: np.ndarray, mask: np.ndarray, camera, floor, n_points: int,
                        skew=float(getattr(camera, "skew", 0.0) or 0.0), outside_px=outside, depth=depth,
                        crop=(int(r0), int(c0)), top_m=top, floor_seen=floor is not None, n_returns=n_returns,
                        noise_m=measured_depth_noise(depth_m, valid), contour_px=contour_px,
-                       contour_depth=contour_depth, sensor=envelope_model(camera))
+                       contour_depth=contour_depth, sensor=sensor)
 
 
 def outline(depth: np.ndarray, sub: np.ndarray, corner: tuple[int, int], shape: tuple[int, int],

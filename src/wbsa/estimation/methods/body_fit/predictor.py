@@ -37,8 +37,10 @@ class BodyFitPredictor:
 
         calibration = load()
         if calibration is not None and abs(request.level - calibration.level) > 1e-9:
-            raise WbsaError(f"the body fit's interval is calibrated at level {calibration.level:g} only; give "
-                            f"--level {calibration.level:g} or use --method regression")
+            said = f"the body fit's interval is calibrated at level {calibration.level:g} only"
+            raise WbsaError(f"{said}; give --level {calibration.level:g} or use --method regression",
+                            code="out_of_range", field="level", value=request.level,
+                            page=f"{said}; choose the method regression")
 
     def predict(self, subject: Subject, request: Request) -> Prediction:
         """WBSA of the fitted body at rest; its flags (``not_converged`` ...) become the estimate's.
@@ -50,8 +52,9 @@ class BodyFitPredictor:
         """
         from wbsa.estimation.methods.body_fit.fit import fit_body
 
-        fit = fit_body(subject.depth_m, subject.mask, subject.camera, subject.floor, clothing_m=request.clothing_m,
-                       azimuth_deg=request.azimuth_deg, settings=self.settings, progress=request.progress)
+        fit = fit_body(subject.depth_m, subject.mask, subject.camera.intrinsics, subject.floor,
+                       clothing_m=request.clothing_m, azimuth_deg=request.azimuth_deg, settings=self.settings,
+                       progress=request.progress, sensor=subject.sensor)
         psi = float(fold_azimuth(fit.azimuth_deg))
         view = ViewEstimate(psi, float("nan"), fit.elevation_deg, float("nan"), float("nan"))
         az = psi if request.azimuth_deg is None else float(fold_azimuth(request.azimuth_deg))

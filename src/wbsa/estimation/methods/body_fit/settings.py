@@ -6,8 +6,9 @@ import math
 from dataclasses import dataclass
 
 from wbsa.bodies.composition import CompositionSettings
-from wbsa.errors import SettingsError
-from wbsa.typing import DATA_TERMS, ROBUST_LOSSES, DataTerm, RobustLoss
+from wbsa.errors import SettingsError, check_field
+from wbsa.typing import DataTerm, RobustLoss
+from wbsa.settings_io import check_types
 
 #: Box of each posture motion (degrees, change from anny's rest A-pose; :data:`wbsa.bodies.posing.JOINT_MOTIONS`
 #: order): wide enough for every named standing posture with its jitter (:data:`wbsa.bodies.posture.POSTURES`)
@@ -70,9 +71,11 @@ class BodyFitSettings:
     composition : CompositionSettings
         Body composition for mass and BMI (:mod:`wbsa.bodies.composition`, its equation's value: no residual);
         the default is how the population tables' ``mass_kg`` is made by default.
-    threads : int
-        torch threads during the fit (restored after). The fit is thousands of small operations: one thread
-        is fastest, and far faster than two on a busy machine (measured: 18 ms against up to 1 s a step).
+    threads : int or None
+        torch threads during the fit (restored after; :func:`wbsa.parallel.torch_threads`). The fit is thousands
+        of small operations: one thread is fastest, and far faster than two on a busy machine (measured: 18 ms
+        against up to 1 s a step). None: the count the process has (``wbsa serve`` sets it once at its start,
+        as torch's count is the whole process's and its estimates run in threads).
     """
 
     vertex_spacing_m: float = 0.035
@@ -98,32 +101,21 @@ class BodyFitSettings:
     time_budget_s: float = 300.0
     tolerance: float = 0.0005
     composition: CompositionSettings = CompositionSettings()
-    threads: int = 1
+    threads: int | None = 1
 
     def __post_init__(self) -> None:
-        def positive(name: str) -> None:
-            value = getattr(self, name)
-            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-                raise SettingsError(name, f"must be a positive number, got {value!r}")
-
+        check_types(self)
         for name in ("age_prior_sd", "vertex_spacing_m", "learning_rate", "robust_scale_m", "time_budget_s", "tolerance"):
-            positive(name)
+            value = getattr(self, name)
+            check_field(math.isfinite(value) and value > 0, name, f"must be a positive number, got {value!r}")
         for name in ("n_points", "restarts", "keep_restarts", "steps", "refresh_every", "threads"):
             value = getattr(self, name)
-            if not isinstance(value, int) or value < 1:
-                raise SettingsError(name, f"must be a whole number of at least 1, got {value!r}")
+            check_field(value is None or value >= 1, name, f"must be a whole number of at least 1, got {value!r}")
         for name in ("silhouette_tolerance_px", "silhouette_weight", "contour_weight", "free_space_weight", "phenotype_prior_weight",
                      "local_change_prior_weight"):
             value = getattr(self, name)
-            if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
-                raise SettingsError(name, f"must be 0 or more, got {value!r}")
+            check_field(math.isfinite(value) and value >= 0, name, f"must be 0 or more, got {value!r}")
         if not 0.005 <= self.vertex_spacing_m <= 0.2:
             raise SettingsError("vertex_spacing_m", f"must be 0.005–0.2 m, got {self.vertex_spacing_m}")
         if not 0.0 <= self.prune_at <= 1.0:
             raise SettingsError("prune_at", f"must be a share of the steps in [0, 1], got {self.prune_at}")
-        if self.data_term not in DATA_TERMS:
-            raise SettingsError("data_term", f"{self.data_term!r} is unknown; use one of {', '.join(DATA_TERMS)}")
-        if self.robust_loss not in ROBUST_LOSSES:
-            raise SettingsError("robust_loss", f"{self.robust_loss!r} is unknown; use one of {', '.join(ROBUST_LOSSES)}")
-        if not isinstance(self.composition, CompositionSettings):
-            raise SettingsError("composition", f"must be CompositionSettings, got {type(self.composition).__name__}")

@@ -30,7 +30,9 @@ class PerViewPredictor:
         """
         if request.clothing_m > 0:
             raise WbsaError("a wbsa fit model allows for no clothes; state none (--clothing-cm 0) or use the default "
-                            "estimator model")
+                            "estimator model", field="clothing_m", value=request.clothing_m,
+                            page="a wbsa fit model allows for no clothes; choose no clothes or use the default "
+                                 "estimator model")
 
     def predict(self, subject: Subject, request: Request) -> Prediction:
         """WBSA from the nearest fitted view; flags ``model_mismatch`` and ``uncertain_view``.

@@ -241,7 +241,8 @@ def side_by_side(res: pd.DataFrame) -> None:
         print(f"\nWBSA signed error, plain minus project renderer, paired: {d.mean():+.2f} % "
               f"(95 % CI {d.mean() - half:+.2f} … {d.mean() + half:+.2f}; n = {len(d)}; target ±0.5 %: "
               f"{verdict(abs(d.mean()) <= 0.5)})")
-        by_cam = ok.pivot_table(index=["image", "camera"], columns="renderer", values="err_pct").dropna()
+        pair = ok[ok["renderer"].isin(["project", "plain"])]
+        by_cam = pair.pivot_table(index=["image", "camera"], columns="renderer", values="err_pct").dropna()
         print("  per camera:", (by_cam["plain"] - by_cam["project"]).groupby(level="camera").mean().round(2).to_dict())
         plain, project = ok[ok["renderer"] == "plain"], ok[ok["renderer"] == "project"]
         print(f"regression bias on the plain renderer: {plain['err_pct'].mean():+.2f} % (target ±0.7 %: "

@@ -165,10 +165,13 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     Parameters
     ----------
     depth : (h, w) float array (metres, 0 = no return) or path
-        A path is read with :func:`wbsa.core.read_depth` (16-bit PNG, .npy, .tiff, .exr).
+        A path is read with :func:`wbsa.core.read_depth` (16-bit PNG, .npy, .tiff, .exr). A ``.pcd`` or ``.ply``
+        point cloud (camera frame, metres) is read with :func:`wbsa.core.point_cloud.point_cloud_depth`: an
+        organised ``.pcd`` brings its own camera, recovered from its points.
     camera : str, path or wbsa.camera.Intrinsics
         A preset name (``kinect-v2``, ``realsense-d435``, ...), an Open3D intrinsics JSON, or ``auto``: the preset
-        of the image's size (:func:`wbsa.camera.presets.camera_for_image`), flagged ``camera_assumed``.
+        of the image's size (:func:`wbsa.camera.presets.camera_for_image`), flagged ``camera_assumed``. An organised
+        ``.pcd``'s recovered camera is used under ``auto``; a ``.ply`` or unorganised ``.pcd`` needs a stated one.
     model : EstimatorModel, path or None
         None: the model shipped with wbsa (:func:`wbsa.estimation.methods.regression.default_model.default_model`). A path: an
         estimator model file (``.npz``, e.g. from ``wbsa train``) or a ``wbsa fit`` model file (``.json``).
@@ -220,6 +223,7 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     """
     from wbsa.camera.presets import AUTO_CAMERA, resolve_camera
     from wbsa.camera.views import check_angle
+    from wbsa.core.point_cloud import is_point_cloud_path, point_cloud_depth
     from wbsa.estimation.flags import FLAGS
     from wbsa.estimation.subject import checks
     from wbsa.estimation.subject.measure import measure_subject
@@ -248,7 +252,11 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
                       progress=None if progress is None else lambda step, steps: progress("body-fit", step, steps))
     auto = isinstance(camera, str) and camera == AUTO_CAMERA
     intrinsics = None if auto else resolve_camera(camera)  # a bad camera is refused before the image is read
-    depth_m = _depth_array(depth, depth_scale)
+    if is_point_cloud_path(depth):  # its camera: recovered from an organised cloud's grid, or the stated one
+        depth_m, intrinsics = point_cloud_depth(depth, intrinsics, units_per_m=depth_scale)
+        auto = False
+    else:
+        depth_m = _depth_array(depth, depth_scale)
     if auto:
         checks.check_two_dimensional(depth_m)
         intrinsics = resolve_camera(camera, depth_m.shape)

@@ -26,18 +26,21 @@ def anthropometer(body_model):
 
 
 @pytest.fixture(scope="session")
-def small_estimator_model(tmp_path_factory):
-    """The path of a small estimator model (32 bodies, 2 views each), trained once per run (about 75 s on two
-    busy cores): quick, and still a bagged model with a calibrated interval."""
-    from wbsa.training.pipeline import train_model
-    from wbsa.training.settings import RenderSettings
-    from wbsa.training.settings import TrainSettings
+def small_training_run(tmp_path_factory):
+    """A small training run of ``wbsa.train`` (``helpers.training.small_training_settings``), once per test run
+    (about 100 s on two busy cores, most of it the 64 renders): its folder, with its renders and ``model.npz``."""
+    from helpers.training import small_training_settings
+    from wbsa.training.run import train
 
-    model = train_model(TrainSettings(n_random=32, n_survey=0, render=RenderSettings(views_per_subject=2),
-                                      calibration_fraction=0.5, tree_iterations=200, tree_bags=2, seed=5))
-    path = tmp_path_factory.mktemp("model") / "small.npz"
-    model.save(path)
-    return path
+    folder = tmp_path_factory.mktemp("small-training") / "run"
+    train(small_training_settings(), folder, workers=1, show_progress=False)
+    return folder
+
+
+@pytest.fixture(scope="session")
+def small_estimator_model(small_training_run):
+    """The path of the small training run's model: quick, and still a bagged model with a calibrated interval."""
+    return small_training_run / "model.npz"
 
 
 @pytest.fixture(scope="session")
@@ -55,3 +58,17 @@ def default_report(tmp_path_factory):
         code = main(["run", "--n", "24", "--out", str(out), "--no-progress"])
     assert code == 0, err.getvalue()
     return out / "report.html"
+
+
+@pytest.fixture(scope="session")
+def dask_cluster():
+    """The scheduler address of one two-process dask cluster on loopback for the whole run: the tests that
+    compare work on worker processes with the in-process path share it, so its workers start (and load the
+    body model) once, not once per test."""
+    import logging
+
+    from distributed import LocalCluster
+
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=":0",
+                      silence_logs=logging.ERROR) as cluster:
+        yield cluster.scheduler_address

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import subprocess
 import sys
@@ -55,32 +56,37 @@ def test_the_run_time_estimator_imports_no_training_code():
 
 
 @pytest.mark.slow
-def test_a_small_rebuild_through_the_same_code_path_is_a_loadable_model_and_resumes(tmp_path):
-    """``wbsa.train`` on a few subjects writes a model of the shipped format; a second run in the same folder
-    reads the renders it kept (as a run killed after its renders would) and fits the same model."""
+def test_a_small_rebuild_through_the_same_code_path_is_a_loadable_model_and_resumes(small_training_run, tmp_path,
+                                                                                     monkeypatch):
+    """``wbsa.train`` on a few subjects (the run's small model, tests/conftest.py) writes a model of the shipped
+    format; a second run in a folder holding its renders (as a run killed after its renders would leave it)
+    renders nothing and fits the same model; renders of other settings are refused."""
+    import shutil
+
+    from helpers.training import small_training_settings
     from wbsa.estimation.methods.regression.default_model import default_model_path
     from wbsa.estimation.methods.regression.model import EstimatorModel
-    from wbsa.training.settings import RenderSettings
+    from wbsa.training import renders
     from wbsa.training.run import train
-    from wbsa.training.settings import TrainSettings
 
-    settings = TrainSettings(n_random=24, n_survey=0, render=RenderSettings(views_per_subject=2),
-                             calibration_fraction=0.5, folds=2, tree_iterations=40, tree_bags=1, seed=3)
-    first = train(settings, tmp_path / "run", workers=1, show_progress=False)
-    loaded = EstimatorModel.load(first.path)
-    with np.load(first.path, allow_pickle=False) as small, np.load(default_model_path(), allow_pickle=False) as shipped:
+    first = small_training_run / "model.npz"
+    loaded = EstimatorModel.load(first)
+    with np.load(first, allow_pickle=False) as small, np.load(default_model_path(), allow_pickle=False) as shipped:
         assert set(small.files) == set(shipped.files)
         assert json.loads(str(small["meta_json"]))["version"] == json.loads(str(shipped["meta_json"]))["version"]
-    assert sorted(p.name for p in (tmp_path / "run" / "renders").iterdir()) == ["calibration", "fit"]
-    first.path.unlink()
-    again = train(settings, tmp_path / "run", workers=1, show_progress=False)  # renders read back, not re-rendered
+    assert sorted(p.name for p in (small_training_run / "renders").iterdir()) == ["calibration", "fit"]
+    shutil.copytree(small_training_run / "renders", tmp_path / "run" / "renders")
+    chunks = []
+    render_chunk = renders.render_chunk
+    monkeypatch.setattr(renders, "render_chunk", lambda *a, **k: chunks.append(1) or render_chunk(*a, **k))
+    again = train(small_training_settings(), tmp_path / "run", workers=1, show_progress=False)
+    assert chunks == []  # every render read back, none rendered again
     for key in ("coef", "scores", "spread_coef", "mean", "scale"):
         assert np.array_equal(getattr(EstimatorModel.load(again.path), key), getattr(loaded, key))
     assert "calibration: WBSA MAPE" in again.summary()
     with pytest.raises(WbsaError, match="renders of other training settings"):
-        train(TrainSettings(n_random=24, n_survey=0, render=RenderSettings(views_per_subject=2),
-                            calibration_fraction=0.5, folds=2, tree_iterations=40, tree_bags=1, seed=4),
-              tmp_path / "run", workers=1, show_progress=False)
+        train(dataclasses.replace(small_training_settings(), seed=4), tmp_path / "run", workers=1, show_progress=False)
+    assert chunks == []
 
 
 def test_train_refuses_bad_settings_in_one_line(tmp_path, capsys):

@@ -247,7 +247,7 @@ def test_varied_population_has_the_obese_adults_the_issue_asks_for(body_model):
 
 
 @pytest.mark.slow
-def test_population_is_identical_with_worker_processes(monkeypatch, body_model):
+def test_population_is_identical_with_worker_processes(monkeypatch, body_model, dask_cluster):
     from wbsa.bodies import table as table_module
     from wbsa.bodies.composition import CompositionSettings
     from wbsa.bodies.random_population import RandomPopulationSettings, sample_random_parameters
@@ -256,7 +256,8 @@ def test_population_is_identical_with_worker_processes(monkeypatch, body_model):
     composition = CompositionSettings(model="deurenberg-siri", seed=4)
     one = table_module.measure_population(params, model=body_model, composition=composition, batch_size=16)
     monkeypatch.setattr(table_module, "PARALLEL_MIN_BODIES", 0)
-    two = table_module.measure_population(params, composition=composition, workers=2, batch_size=16)
+    two = table_module.measure_population(params, composition=composition, workers=2, batch_size=16,
+                                          scheduler=dask_cluster)
     pd.testing.assert_frame_equal(one, two, check_exact=True)
 
 

@@ -224,14 +224,15 @@ def test_scan_sees_the_posed_bodies(body_model, mixed_table, tmp_path, monkeypat
 
 
 @pytest.mark.slow
-def test_scan_of_postured_bodies_is_the_same_on_two_workers(body_model, mixed_table, tmp_path, monkeypatch):
+def test_scan_of_postured_bodies_is_the_same_on_two_workers(body_model, mixed_table, tmp_path, monkeypatch,
+                                                            dask_cluster):
     from wbsa.scan import worker
     from wbsa.scan.layout import TABLE_FILE
 
     monkeypatch.setattr(worker, "_BODY_MODEL", body_model)
     mixed_table.iloc[:4].to_parquet(tmp_path / "posed.parquet", index=False)
     assert _scan(tmp_path / "posed.parquet", tmp_path / "one", "--workers", "1") == 0
-    assert _scan(tmp_path / "posed.parquet", tmp_path / "two", "--workers", "2") == 0
+    assert _scan(tmp_path / "posed.parquet", tmp_path / "two", "--scheduler", dask_cluster) == 0  # two workers
     one = pd.read_parquet(tmp_path / "one" / TABLE_FILE)
     pd.testing.assert_frame_equal(one, pd.read_parquet(tmp_path / "two" / TABLE_FILE))
     assert len(one) == 8

@@ -77,21 +77,26 @@ def test_a_pick_on_no_person_is_refused_in_one_line(five_people, pixel, message)
 # ------------------------------------------------- the estimate on the real frame and on renders of its cases
 def test_the_person_cut_at_the_knees_is_refused_and_answered_with_a_stature(five_people, tmp_path):
     """The nearest person of the real frame (dark shirt, 2 m) is cut by the frame at the knees: refused in one
-    line (exit 2); with a stated stature, answered at that stature and flagged ``feet_not_seen``."""
+    line (exit 2); with a stated stature, answered at that stature and flagged ``feet_not_seen``. The ``.pcd``
+    itself is read, its camera recovered from its points; its depth saved as ``.npy`` is read with ``--camera``."""
     from helpers.cli import assert_one_line_error, run_cli
+    from helpers.frames import FIVE_PEOPLE
 
     import json
 
     depth, _, _ = five_people
     path = tmp_path / "five_people.npy"
     np.save(path, depth)
-    base = ["estimate", path, "--camera", "tum", "--pick", "530,250"]
+    base = ["estimate", FIVE_PEOPLE, "--pick", "530,250"]
     assert_one_line_error(*run_cli(*base)[::2], "feet not seen", "--stature-cm")
     code, out, err = run_cli(*base, "--stature-cm", "180", "--json")
     est = json.loads(out)
     assert code == 0 and est["stature_m"] == 1.8 and est["stature_stated_m"] == 1.8
     assert "feet_not_seen" in est["flags"] and "clothes_unstated" in est["flags"] and not est["clothing_stated"]
     assert est["wbsa_lo_m2"] < est["wbsa_m2"] < est["wbsa_hi_m2"] and est["wbsa_m2"] > 1.6  # an adult's, not a child's
+    assert est["camera"] == "five_people.pcd's grid" and "camera_assumed" not in est["flags"]
+    code, out, err = run_cli("estimate", path, "--camera", "tum", "--pick", "530,250", "--stature-cm", "180", "--json")
+    assert code == 0 and json.loads(out)["wbsa_m2"] == pytest.approx(est["wbsa_m2"], rel=1e-4)  # the same camera
     assert_one_line_error(*run_cli("estimate", path, "--camera", "tum", "--pick", "260,150")[::2],
                           "pick pixel (260, 150) lies on an object that is not a person")
     assert_one_line_error(*run_cli(*base, "--clothes", "coat")[::2], "--clothes", "coat")
@@ -209,3 +214,79 @@ def test_the_frame_moves_in_past_bands_without_returns_but_not_past_a_head_or_a_
     alone = np.zeros((100, 200), dtype=bool)
     alone[10:90, 90:110] = True  # a body alone: narrow rows, empty around
     assert image_frame(alone) == Frame(0, 99, 0, 199)
+
+
+# ------------------------------------------------------------------------------------- point clouds as input
+def test_an_organised_pcd_brings_its_own_camera():
+    """PCL's frame: the camera recovered from its own points is TUM's Kinect v1 (fx = fy = 525, c = (319.5,
+    239.5)) to well within 0.5 % of the focal length, and its depth is the points' z in grid order."""
+    from helpers.frames import FIVE_PEOPLE
+    from wbsa.core.point_cloud import point_cloud_depth, read_point_cloud
+
+    depth, camera = point_cloud_depth(FIVE_PEOPLE)
+    assert (camera.width, camera.height) == (640, 480)
+    assert abs(camera.fx / 525.0 - 1) < 0.005 and abs(camera.fy / 525.0 - 1) < 0.005
+    assert abs(camera.cx - 319.5) < 0.5 and abs(camera.cy - 239.5) < 0.5
+    z = read_point_cloud(FIVE_PEOPLE).points_m[:, 2].reshape(480, 640)
+    assert np.array_equal(depth, np.where(np.isfinite(z), z, 0.0)) and 0.7 < (depth > 0).mean() < 0.85
+
+
+def test_a_pcd_written_from_a_render_gives_back_its_camera_and_its_estimate(side_by_side, tmp_path):
+    """A render of known intrinsics (Kinect v2) written as an organised PCD: the camera comes back within
+    0.5 % of its focal length and half a pixel of its centre, and the estimate from the file without a camera
+    is the estimate of the depth image with the camera named (to the rounding of float32 coordinates); a
+    stated camera the grid contradicts is refused."""
+    from helpers.cli import assert_one_line_error, run_cli
+    from helpers.frames import grid_points, write_organised_pcd
+    import wbsa
+    from wbsa.camera import preset
+    from wbsa.estimation import SegmentSettings
+
+    depth, man, _ = side_by_side
+    truth = preset("kinect-v2")
+    path = write_organised_pcd(tmp_path / "render.pcd", grid_points(depth, truth))
+    from wbsa.core.point_cloud import point_cloud_depth
+
+    read, camera = point_cloud_depth(path)
+    assert abs(camera.fx / truth.fx - 1) < 0.005 and abs(camera.fy / truth.fy - 1) < 0.005
+    assert abs(camera.cx - truth.cx) < 0.5 and abs(camera.cy - truth.cy) < 0.5
+    assert np.allclose(read, depth, rtol=1e-6, atol=0)
+    pick = _pick(man)
+    named = wbsa.estimate(depth, "kinect-v2", segment=SegmentSettings(pick=pick))
+    own = wbsa.estimate(path, "auto", segment=SegmentSettings(pick=pick))
+    assert own.wbsa_m2 == pytest.approx(named.wbsa_m2, rel=1e-3) and "camera_assumed" not in own.flags
+    assert own.camera == "render.pcd's grid"
+    assert wbsa.estimate(path, "kinect-v2", segment=SegmentSettings(pick=pick)).camera == "kinect-v2"
+    assert_one_line_error(*run_cli("estimate", path, "--camera", "kinect-v1")[::2], "render.pcd's points lie on the grid",
+                          "fx 365.5", "leave out --camera")
+
+
+def test_a_ply_is_projected_through_the_stated_camera_or_refused_without_one(side_by_side, tmp_path):
+    """A ``.ply`` of the render's points has no grid: without ``--camera`` it is refused in one line naming
+    the option; with it, its points project back onto the render's depth image, and the estimate is the
+    depth image's."""
+    import open3d as o3d
+
+    from helpers.cli import assert_one_line_error, run_cli
+    from helpers.frames import grid_points
+    import wbsa
+    from wbsa.camera import preset
+    from wbsa.core.point_cloud import project_points
+    from wbsa.estimation import SegmentSettings
+
+    depth, man, _ = side_by_side
+    camera = preset("kinect-v2")
+    points = grid_points(depth, camera).reshape(-1, 3)
+    points = points[np.isfinite(points).all(axis=1)]
+    assert np.allclose(project_points(points, camera), depth, rtol=1e-9, atol=0)  # the round trip
+    path = tmp_path / "render.ply"
+    o3d.io.write_point_cloud(str(path), o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points)))
+    assert_one_line_error(*run_cli("estimate", path)[::2], "render.ply is a .ply point cloud, without a pixel grid",
+                          "--camera")
+    pick = _pick(man)
+    named = wbsa.estimate(depth, "kinect-v2", segment=SegmentSettings(pick=pick))
+    code, out, err = run_cli("estimate", path, "--camera", "kinect-v2", "--pick", f"{pick[0]},{pick[1]}", "--json")
+    import json
+
+    assert code == 0, err
+    assert json.loads(out)["wbsa_m2"] == pytest.approx(named.wbsa_m2, rel=1e-4)

@@ -176,16 +176,12 @@ def test_resume_refuses_other_settings_on_the_cli(population, tmp_path, capsys):
 
 
 @pytest.mark.slow
-def test_real_bodies_on_a_two_worker_cluster_equal_the_in_process_scan(population, tmp_path):
+def test_real_bodies_on_a_two_worker_cluster_equal_the_in_process_scan(population, tmp_path, dask_cluster):
     """Real anny bodies and ray casting in two dask worker processes: bit-identical to the in-process run."""
-    from distributed import Client, LocalCluster
-
     pop_path, _ = population
     assert _scan(pop_path, tmp_path / "local", "--chunk-size", "1", azimuths="0,135", elevations="30") == 0
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
-                      dashboard_address=":0") as cluster, Client(cluster):
-        assert _scan(pop_path, tmp_path / "dask", "--chunk-size", "1", "--scheduler", cluster.scheduler_address,
-                     azimuths="0,135", elevations="30") == 0
+    assert _scan(pop_path, tmp_path / "dask", "--chunk-size", "1", "--scheduler", dask_cluster,
+                 azimuths="0,135", elevations="30") == 0
     local = pd.read_parquet(tmp_path / "local" / TABLE_FILE)
     pd.testing.assert_frame_equal(local, pd.read_parquet(tmp_path / "dask" / TABLE_FILE))
     assert len(local) == 6

@@ -154,31 +154,41 @@ def test_resume_after_interruption_gives_the_uninterrupted_table(tmp_path):
 
 
 def test_killed_run_resumes_to_the_uninterrupted_table(tmp_path):
-    """SIGKILL a real scan process mid-way, run the same scan again: same table as an uninterrupted run."""
+    """SIGKILL a real scan process mid-way, run the same scan again: same table as an uninterrupted run.
+
+    The process's third chunk says so (a file) and waits to be killed, so it dies with exactly two parts
+    written, whatever the machine's speed."""
     full = _scan(_population(), tmp_path / "full").table
     out = tmp_path / "killed"
+    waiting = tmp_path / "third-chunk-started"
     script = textwrap.dedent(f"""
-        import sys, time
+        import pathlib, sys, time
         sys.path.insert(0, {str(Path(__file__).parent)!r})
         import test_scan_engine as t
 
-        def slow(subjects, settings):
-            time.sleep(0.25)
+        calls = []
+
+        def third_waits(subjects, settings):
+            calls.append(1)
+            if len(calls) == 3:
+                pathlib.Path({str(waiting)!r}).touch()
+                time.sleep(600)  # killed here
             return t.stand_in_chunk(subjects, settings)
 
-        t._scan(t._population(), {str(out)!r}, chunk_fn=slow)
+        t._scan(t._population(), {str(out)!r}, chunk_fn=third_waits)
     """)
     proc = subprocess.Popen([sys.executable, "-c", script])
     try:
-        deadline = time.monotonic() + 60
-        while time.monotonic() < deadline and len(list((out / PARTS_DIR).glob("part-*.parquet"))) < 2:
+        deadline = time.monotonic() + 300  # a hung child fails the test instead of hanging the suite
+        while not waiting.exists():
             assert proc.poll() is None, "the scan process ended before it could be killed"
+            assert time.monotonic() < deadline, "the scan process never reached its third chunk"
             time.sleep(0.02)
     finally:
         proc.kill()
         proc.wait()
     done = len(list((out / PARTS_DIR).glob("part-*.parquet")))
-    assert 2 <= done < 6 and not (out / TABLE_FILE).exists()
+    assert done == 2 and not (out / TABLE_FILE).exists()
     res = _scan(_population(), out)
     assert res.n_resumed == done
     pd.testing.assert_frame_equal(res.table, full)
@@ -261,25 +271,23 @@ def test_error_in_a_chunk_keeps_the_finished_parts(tmp_path):
     assert not (tmp_path / "out" / TABLE_FILE).exists()
 
 
-def test_two_worker_local_cluster_equals_in_process(tmp_path):
+def test_two_worker_local_cluster_equals_in_process(tmp_path, dask_cluster):
     """A real two-process dask cluster on loopback gives the same table as the in-process path."""
-    from distributed import Client, LocalCluster
+    from distributed import Client
 
     pop = _population(n=30, start=100)
     local = _scan(pop, tmp_path / "local").table
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
-                      dashboard_address=":0") as cluster:
-        with Client(cluster) as client:
-            res = _scan(pop, tmp_path / "dask", scheduler=cluster.scheduler_address)
-            # The chunks really ran in the worker processes, not in this one.
-            worker_pids = set(client.run(os.getpid).values())
-            pids = _scan(pop, tmp_path / "pids", scheduler=cluster.scheduler_address, chunk_fn=pid_chunk).table["pid"]
-            assert set(pids) <= worker_pids and os.getpid() not in worker_pids and len(worker_pids) == 2
-        # Resume into a half-finished folder on the cluster, too.
-        parts = sorted((tmp_path / "dask" / PARTS_DIR).iterdir())
-        for p in parts[::3]:
-            p.unlink()
-        again = _scan(pop, tmp_path / "dask", scheduler=cluster.scheduler_address)
+    with Client(dask_cluster) as client:
+        res = _scan(pop, tmp_path / "dask", scheduler=dask_cluster)
+        # The chunks really ran in the worker processes, not in this one.
+        worker_pids = set(client.run(os.getpid).values())
+        pids = _scan(pop, tmp_path / "pids", scheduler=dask_cluster, chunk_fn=pid_chunk).table["pid"]
+        assert set(pids) <= worker_pids and os.getpid() not in worker_pids and len(worker_pids) == 2
+    # Resume into a half-finished folder on the cluster, too.
+    parts = sorted((tmp_path / "dask" / PARTS_DIR).iterdir())
+    for p in parts[::3]:
+        p.unlink()
+    again = _scan(pop, tmp_path / "dask", scheduler=dask_cluster)
     pd.testing.assert_frame_equal(local, res.table)
     pd.testing.assert_frame_equal(local, again.table)
     assert again.n_resumed == len(parts) - len(parts[::3])

@@ -332,28 +332,79 @@ def test_method_both_shows_each_route_which_leads_and_the_progress_of_the_fit(se
 
 
 @pytest.mark.slow
+def _device(driver, width: int, height: int, mobile: bool) -> None:
+    """Emulate a screen of ``width`` × ``height`` CSS pixels (a phone with ``mobile``: its viewport rules)."""
+    driver.execute_cdp_cmd("Emulation.setDeviceMetricsOverride",
+                           {"width": width, "height": height, "deviceScaleFactor": 1, "mobile": mobile})
+
+
+#: Where the page's progress and answer lie in the window: the progress card's box when it first shows (a
+#: MutationObserver sees it right after the page made it visible), the number's box, the window's size and
+#: the page's scroll width.
+_IN_VIEW = """
+const box = id => { const r = document.getElementById(id).getBoundingClientRect(); return [r.top, r.bottom]; };
+return {progress: window.progressSeen, answer: box('wbsa-value'), height: innerHeight, width: innerWidth,
+        scrollWidth: document.documentElement.scrollWidth};"""
+
+
+def _watch_progress(driver) -> None:
+    """Record the progress card's box when it first shows (``window.progressSeen``)."""
+    driver.execute_script("""
+        window.progressSeen = null;
+        const p = document.getElementById('progress');
+        new MutationObserver(() => { if (!p.hidden && window.progressSeen === null) {
+            const r = p.getBoundingClientRect(); window.progressSeen = [r.top, r.bottom]; } })
+          .observe(p, {attributes: true});""")
+
+
+def _answer_at(driver, url, path, width: int, height: int, mobile: bool) -> dict:
+    """Measure ``path`` on the page in a ``width`` × ``height`` window: where the progress and the answer lay."""
+    from selenium.webdriver.common.by import By
+
+    _device(driver, width, height, mobile)
+    _upload(driver, url, height_cm="186", mass_kg="84")
+    _watch_progress(driver)
+    driver.find_element(By.ID, "depth-file").send_keys(str(path))
+    _wait(driver, "document.body.dataset.answer && document.getElementById('viewer').dataset.triangles > 0")
+    return driver.execute_script(_IN_VIEW)
+
+
+def test_at_phone_width_the_progress_and_the_answer_scroll_into_view_and_nothing_overflows(server, browser, frames):
+    """390 × 844, a phone's viewport: the form fills the screen, so the page scrolls the progress into view
+    when it starts and the answer when it comes; nothing is wider than the screen."""
+    url, _ = server
+    try:
+        seen = _answer_at(browser, url, frames["one"]["path"], 390, 844, mobile=True)
+    finally:
+        browser.execute_cdp_cmd("Emulation.clearDeviceMetricsOverride", {})
+    assert seen["width"] == 390 and seen["scrollWidth"] <= seen["width"], seen
+    assert seen["progress"] is not None and 0 <= seen["progress"][0] and seen["progress"][1] <= seen["height"], seen
+    assert 0 <= seen["answer"][0] and seen["answer"][1] <= seen["height"], seen
+
+
 def test_the_readme_picture_is_the_shipped_default_models_answer(browser, frames, tmp_path):
     """The page as ``wbsa serve`` starts it (no --model: wbsa.estimate's default model) on the tests' frame: its
-    number is the default model's, and the whole page is saved (test-artefacts/serve-page.png, the picture of
-    docs/serve-page.png and the README)."""
+    number is the default model's, in view at a desktop's 1280 × 900 and a phone's 390 × 844, and both windows
+    are saved (test-artefacts/serve-page.png and serve-page-phone.png, the pictures of docs/serve.md and the
+    README)."""
     import wbsa
     from wbsa.server.app import create_app
     from wbsa.server.command import start_in_thread
 
     app = create_app(None, temp_dir=str(tmp_path))
     url, stop = start_in_thread(app)
+    est = wbsa.estimate(str(frames["one"]["path"]), "kinect-v2", clothes="underwear")
     try:
-        _upload(browser, url, frames["one"]["path"], height_cm="186", mass_kg="84")
-        _wait(browser, "document.body.dataset.answer && document.getElementById('viewer').dataset.triangles > 0")
-        est = wbsa.estimate(str(frames["one"]["path"]), "kinect-v2", clothes="underwear")
-        shown = _answer(browser)
-        assert float(shown["wbsa"]) == pytest.approx(est.wbsa_m2, abs=5e-4) and shown["flagNames"] == list(est.flags)
-        assert browser.execute_script("return current.model") == est.model  # the default model's name
-        height = browser.execute_script("return document.documentElement.scrollHeight")
-        browser.set_window_size(1280, height + 120)
-        _screenshot(browser, "serve-page.png")
+        for name, width, height, mobile in (("serve-page.png", 1280, 900, False),
+                                            ("serve-page-phone.png", 390, 844, True)):
+            seen = _answer_at(browser, url, frames["one"]["path"], width, height, mobile)
+            shown = _answer(browser)
+            assert float(shown["wbsa"]) == pytest.approx(est.wbsa_m2, abs=5e-4) and shown["flagNames"] == list(est.flags)
+            assert browser.execute_script("return current.model") == est.model  # the default model's name
+            assert 0 <= seen["answer"][0] and seen["answer"][1] <= seen["height"] and seen["scrollWidth"] <= width, seen
+            _screenshot(browser, name)
     finally:
-        browser.set_window_size(1280, 1900)
+        browser.execute_cdp_cmd("Emulation.clearDeviceMetricsOverride", {})
         stop()
 
 
@@ -653,17 +704,39 @@ def test_upload_names_never_carry_folders_and_messages_never_carry_the_servers_p
         "a.png is not readable"
 
 
+def test_a_wildcard_host_is_printed_as_the_machines_own_addresses():
+    """0.0.0.0 and :: are no address to open: the page's addresses are this machine's own (each can be bound
+    here), never a wildcard; any other host is printed as given."""
+    from wbsa.server.addresses import machine_hosts, page_urls
+
+    for wildcard in ("0.0.0.0", "::"):
+        hosts = machine_hosts(wildcard)
+        assert hosts and not set(hosts) & {"0.0.0.0", "::", ""}
+        for host in hosts:
+            family = socket.AF_INET6 if ":" in host else socket.AF_INET
+            if host[0].isdigit() or ":" in host:  # an address: one of this machine's
+                with socket.socket(family, socket.SOCK_STREAM) as s:
+                    s.bind((host, 0))
+            else:  # its name
+                assert host == socket.gethostname()
+    assert page_urls("127.0.0.1", 8080, "?token=t") == ["http://127.0.0.1:8080/?token=t"]
+    assert page_urls("::1", 8080) == ["http://[::1]:8080/"]
+
+
 @pytest.mark.slow
 def test_wbsa_serve_prints_its_address_and_serves_the_page(small_estimator_model):
+    """Listening on every interface, the printed address is the machine's own, token included, and opens the page."""
     import subprocess
     import sys
 
-    proc = subprocess.Popen([sys.executable, "-m", "wbsa", "serve", "--model", str(small_estimator_model)],
+    proc = subprocess.Popen([sys.executable, "-m", "wbsa", "serve", "--model", str(small_estimator_model), "--host",
+                             "0.0.0.0", "--token", "a-token-of-the-users-0123"],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         line = proc.stdout.readline()
-        assert line.startswith("wbsa serve: open http://127.0.0.1:"), (line, proc.stderr.read() if proc.poll() else "")
+        assert line.startswith("wbsa serve: open http://"), (line, proc.stderr.read() if proc.poll() else "")
         address = line.split()[3]
+        assert "0.0.0.0" not in line and address.endswith("/?token=a-token-of-the-users-0123"), line
         with urllib.request.urlopen(address, timeout=30) as r:
             page = r.read().decode()
         assert "Body surface area from one depth image" in page and "https://" not in page

@@ -25,3 +25,19 @@ def pcd_depth(path: Path = FIVE_PEOPLE) -> np.ndarray:
     from wbsa.testing.frames import read_pcd_depth
 
     return read_pcd_depth(path)
+
+
+def write_organised_pcd(path: Path, points_m: np.ndarray) -> Path:
+    """Write an organised binary PCD (``WIDTH`` × ``HEIGHT``, x y z float32) of (h, w, 3) points (NaN: no return)."""
+    height, width = points_m.shape[:2]
+    header = (f"VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH {width}\nHEIGHT {height}\n"
+              f"VIEWPOINT 0 0 0 1 0 0 0\nPOINTS {width * height}\nDATA binary\n")
+    path.write_bytes(header.encode("ascii") + np.ascontiguousarray(points_m, dtype="<f4").tobytes())
+    return path
+
+
+def grid_points(depth_m: np.ndarray, camera) -> np.ndarray:
+    """(h, w, 3) float64 points of a depth image seen by ``camera`` (pixel centres; NaN where no return)."""
+    v, u = np.mgrid[:depth_m.shape[0], :depth_m.shape[1]].astype(np.float64)
+    z = np.where(depth_m > 0, depth_m, np.nan)
+    return np.stack([(u - camera.cx) * z / camera.fx, (v - camera.cy) * z / camera.fy, z], axis=-1)

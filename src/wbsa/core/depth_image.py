@@ -284,7 +284,8 @@ def read_depth(path: str | os.PathLike, *, depth_scale: float | None = None) -> 
         check_depth_path(path)
     suffix = path.suffix.lower()
     if suffix not in DEPTH_SUFFIXES:
-        raise WbsaError(f"cannot read depth from {path.name}: use a {', '.join(DEPTH_SUFFIXES)} file")
+        raise WbsaError(f"cannot read depth from {path.name}: use a {', '.join(DEPTH_SUFFIXES)} file, or a .pcd or "
+                        ".ply point cloud with wbsa estimate")
     check_depth_path(path)
     if isinstance(depth_scale, bool) or not (depth_scale is None or isinstance(depth_scale, (int, float, np.number))):
         raise WbsaError(f"depth scale must be a number of units per metre, e.g. 1000, got {depth_scale!r}")

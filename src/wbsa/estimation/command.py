@@ -28,7 +28,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "warning is printed; exit 2 on input that cannot be measured. The camera sees "
                                    "the outside of the clothes: state them with --clothes (a 1 cm layer "
                                    "not stated reads about 9 % high; docs/estimate.md, Clothes).")
-    p.add_argument("depth", help="depth image: 16-bit PNG (mm), .npy (float metres), 32-bit float .tiff, .exr")
+    p.add_argument("depth", help="depth image: 16-bit PNG (mm), .npy (float metres), 32-bit float .tiff, .exr; or a "
+                                 "point cloud in the camera's frame (metres): an organised .pcd brings its own camera "
+                                 "(recovered from its points), a .ply or unorganised .pcd needs --camera")
     p.add_argument("--camera", default="auto",
                    help=presets_help() + "; auto (default): the preset of the image's size, flagged")
     p.add_argument("--method", default="regression", choices=METHODS,

@@ -114,6 +114,15 @@ class EstimateRequest:
         return cls(record, None if record is None else _sensor(record), auto, method, float(level), azimuth_deg,
                    elevation_deg, stated, stature_m, segment, body_fit)
 
+    def with_camera(self, record: CameraRecord) -> EstimateRequest:
+        """This request with the camera ``record`` (one a point cloud brought), no longer assumed.
+
+        Parameters
+        ----------
+        record : CameraRecord
+        """
+        return dataclasses.replace(self, camera=record, sensor=_sensor(record), camera_assumed=False)
+
     def for_image(self, depth_m: np.ndarray) -> EstimateRequest:
         """This request for a depth image: ``auto`` resolved to the preset of its size, which must be the
         camera's.

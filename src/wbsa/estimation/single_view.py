@@ -173,10 +173,13 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
     Parameters
     ----------
     depth : (h, w) float array (metres, 0 = no return) or path
-        A path is read with :func:`wbsa.core.read_depth` (16-bit PNG, .npy, .tiff, .exr).
+        A path is read with :func:`wbsa.core.read_depth` (16-bit PNG, .npy, .tiff, .exr). A ``.pcd`` or ``.ply``
+        point cloud (camera frame, metres) is read with :func:`wbsa.core.point_cloud.point_cloud_depth`: an
+        organised ``.pcd`` brings its own camera, recovered from its points.
     camera : str, path, wbsa.camera.Intrinsics or wbsa.camera.CameraRecord
         A preset name (``kinect-v2``, ...), an Open3D intrinsics JSON (its technology unknown: Kinect v1's depth
-        noise is assumed), or ``auto``: the preset of the image's size, flagged ``camera_assumed``.
+        noise is assumed), or ``auto``: the preset of the image's size, flagged ``camera_assumed``. An organised
+        ``.pcd``'s recovered camera is used under ``auto``; a ``.ply`` or unorganised ``.pcd`` needs a stated one.
     model : EstimatorModel, path or None
         None: the model shipped with wbsa. A path: an estimator model file (``.npz``, e.g. from ``wbsa train``)
         or a ``wbsa fit`` model file (``.json``).
@@ -238,8 +241,7 @@ def estimate_request(request: EstimateRequest, depth, model=None, *, depth_scale
     -------
     Estimate
     """
-    depth_m = _depth_array(depth, depth_scale)
-    request = request.for_image(depth_m)
+    depth_m, request = _read(request, depth, depth_scale)
     predictors = list(predictors_for(request.method, model, request.body_fit))  # a model is read (and refused) first
     depth_m, mixed = repair_mixed_pixels(depth_m, request.camera.intrinsics.fx, request.sensor)
     asked = request.method_request(progress)
@@ -250,6 +252,22 @@ def estimate_request(request: EstimateRequest, depth, model=None, *, depth_scale
     prediction, routes, route_flags = run_routes(predictors, subject, asked, request.clothes, progress)
     flags.update(route_flags)
     return assemble(request, subject, prediction, routes, flags)
+
+
+def _read(request: EstimateRequest, depth, depth_scale: float | None) -> tuple[np.ndarray, EstimateRequest]:
+    """The depth image (metres) and the request for it: a point cloud's camera (recovered from an organised
+    ``.pcd``'s grid, or the stated one it is projected through) is the request's camera."""
+    from wbsa.camera.presets import record_of
+    from wbsa.core.point_cloud import is_point_cloud_path, point_cloud_depth
+
+    if not is_point_cloud_path(depth):
+        depth_m = _depth_array(depth, depth_scale)
+        return depth_m, request.for_image(depth_m)
+    stated = None if request.camera is None else request.camera.intrinsics
+    depth_m, intrinsics = point_cloud_depth(depth, stated, units_per_m=depth_scale)
+    if stated is None or intrinsics != stated:
+        request = request.with_camera(record_of(intrinsics))
+    return depth_m, request.for_image(depth_m)
 
 
 def _clothes_named(clothes: str | None, clothing: str | None) -> str | None:

@@ -88,13 +88,15 @@ def run_serve(args: argparse.Namespace) -> int:
     import uvicorn
 
     from wbsa.server.access import TOKEN_NAME, choose_token, needs_token
+    from wbsa.server.addresses import page_urls
     from wbsa.server.app import create_app
 
     token = choose_token(args.host, args.token or os.environ.get("WBSA_SERVE_TOKEN"))
     app = create_app(args.model, workers=int(args.workers), token=token)
     sock = bind(args.host, args.port)
-    url = url_of(sock) + (f"?{TOKEN_NAME}={token}" if token else "")
-    print(f"wbsa serve: open {url} in a browser (Ctrl-C stops)", flush=True)
+    urls = page_urls(args.host, sock.getsockname()[1], f"?{TOKEN_NAME}={token}" if token else "")
+    also = f"; or {', '.join(urls[1:])}" if len(urls) > 1 else ""
+    print(f"wbsa serve: open {urls[0]} in a browser (Ctrl-C stops){also}", flush=True)
     if needs_token(args.host):
         sys.stderr.write(f"note: listening on {args.host}: every request needs the token in the address above; "
                          "the traffic is not encrypted: put TLS in front beyond a trusted network (docs/serve.md)\n")

@@ -50,16 +50,13 @@ def side_by_side(body_model, side_m: float = 1.0, seed: int = 4) -> tuple[np.nda
 
 
 def read_pcd_depth(path: str | Path) -> np.ndarray:
-    """(h, w) float64 depth image (z in metres, 0 = no return) of an organised PCD file, read with Open3D."""
-    import open3d as o3d
+    """(h, w) float64 depth image (z in metres, 0 = no return) of an organised PCD file
+    (:func:`wbsa.core.point_cloud.point_cloud_depth`).
 
-    cloud = o3d.io.read_point_cloud(str(path), remove_nan_points=False, remove_infinite_points=False)
-    z = np.asarray(cloud.points)[:, 2]
-    header = {}
-    with open(path, "rb") as f:
-        for line in iter(f.readline, b""):  # the text header ends at the DATA line
-            key, _, value = line.decode("ascii").strip().partition(" ")
-            if key == "DATA":
-                break
-            header[key] = value
-    return np.where(np.isfinite(z), z, 0.0).reshape(int(header["HEIGHT"]), int(header["WIDTH"]))
+    Parameters
+    ----------
+    path : str or path
+    """
+    from wbsa.core.point_cloud import point_cloud_depth
+
+    return point_cloud_depth(path)[0]

@@ -71,6 +71,7 @@ function startProgress() {
   $("progress-count").textContent = "";
   $("progress-bar").removeAttribute("value");
   $("progress").hidden = false;
+  $("progress").scrollIntoView({ block: "nearest" });  // a phone: the form fills the screen above it
 }
 
 function showProgress(p) {
@@ -217,6 +218,8 @@ function show(a) {
   showFormulae(ok ? a.formulae : null, ok ? a.wbsa_m2 : null);
   showDownloads(ok ? a.downloads : []);
   if (ok) showMeshes(a.meshes); else if (viewer) viewer.clear();
+  if (ok) $("answer").scrollIntoView({ block: "nearest" });  // below the form on a phone
+  else if (a.error && !choose) $("error").scrollIntoView({ block: "nearest" });
   if (choose) {  // the message heads the picture, which fills the window below it
     showError("");
     $("pick-title").textContent = a.error;

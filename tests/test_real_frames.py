@@ -96,7 +96,9 @@ def test_the_person_cut_at_the_knees_is_refused_and_answered_with_a_stature(five
     assert est["wbsa_lo_m2"] < est["wbsa_m2"] < est["wbsa_hi_m2"] and est["wbsa_m2"] > 1.6  # an adult's, not a child's
     assert est["camera"] == "five_people.pcd's grid" and "camera_assumed" not in est["flags"]
     code, out, err = run_cli("estimate", path, "--camera", "tum", "--pick", "530,250", "--stature-cm", "180", "--json")
-    assert code == 0 and json.loads(out)["wbsa_m2"] == pytest.approx(est["wbsa_m2"], rel=1e-4)  # the same camera
+    # the same camera geometry; the stated preset brings its own noise envelope (the recovered camera's
+    # technology is unknown: Kinect v1's is assumed), which moves the answer by about 0.1 %
+    assert code == 0 and json.loads(out)["wbsa_m2"] == pytest.approx(est["wbsa_m2"], rel=3e-3)
     assert_one_line_error(*run_cli("estimate", path, "--camera", "tum", "--pick", "260,150")[::2],
                           "pick pixel (260, 150) lies on an object that is not a person")
     assert_one_line_error(*run_cli(*base, "--clothes", "coat")[::2], "--clothes", "coat")

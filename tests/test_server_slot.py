@@ -49,3 +49,22 @@ def test_the_server_sets_the_fit_threads_once_and_its_fits_keep_them():
 
         shutil.rmtree(app.state.root, ignore_errors=True)
         app.state.runner.close()
+
+
+def test_torch_threads_is_the_one_place_the_count_is_set():
+    """Saving, setting and restoring torch's process-wide thread count is written once (wbsa.parallel)."""
+    from pathlib import Path
+
+    import torch
+
+    from wbsa.parallel import torch_threads
+
+    src = Path(__file__).resolve().parents[1] / "src" / "wbsa"
+    setters = sorted(str(p.relative_to(src)) for p in src.rglob("*.py") if "set_num_threads(" in p.read_text())
+    assert setters == ["parallel.py"], setters
+    before = torch.get_num_threads()
+    with torch_threads(None):
+        assert torch.get_num_threads() == before
+    with torch_threads(1):
+        assert torch.get_num_threads() == 1
+    assert torch.get_num_threads() == before

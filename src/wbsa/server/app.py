@@ -150,7 +150,8 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
     Returns
     -------
     starlette.applications.Starlette
-        ``app.state`` holds ``root`` (the temporary folder), ``runner``, ``results`` and ``batches``.
+        ``app.state`` holds ``root`` (the temporary folder), ``runner``, ``results``, ``batches``, ``model`` and
+        ``body_fit`` (the fits' settings: ``threads`` None, the server's count).
     """
     from starlette.applications import Starlette
     from starlette.requests import ClientDisconnect, Request
@@ -327,5 +328,6 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
         + ([Middleware(TokenGate, token=token)] if token is not None else []))
     app.state.root, app.state.runner, app.state.results, app.state.batches = root, runner, results, batches
     app.state.model = model
+    app.state.body_fit = body_fit
     return app
 

@@ -94,11 +94,9 @@ def test_the_person_cut_at_the_knees_is_refused_and_answered_with_a_stature(five
     assert code == 0 and est["stature_m"] == 1.8 and est["stature_stated_m"] == 1.8
     assert "feet_not_seen" in est["flags"] and "clothes_unstated" in est["flags"] and not est["clothing_stated"]
     assert est["wbsa_lo_m2"] < est["wbsa_m2"] < est["wbsa_hi_m2"] and est["wbsa_m2"] > 1.6  # an adult's, not a child's
-    assert est["camera"] == "five_people.pcd's grid" and "camera_assumed" not in est["flags"]
+    assert est["camera"] == "tum" and "camera_assumed" not in est["flags"]  # the preset its grid matches
     code, out, err = run_cli("estimate", path, "--camera", "tum", "--pick", "530,250", "--stature-cm", "180", "--json")
-    # the same camera geometry; the stated preset brings its own noise envelope (the recovered camera's
-    # technology is unknown: Kinect v1's is assumed), which moves the answer by about 0.1 %
-    assert code == 0 and json.loads(out)["wbsa_m2"] == pytest.approx(est["wbsa_m2"], rel=3e-3)
+    assert code == 0 and json.loads(out)["wbsa_m2"] == est["wbsa_m2"]  # the same frame, the same camera
     assert_one_line_error(*run_cli("estimate", path, "--camera", "tum", "--pick", "260,150")[::2],
                           "pick pixel (260, 150) lies on an object that is not a person")
     assert_one_line_error(*run_cli(*base, "--clothes", "coat")[::2], "--clothes", "coat")
@@ -221,11 +219,14 @@ def test_the_frame_moves_in_past_bands_without_returns_but_not_past_a_head_or_a_
 # ------------------------------------------------------------------------------------- point clouds as input
 def test_an_organised_pcd_brings_its_own_camera():
     """PCL's frame: the camera recovered from its own points is TUM's Kinect v1 (fx = fy = 525, c = (319.5,
-    239.5)) to well within 0.5 % of the focal length, and its depth is the points' z in grid order."""
+    239.5)) to well within 0.5 % of the focal length, so the tum preset is taken; its depth is the points' z in
+    grid order."""
     from helpers.frames import FIVE_PEOPLE
-    from wbsa.core.point_cloud import point_cloud_depth, read_point_cloud
+    from wbsa.core.point_cloud import grid_intrinsics, point_cloud_depth, read_point_cloud
 
-    depth, camera = point_cloud_depth(FIVE_PEOPLE)
+    depth, preset_taken = point_cloud_depth(FIVE_PEOPLE)
+    assert preset_taken.name == "tum"
+    camera = grid_intrinsics(read_point_cloud(FIVE_PEOPLE).points_m.reshape(480, 640, 3))
     assert (camera.width, camera.height) == (640, 480)
     assert abs(camera.fx / 525.0 - 1) < 0.005 and abs(camera.fy / 525.0 - 1) < 0.005
     assert abs(camera.cx - 319.5) < 0.5 and abs(camera.cy - 239.5) < 0.5
@@ -236,8 +237,8 @@ def test_an_organised_pcd_brings_its_own_camera():
 def test_a_pcd_written_from_a_render_gives_back_its_camera_and_its_estimate(side_by_side, tmp_path):
     """A render of known intrinsics (Kinect v2) written as an organised PCD: the camera comes back within
     0.5 % of its focal length and half a pixel of its centre, and the estimate from the file without a camera
-    is the estimate of the depth image with the camera named (to the rounding of float32 coordinates); a
-    stated camera the grid contradicts is refused."""
+    is the estimate of the depth image (as float32) with the camera named; a stated camera the grid contradicts
+    is refused."""
     from helpers.cli import assert_one_line_error, run_cli
     from helpers.frames import grid_points, write_organised_pcd
     import wbsa
@@ -247,17 +248,20 @@ def test_a_pcd_written_from_a_render_gives_back_its_camera_and_its_estimate(side
     depth, man, _ = side_by_side
     truth = preset("kinect-v2")
     path = write_organised_pcd(tmp_path / "render.pcd", grid_points(depth, truth))
-    from wbsa.core.point_cloud import point_cloud_depth
+    from wbsa.core.point_cloud import grid_intrinsics, point_cloud_depth, read_point_cloud
 
-    read, camera = point_cloud_depth(path)
-    assert abs(camera.fx / truth.fx - 1) < 0.005 and abs(camera.fy / truth.fy - 1) < 0.005
+    read, taken = point_cloud_depth(path)
+    camera = grid_intrinsics(read_point_cloud(path).points_m.reshape(*depth.shape, 3))
+    assert taken.name == "kinect-v2" and abs(camera.fx / truth.fx - 1) < 0.005 and abs(camera.fy / truth.fy - 1) < 0.005
     assert abs(camera.cx - truth.cx) < 0.5 and abs(camera.cy - truth.cy) < 0.5
     assert np.allclose(read, depth, rtol=1e-6, atol=0)
+    assert (camera.fx, camera.fy, camera.cx, camera.cy) == (truth.fx, truth.fy, truth.cx, truth.cy)  # to 0.001 px
     pick = _pick(man)
-    named = wbsa.estimate(depth, "kinect-v2", segment=SegmentSettings(pick=pick))
+    stored = depth.astype(np.float32).astype(np.float64)  # the depth as the file's float32 points hold it
+    named = wbsa.estimate(stored, "kinect-v2", segment=SegmentSettings(pick=pick))
     own = wbsa.estimate(path, "auto", segment=SegmentSettings(pick=pick))
-    assert own.wbsa_m2 == pytest.approx(named.wbsa_m2, rel=1e-3) and "camera_assumed" not in own.flags
-    assert own.camera == "render.pcd's grid"
+    assert own.wbsa_m2 == named.wbsa_m2 and "camera_assumed" not in own.flags
+    assert own.camera == "kinect-v2"  # the preset the grid matches, with its sensor model
     assert wbsa.estimate(path, "kinect-v2", segment=SegmentSettings(pick=pick)).camera == "kinect-v2"
     assert_one_line_error(*run_cli("estimate", path, "--camera", "kinect-v1")[::2], "render.pcd's points lie on the grid",
                           "fx 365.5", "leave out --camera")
@@ -292,3 +296,23 @@ def test_a_ply_is_projected_through_the_stated_camera_or_refused_without_one(sid
 
     assert code == 0, err
     assert json.loads(out)["wbsa_m2"] == pytest.approx(named.wbsa_m2, rel=1e-4)
+
+
+def test_a_point_cloud_that_cannot_be_read_is_refused_in_one_line(tmp_path):
+    """Not a PCD, an empty PLY, a point in absurd units, a depth scale that is no scale: one line each, the
+    problem named."""
+    from helpers.cli import assert_one_line_error, run_cli
+
+    (tmp_path / "text.pcd").write_text("hello\n")
+    (tmp_path / "empty.ply").write_bytes(b"")
+    (tmp_path / "far.ply").write_text("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                                      "property float z\nend_header\n1e30 1e30 1e-30\n")
+    assert_one_line_error(*run_cli("estimate", tmp_path / "text.pcd")[::2], "text.pcd has no PCD header")
+    assert_one_line_error(*run_cli("estimate", tmp_path / "empty.ply", "--camera", "kinect-v2")[::2],
+                          "empty.ply holds no points")
+    code, _, err = run_cli("estimate", tmp_path / "far.ply", "--camera", "kinect-v2")
+    assert_one_line_error(code, err, "none of the 1 points falls in the kinect-v2 camera's image")
+    from wbsa.core.point_cloud import read_point_cloud
+
+    with pytest.raises(WbsaError, match="must be a positive number of coordinate units per metre"):
+        read_point_cloud(tmp_path / "far.ply", units_per_m=0)

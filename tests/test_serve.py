@@ -378,8 +378,9 @@ def test_at_phone_width_the_progress_and_the_answer_scroll_into_view_and_nothing
     finally:
         browser.execute_cdp_cmd("Emulation.clearDeviceMetricsOverride", {})
     assert seen["width"] == 390 and seen["scrollWidth"] <= seen["width"], seen
-    assert seen["progress"] is not None and 0 <= seen["progress"][0] and seen["progress"][1] <= seen["height"], seen
-    assert 0 <= seen["answer"][0] and seen["answer"][1] <= seen["height"], seen
+    # in view: inside the window, to a pixel (a box scrolled to the window's edge may end a fraction past it)
+    assert seen["progress"] is not None and 0 <= seen["progress"][0] and seen["progress"][1] <= seen["height"] + 1, seen
+    assert 0 <= seen["answer"][0] and seen["answer"][1] <= seen["height"] + 1, seen
 
 
 def test_the_readme_picture_is_the_shipped_default_models_answer(browser, frames, tmp_path):
@@ -401,7 +402,7 @@ def test_the_readme_picture_is_the_shipped_default_models_answer(browser, frames
             shown = _answer(browser)
             assert float(shown["wbsa"]) == pytest.approx(est.wbsa_m2, abs=5e-4) and shown["flagNames"] == list(est.flags)
             assert browser.execute_script("return current.model") == est.model  # the default model's name
-            assert 0 <= seen["answer"][0] and seen["answer"][1] <= seen["height"] and seen["scrollWidth"] <= width, seen
+            assert 0 <= seen["answer"][0] and seen["answer"][1] <= seen["height"] + 1 and seen["scrollWidth"] <= width, seen
             _screenshot(browser, name)
     finally:
         browser.execute_cdp_cmd("Emulation.clearDeviceMetricsOverride", {})

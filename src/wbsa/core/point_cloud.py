@@ -2,7 +2,7 @@
 
 An organised ``.pcd`` (``WIDTH`` × ``HEIGHT`` > 1, as a depth camera's driver writes it) keeps its pixel grid:
 its depth image is the points' z in grid order, and its camera is recovered from its own points
-(:func:`grid_intrinsics`), so none is guessed. A ``.ply`` or an unorganised ``.pcd`` has no grid: its points are
+(:func:`grid_intrinsics`), so none is guessed; a preset it matches is taken with its sensor model. A ``.ply`` or an unorganised ``.pcd`` has no grid: its points are
 projected through a stated camera (:func:`project_points`), or refused without one.
 
 The points are taken as the camera sees them (x right, y down, z forward; metres unless a scale is given).
@@ -88,8 +88,13 @@ def read_point_cloud(path: str | os.PathLike, *, units_per_m: float = 1.0) -> Po
         A missing or unreadable file, an unknown suffix, no points, or a grid that does not match the points.
     """
     from wbsa.core.depth_image import check_depth_path
+    from wbsa.core.mesh_io import quiet_stderr
 
     path = Path(path)
+    if isinstance(units_per_m, bool) or not isinstance(units_per_m, (int, float, np.number)) or not (
+            np.isfinite(units_per_m) and units_per_m > 0):
+        raise WbsaError(f"depth scale {units_per_m!r} must be a positive number of coordinate units per metre, "
+                        "e.g. 1000 for millimetres")
     suffix = path.suffix.lower()
     if suffix not in POINT_CLOUD_SUFFIXES:
         raise WbsaError(f"cannot read a point cloud from {path.name}: use a {' or '.join(POINT_CLOUD_SUFFIXES)} file")
@@ -109,7 +114,8 @@ def read_point_cloud(path: str | os.PathLike, *, units_per_m: float = 1.0) -> Po
             grid = (height, width)
     import open3d as o3d
 
-    cloud = o3d.io.read_point_cloud(str(path), remove_nan_points=False, remove_infinite_points=False)
+    with quiet_stderr(), o3d.utility.VerbosityContextManager(o3d.utility.VerbosityLevel.Error):  # its own errors
+        cloud = o3d.io.read_point_cloud(str(path), remove_nan_points=False, remove_infinite_points=False)
     points = np.asarray(cloud.points, dtype=np.float64) / float(units_per_m)
     if len(points) == 0:
         raise WbsaError(f"{path} holds no points Open3D can read; check that it is a point cloud "
@@ -125,7 +131,8 @@ def grid_intrinsics(points_m: np.ndarray, name: str = "custom"):
     """The pinhole camera whose pixel grid an organised cloud's points lie on.
 
     Each pixel (u, v) with a return satisfies u = fx·x/z + cx and v = fy·y/z + cy; the two lines are fitted
-    by least squares over every such pixel.
+    by least squares over every such pixel, and kept to a thousandth of a pixel (points stored as float32
+    carry no finer: PCL's ``five_people.pcd`` fits 525.0000056, which is 525.000).
 
     Parameters
     ----------
@@ -161,7 +168,7 @@ def grid_intrinsics(points_m: np.ndarray, name: str = "custom"):
         if not (np.isfinite(f) and f > 0) or np.percentile(residual, 99) > 1.0:
             raise WbsaError(f"the point cloud's points do not lie on a pinhole camera's pixel grid ({axis}/z does "
                             "not grow with the pixel column); give the depth image, or a .ply with --camera")
-        fit[axis] = (float(f), float(c))
+        fit[axis] = (round(float(f), 3), round(float(c), 3))
     return Intrinsics(width, height, fit["x"][0], fit["y"][0], fit["x"][1], fit["y"][1], name=name)
 
 
@@ -186,9 +193,10 @@ def project_points(points_m: np.ndarray, camera) -> np.ndarray:
     """
     p = np.asarray(points_m, dtype=np.float64)
     p = p[np.isfinite(p).all(axis=1) & (p[:, 2] > 0)]
-    u = np.rint(camera.fx * p[:, 0] / p[:, 2] + camera.skew * p[:, 1] / p[:, 2] + camera.cx)
-    v = np.rint(camera.fy * p[:, 1] / p[:, 2] + camera.cy)
-    inside = (u >= 0) & (u < camera.width) & (v >= 0) & (v < camera.height)
+    with np.errstate(over="ignore", invalid="ignore"):  # absurd coordinates project nowhere, without a warning
+        u = np.rint(camera.fx * p[:, 0] / p[:, 2] + camera.skew * p[:, 1] / p[:, 2] + camera.cx)
+        v = np.rint(camera.fy * p[:, 1] / p[:, 2] + camera.cy)
+        inside = (u >= 0) & (u < camera.width) & (v >= 0) & (v < camera.height)
     if not inside.any():
         raise WbsaError(f"none of the {len(points_m)} points falls in the {camera.name} camera's image; the cloud "
                         "must be in the camera's frame (x right, y down, z forward, metres)")
@@ -196,6 +204,12 @@ def project_points(points_m: np.ndarray, camera) -> np.ndarray:
     np.minimum.at(depth, (v[inside] * camera.width + u[inside]).astype(np.int64), p[inside, 2])
     depth[~np.isfinite(depth)] = 0.0
     return depth.reshape(camera.height, camera.width)
+
+
+def _same_camera(a, b) -> bool:
+    """Whether two intrinsics are one camera: the same size, focal lengths within 1 %, centres within 2 px."""
+    return ((a.width, a.height) == (b.width, b.height) and abs(a.fx / b.fx - 1) <= 0.01
+            and abs(a.fy / b.fy - 1) <= 0.01 and abs(a.cx - b.cx) <= 2 and abs(a.cy - b.cy) <= 2)
 
 
 def point_cloud_depth(path: str | os.PathLike, camera=None, *, units_per_m: float | None = None):
@@ -206,9 +220,10 @@ def point_cloud_depth(path: str | os.PathLike, camera=None, *, units_per_m: floa
     path : str or path
         A ``.pcd`` or ``.ply`` file.
     camera : wbsa.camera.Intrinsics or None
-        The stated camera, or None. An organised ``.pcd`` needs none (its own is recovered); a stated one must
-        agree with it (focal lengths within 1 %, principal point within 2 pixels) and is then used. A cloud
-        without a grid needs one.
+        The stated camera, or None. An organised ``.pcd`` needs none: its own is recovered, and where a preset
+        agrees with it (the same size, focal lengths within 1 %, principal point within 2 pixels) that preset
+        is used, with its sensor model and working range; a stated one must agree with it likewise and is then
+        used. A cloud without a grid needs one.
     units_per_m : float or None
         Coordinate units per metre in the file; None: 1 (metres).
 
@@ -233,14 +248,17 @@ def point_cloud_depth(path: str | os.PathLike, camera=None, *, units_per_m: floa
         return project_points(cloud.points_m, camera), camera
     grid = cloud.points_m.reshape(*cloud.grid, 3)
     own = grid_intrinsics(grid, name=f"{path.name}'s grid")
-    if camera is not None:
-        if (camera.width, camera.height) != (own.width, own.height) or not (
-                abs(camera.fx / own.fx - 1) <= 0.01 and abs(camera.fy / own.fy - 1) <= 0.01
-                and abs(camera.cx - own.cx) <= 2 and abs(camera.cy - own.cy) <= 2):
-            raise WbsaError(f"{path.name}'s points lie on the grid of a {own.width}x{own.height} camera with "
-                            f"fx {own.fx:.1f}, fy {own.fy:.1f}, centre ({own.cx:.1f}, {own.cy:.1f}) px, which the "
-                            f"stated camera {camera.name} ({camera.width}x{camera.height}, fx {camera.fx:.1f}) does "
-                            "not match; leave out --camera to use the cloud's own")
+    if camera is None:  # a preset the grid matches brings its sensor model and working range too
+        from wbsa.camera.presets import PRESETS
+
+        camera = next((k for k in PRESETS.values() if _same_camera(k, own)), None)
+        own = camera or own
+    elif not _same_camera(camera, own):
+        raise WbsaError(f"{path.name}'s points lie on the grid of a {own.width}x{own.height} camera with "
+                        f"fx {own.fx:.1f}, fy {own.fy:.1f}, centre ({own.cx:.1f}, {own.cy:.1f}) px, which the "
+                        f"stated camera {camera.name} ({camera.width}x{camera.height}, fx {camera.fx:.1f}) does "
+                        "not match; leave out --camera to use the cloud's own")
+    else:
         own = camera
     z = grid[..., 2]
     return np.where(np.isfinite(z) & (z > 0), z, 0.0), own

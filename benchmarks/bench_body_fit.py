@@ -162,13 +162,9 @@ def side_by_side(res: pd.DataFrame) -> None:
                                        stature_p90_abs_cm=("stature_err_cm", lambda e: e.abs().quantile(0.9)))
     print("\nby renderer (fitted rest stature against the truth):")
     print(table.round(3).to_string())
-    wide = ok.pivot_table(index="image", columns="renderer", values="err_pct")
-    if {"project", "plain"} <= set(wide.columns):
-        d = (wide["plain"] - wide["project"]).dropna()
-        half = 1.96 * d.std(ddof=1) / np.sqrt(len(d)) if len(d) > 1 else float("nan")
-        print(f"WBSA signed error, plain minus project renderer, paired: {d.mean():+.2f} % (95 % CI "
-              f"{d.mean() - half:+.2f} … {d.mean() + half:+.2f}; n = {len(d)}; target ±0.5 %: "
-              f"{verdict(abs(d.mean()) <= 0.5)})")
+    from bench_estimate import paired_difference
+
+    print(paired_difference(ok))
 
 
 def verdict(ok: bool) -> str:

@@ -225,6 +225,19 @@ def stature_errors_cm(g: pd.DataFrame) -> pd.Series:
                       "vs_rest_p90_abs_cm": rest.abs().quantile(0.9)})
 
 
+def paired_difference(ok: pd.DataFrame) -> str:
+    """One line: the mean of plain minus project renderer of ``err_pct`` over the images both estimated, with its
+    95 % CI and the ±0.5 % verdict; '' unless both renderers are there."""
+    wide = ok.pivot_table(index="image", columns="renderer", values="err_pct")
+    if not {"project", "plain"} <= set(wide.columns):
+        return ""
+    d = (wide["plain"] - wide["project"]).dropna()
+    half = 1.96 * d.std(ddof=1) / np.sqrt(len(d)) if len(d) > 1 else float("nan")
+    return (f"WBSA signed error, plain minus project renderer, paired: {d.mean():+.2f} % (95 % CI "
+            f"{d.mean() - half:+.2f} … {d.mean() + half:+.2f}; n = {len(d)}; target ±0.5 %: "
+            f"{verdict(abs(d.mean()) <= 0.5)})")
+
+
 def side_by_side(res: pd.DataFrame) -> None:
     """The renderers side by side on the same captures: per renderer, and paired (plain minus project)."""
     ok = res[res["error"] == ""].copy()
@@ -234,13 +247,9 @@ def side_by_side(res: pd.DataFrame) -> None:
         ok.groupby("renderer").apply(stature_errors_cm, include_groups=False).drop(columns="n"))
     refused = res.groupby("renderer")["error"].apply(lambda e: int((e != "").sum())).rename("refused")
     print(table.join(refused).round(3).to_string())
-    wide = ok.pivot_table(index="image", columns="renderer", values="err_pct")
-    if {"project", "plain"} <= set(wide.columns):
-        d = (wide["plain"] - wide["project"]).dropna()
-        half = 1.96 * d.std(ddof=1) / np.sqrt(len(d)) if len(d) > 1 else float("nan")
-        print(f"\nWBSA signed error, plain minus project renderer, paired: {d.mean():+.2f} % "
-              f"(95 % CI {d.mean() - half:+.2f} … {d.mean() + half:+.2f}; n = {len(d)}; target ±0.5 %: "
-              f"{verdict(abs(d.mean()) <= 0.5)})")
+    line = paired_difference(ok)
+    if line:
+        print("\n" + line)
         pair = ok[ok["renderer"].isin(["project", "plain"])]
         by_cam = pair.pivot_table(index=["image", "camera"], columns="renderer", values="err_pct").dropna()
         print("  per camera:", (by_cam["plain"] - by_cam["project"]).groupby(level="camera").mean().round(2).to_dict())

@@ -670,7 +670,8 @@ def test_model_file_round_trip_and_refuses_non_finite_numbers(small_model, tmp_p
     from wbsa.estimation.methods.regression.model import EstimatorModel
 
     m = EstimatorModel.load(small_model)
-    feats = {k: np.array([v]) for k, v in dict(vbsa_m2=0.8, stature_m=1.7, silhouette_m2=0.6, width_m=0.7,
+    feats = {k: np.array([v]) for k, v in dict(vbsa_m2=0.8, seen_area_m2=0.8, stature_m=1.7, silhouette_m2=0.6,
+                                               width_m=0.7,
                                                thickness_m=0.4, distance_m=3.0, pitch_m=0.008, n_pixels=9000.0,
                                                mixed_share=0.0, gap_share=0.03, edge_gap_share=0.2,
                                                depth_noise_m=0.01, floor_seen=1.0, clothing_m=0.0).items()}

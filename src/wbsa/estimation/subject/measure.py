@@ -50,7 +50,7 @@ class SubjectMeasures:
         Height of the top of the subject above the floor (or its extent along its long axis): the highest point
         of the seen surface, raised by the part of the crown the camera cannot see (:data:`CROWN_RADIUS_M`).
     silhouette_m2 : float
-        Σ z² / (fx·fy) over the pixels: the subject's area projected on a plane facing the camera.
+        Σ z² / (fx·fy) over the seen surface's pixels (its gaps filled): the subject's area projected on a plane facing the camera.
     width_m, thickness_m : float
         Extents across (image right) and along (towards the camera) the horizontal plane.
     distance_m : float
@@ -249,11 +249,10 @@ def measure_subject(depth_m: np.ndarray, mask: np.ndarray, intrinsics, floor: Pl
     axis_elevation = elevation if floor is None else _elevation(body_frame(points, None), points, False)[3]
     q = frame.coordinates(points)
     focal = math.sqrt(float(intrinsics.fx) * float(intrinsics.fy))
-    z = points[:, 2]
     surface = reconstruct(frame_from_depth_image(np.where(mask, depth, 0.0), intrinsics, normals=False), "grid")
     border = bool(mask[0].any() or mask[-1].any() or mask[:, 0].any() or mask[:, -1].any())
     return SubjectMeasures(
-        vbsa_m2=surface.area_m2, seen_area_m2=seen.area_m2, stature_m=stature, silhouette_m2=float(np.sum(z * z)) / (intrinsics.fx * intrinsics.fy),
+        vbsa_m2=surface.area_m2, seen_area_m2=seen.area_m2, stature_m=stature, silhouette_m2=float(np.sum(seen.depth_m[seen.mask] ** 2)) / (intrinsics.fx * intrinsics.fy),
         width_m=float(np.quantile(q[:, 0], 0.998) - np.quantile(q[:, 0], 0.002)),
         thickness_m=float(np.quantile(q[:, 2], 0.998) - np.quantile(q[:, 2], 0.002)),
         distance_m=distance, elevation_deg=elevation, elevation_axis_deg=axis_elevation, pitch_m=distance / focal,

@@ -29,36 +29,14 @@ import numpy as np
 import pandas as pd
 
 from wbsa.typing import EDGE_PIXELS, TEST_RENDERERS, TEST_SCENES
+from wbsa.testing.testset import held_out_population
 
 TARGETS = {"kept": 0.98, "included": 0.01, "seg_share": 0.99, "az_median": 10.0, "az_p95": 30.0, "mape_all": 2.5,
            "mape_fb": 2.0, "bias": 0.5, "coverage": (0.93, 0.97), "seconds": 5.0}
 
 
-def population(n: int, survey_share: float, seed: int) -> pd.DataFrame:
-    """Held-out subjects: random and survey-matched, excluding the people the default model was trained on."""
-    import warnings
-
-    from wbsa.bodies.random_population import RandomPopulationSettings, sample_random_parameters
-    from wbsa.bodies.survey import build_survey_population
-    from wbsa.bodies.survey_data import load_survey, select_people
-    from wbsa.bodies.table import measure_population
-    from wbsa.training.pipeline import TrainSettings
-
-    n_survey = int(round(n * survey_share))
-    params = sample_random_parameters(RandomPopulationSettings(n=n - n_survey, seed=seed, age_years=(3, 80),
-                                                               age_sampling="years", weight=(0.0, 1.0)))
-    parts = [measure_population(params, show_progress=False).assign(population="random")]
-    if n_survey:
-        train = TrainSettings()
-        trained_ids = set(select_people(load_survey(None).people, train.n_survey, train.seed + 1)["survey_id"])
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            survey = build_survey_population(n_survey + 10, seed=seed + 1, show_progress=False)
-        survey = survey[~survey["survey_id"].isin(trained_ids)].head(n_survey)
-        parts.append(survey.assign(population="survey"))
-    pop = pd.concat(parts, ignore_index=True)
-    pop["subject_id"] = np.arange(len(pop))
-    return pop
+#: The held-out subjects (kept under this name for the other benchmarks).
+population = held_out_population
 
 
 def formula_error_pct(df: pd.DataFrame, key: str) -> np.ndarray:

@@ -20,6 +20,14 @@ _UNSTATED = ("no clothes were stated; they were taken as none or tight-fitting (
 CLOTHES_UNSTATED = Worded(f"{_UNSTATED}: state them (--clothes underwear, thin-gown, light or street)",
                           f"{_UNSTATED}: choose them under Clothes")
 
+_NO_FLOOR = ("no floor was found, so the feet could not be checked to stand on one (the elevation comes from the "
+             "body's long axis)")
+#: The meaning (and detail) of ``no_floor``: what to do with the image at hand, and next time.
+NO_FLOOR = Worded(f"{_NO_FLOOR}: if the picture cuts off the legs, state the stature (--stature-cm); next time "
+                  "tilt the camera down so the floor shows",
+                  f"{_NO_FLOOR}: if the picture cuts off the legs, type the height; next time tilt the camera down "
+                  "so the floor shows")
+
 
 @dataclass(frozen=True)
 class Flag:
@@ -48,9 +56,9 @@ FLAG_RECORDS: dict[str, Flag] = {
         "to feet is inside the image; then take the picture again.",
         ("image", "body-fit")),
     "no_floor": Flag(
-        "no floor was found; the elevation comes from the body's long axis",
-        "Tilt the camera down a little so that some floor shows in front of the feet; the answer is more reliable "
-        "with the floor in view.",
+        NO_FLOOR,
+        "With this picture: check that it shows the whole person from head to feet; if the legs are cut off, type "
+        "the height. Next time, tilt the camera down a little so that some floor shows in front of the feet.",
         ("image", "body-fit")),
     "several_people": Flag(
         "more than one person-sized object; one was picked",
@@ -153,6 +161,10 @@ FLAG_RECORDS: dict[str, Flag] = {
         "the subject's feet are not seen (cut off by the frame or hidden); the stated stature was used",
         "The feet are not in the picture, so the height typed was used: step the person back, or turn the camera "
         "down, so that the whole body and the floor under the feet show, and take the picture again.",
+        ("image",)),
+    "stature_disagrees": Flag(
+        "the stated stature and the one measured on the image differ by more than 5 cm; the stated one was used",
+        "Check the height typed (in cm) and that the whole person stands straight in the picture.",
         ("image",)),
     "clothes_unstated": Flag(
         CLOTHES_UNSTATED,

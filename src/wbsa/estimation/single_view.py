@@ -22,10 +22,12 @@ from wbsa.estimation.methods.dispatch import predictors_for
 from wbsa.estimation.methods.view import ViewEstimate, view_flags
 from wbsa.estimation.request import EstimateRequest
 from wbsa.estimation.subject import checks
-from wbsa.estimation.subject.measure import measure_subject
+from wbsa.estimation.subject.measure import SubjectMeasures, measure_subject
 from wbsa.estimation.subject.mixed_pixels import repair_mixed_pixels
-from wbsa.estimation.subject.people import feet_unseen, open_feet
+from wbsa.estimation.subject.people import feet_shape_unseen, feet_unseen, open_feet
 from wbsa.estimation.subject.segment import SegmentSettings, segment_subject
+from wbsa.estimation.subject.unseen import UnseenLegs, unseen_legs
+from wbsa.estimation.subject.unseen import widened as unseen_widened
 from wbsa.typing import Method
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -342,16 +344,19 @@ def measure(depth_m: np.ndarray, mixed: np.ndarray, request: EstimateRequest) ->
                 f"picked {seg.subject.describe(True)} ({pick}); others: "
                 + "; ".join(c.describe(True) for c in seg.others))
         feet = feet_unseen(seg.subject, floor)
+    m = measure_subject(depth_m, mask, camera.intrinsics, floor, mixed)
+    if feet is None and floor is None:
+        feet = feet_shape_unseen(m.shape)
     if feet is not None and stature_m is None:
         why = (f"feet not seen: {feet}; without the feet the WBSA is not measured (a cut-off adult would read as a "
                "child): capture the whole person, feet on the floor, or state the stature")
         raise WbsaError(f"{why} (--stature-cm, stature_m)", code="feet_not_seen", field="stature_m",
                         page=f"{why} (type the height in cm under Height)")
-    m = measure_subject(depth_m, mask, camera.intrinsics, floor, mixed)
-    if feet is not None:
-        flags["feet_not_seen"] = (f"{feet}; the stated stature {stature_m:.2f} m is used (measured "
-                                  f"{m.stature_m:.2f} m); the legs' area is not seen, so the estimate may read low")
-        m = dataclasses.replace(m, stature_m=stature_m)
+    unseen = None
+    if stature_m is not None:
+        bottom_m = None if request.segment is None or floor is None else seg.subject.bottom_m
+        m, unseen, stated_flags = stated_stature(m, stature_m, feet, bottom_m)
+        flags.update(stated_flags)
     checks.check_height(m.stature_m)
     flags.update(checks.person_shape_flags(m.stature_m, m.width_m, m.silhouette_m2))
     flags.update(checks.mixed_pixel_flags(m.mixed_share))
@@ -361,7 +366,46 @@ def measure(depth_m: np.ndarray, mixed: np.ndarray, request: EstimateRequest) ->
         flags["no_floor"] = FLAGS["no_floor"]
     flags.update(checks.working_range_flags(m.distance_m, camera))
     flags.update(checks.feet_flags(m.distance_m, camera))
-    return Subject(depth_m, mask, camera, floor, m, request.sensor), flags
+    return Subject(depth_m, mask, camera, floor, m, request.sensor, unseen), flags
+
+
+def stated_stature(m: SubjectMeasures, stature_m: float, feet: str | None,
+                   bottom_m: float | None) -> tuple[SubjectMeasures, UnseenLegs | None, dict[str, str]]:
+    """The measures at a stated stature, the legs left unseen and the flags: a stated stature is always used.
+
+    Where the feet are not seen (``feet``), the body below its lowest returns (``bottom_m`` over a seen floor;
+    without a floor, the stated stature less the seen body's height) is unseen (flag ``feet_not_seen``).
+    Without a floor and with the feet not judged, a seen body more than
+    :data:`~wbsa.estimation.subject.checks.STATURE_TOLERANCE_M` shorter than stated is taken as cut off there
+    too (the legs may end over nothing: a frame cut above the floor). Otherwise a stature that differs from the
+    measured one by more than that is flagged ``stature_disagrees``.
+
+    Parameters
+    ----------
+    m : SubjectMeasures
+    stature_m : float
+        The stated stature (metres).
+    feet : str or None
+        Why the feet are not seen (:func:`~wbsa.estimation.subject.people.feet_unseen`), or None.
+    bottom_m : float or None
+        Height of the subject's lowest returns over the seen floor (None: no floor seen).
+    """
+    measured = m.stature_m
+    short = stature_m - measured
+    flags: dict[str, str] = {}
+    unseen = None
+    if feet is not None or (bottom_m is None and short > checks.STATURE_TOLERANCE_M):
+        seen_from = bottom_m if bottom_m is not None else short
+        unseen = unseen_legs(stature_m, seen_from)
+        why = feet or (f"the body seen is {measured:.2f} m tall, {100 * short:.0f} cm less than the stated "
+                       f"{stature_m:.2f} m, with no floor seen: the legs may end over nothing (cut off by the picture)")
+        flags["feet_not_seen"] = (f"{why}; the stated stature {stature_m:.2f} m is used"
+                                  + (f"; {unseen.describe()}" if unseen is not None else ""))
+    elif abs(short) > checks.STATURE_TOLERANCE_M:
+        flags["stature_disagrees"] = (f"the stated stature {stature_m:.2f} m is used; {measured:.2f} m was measured "
+                                      f"({100 * short:+.0f} cm): check the value typed and that the person stands "
+                                      "straight")
+    return dataclasses.replace(m, stature_m=stature_m), unseen, flags
 
 
 def run_routes(predictors: list, subject: Subject, request: Request, clothes: Clothes,
@@ -410,6 +454,12 @@ def run_routes(predictors: list, subject: Subject, request: Request, clothes: Cl
                             "model file, or rebuild it")
     if clothes.sd_m > 0:  # the layer's own uncertainty widens every route's interval that can take it
         prediction, routes = _clothes_widened(prediction, routes, predictors, subject, request, clothes)
+    if subject.unseen is not None:  # so does the spread of the unseen legs' share
+        def wider(route: Prediction) -> Prediction:
+            lo, hi = unseen_widened(route.wbsa_lo_m2, route.wbsa_hi_m2, route.wbsa_m2, subject.unseen, request.level)
+            return dataclasses.replace(route, wbsa_lo_m2=lo, wbsa_hi_m2=hi)
+
+        prediction, routes = wider(prediction), {name: wider(route) for name, route in routes.items()}
     return prediction, routes, flags
 
 

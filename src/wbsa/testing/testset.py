@@ -103,6 +103,34 @@ class RoomTestSettings:
 CONTACT_REACH_PX = 3
 
 
+def held_out_population(n: int, survey_share: float, seed: int) -> pd.DataFrame:
+    """Held-out subjects: random (ages 3–80) and survey-matched (a ``survey_share`` of ``n``), excluding the
+    survey people the default model was trained on; one row per subject with its truth (``wbsa_m2``, ...)."""
+    import warnings
+
+    from wbsa.bodies.random_population import RandomPopulationSettings, sample_random_parameters
+    from wbsa.bodies.survey import build_survey_population
+    from wbsa.bodies.survey_data import load_survey, select_people
+    from wbsa.bodies.table import measure_population
+    from wbsa.training.pipeline import TrainSettings
+
+    n_survey = int(round(n * survey_share))
+    params = sample_random_parameters(RandomPopulationSettings(n=n - n_survey, seed=seed, age_years=(3, 80),
+                                                               age_sampling="years", weight=(0.0, 1.0)))
+    parts = [measure_population(params, show_progress=False).assign(population="random")]
+    if n_survey:
+        train = TrainSettings()
+        trained_ids = set(select_people(load_survey(None).people, train.n_survey, train.seed + 1)["survey_id"])
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            survey = build_survey_population(n_survey + 10, seed=seed + 1, show_progress=False)
+        survey = survey[~survey["survey_id"].isin(trained_ids)].head(n_survey)
+        parts.append(survey.assign(population="survey"))
+    pop = pd.concat(parts, ignore_index=True)
+    pop["subject_id"] = np.arange(len(pop))
+    return pop
+
+
 def contact_strip(truth: np.ndarray, surface_height_m: np.ndarray) -> np.ndarray:
     """(h, w) bool: the feet's contact strip, pixels no depth image tells between the subject and the floor.
 

@@ -17,6 +17,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from wbsa.sensor.technology import SensorModel
     from wbsa.estimation.subject.cloud import Plane
     from wbsa.estimation.subject.measure import SubjectMeasures
+    from wbsa.estimation.subject.unseen import UnseenLegs
     from wbsa.estimation.methods.view import ViewEstimate
 
 
@@ -39,6 +40,9 @@ class Subject:
     sensor : SensorModel or None
         The depth-noise model assumed for the camera (the request's); None: that of a camera whose technology is
         unknown.
+    unseen : UnseenLegs or None
+        The body below the lowest seen returns, where the feet are not seen and the stature is stated
+        (:mod:`wbsa.estimation.subject.unseen`); None: the whole body is seen.
     """
 
     depth_m: np.ndarray
@@ -47,6 +51,7 @@ class Subject:
     floor: Plane | None
     measures: SubjectMeasures
     sensor: SensorModel | None = None
+    unseen: UnseenLegs | None = None
 
 
 @dataclass(frozen=True)

@@ -228,13 +228,17 @@ def why_not_a_person(c: Cluster, min_height_m: float, max_height_m: float, max_w
     return None
 
 
+#: What is found when a subject's lowest returns touch the bottom edge of the frame.
+FEET_AT_EDGE = "the feet touch the bottom edge of the picture: they may be cut off"
+
+
 def feet_unseen(c: Cluster, floor: Plane | None) -> str | None:
     """Why a person's feet are not seen (a clause), or None when they stand on the seen floor.
 
-    The feet are not seen when the lowest returns end at the frame's bottom (the image's, or a band without
-    returns along it: ``bottom_cut``), or stand more than :data:`FLOOR_CONTACT_M` over a seen floor
-    (hidden), unless they touch the floor. Without a floor and with the feet inside the frame nothing is
-    known; a body alone in the image (no room) passes.
+    The feet are not seen when the lowest returns touch the frame's bottom edge (the image's, or a band
+    without returns along it: ``bottom_cut``), even on a seen floor (one rule for every frame: they may be cut
+    off), or stand more than :data:`FLOOR_CONTACT_M` over a seen floor (hidden). Without a floor and with the
+    feet inside the frame the returns say nothing (:func:`feet_shape_unseen` looks at the shape).
 
     Parameters
     ----------
@@ -246,14 +250,48 @@ def feet_unseen(c: Cluster, floor: Plane | None) -> str | None:
     -------
     str or None
     """
+    if c.bottom_cut:
+        return FEET_AT_EDGE + (f" ({c.bottom_m:.2f} m over the floor)" if floor is not None else " (no floor seen)")
     if floor is not None and c.bottom_m <= FLOOR_CONTACT_M:
         return None
-    if c.bottom_cut:
-        return ("its lowest returns end at the bottom of the frame (the image's, or a band without returns)"
-                + (f", {c.bottom_m:.2f} m over the floor" if floor is not None else ", with no floor seen"))
     if floor is not None:
         return f"its lowest returns are {c.bottom_m:.2f} m over the floor (the feet are hidden)"
     return None
+
+
+#: The lowest band of a standing body (0–5 % of its height) reaches wider or deeper than the band two above it
+#: (10–15 %) by at least this factor where it ends in feet: toes point forward and feet are longer than shins
+#: are thick. Measured on seed 2000's bodies alone (no floor), 30 whole and 29 cut from 12 to 42 % of their
+#: height: every whole body 1.24 or more (median 1.5), 27 of the cut 1.2 or less (median 0.45).
+FEET_SPREAD = 1.2
+
+
+def feet_shape_unseen(shape: np.ndarray) -> str | None:
+    """Why a body seen with no floor does not end in feet (a clause), or None when it does.
+
+    Without a floor nothing says where the feet are, and a frame cut above the floor (the legs end over
+    nothing) reads as a shorter person. Feet are told by their shape: the lowest band of the body is wider
+    or deeper than the legs above it by :data:`FEET_SPREAD`.
+
+    Parameters
+    ----------
+    shape : (40,) float
+        The body's shape bands (:func:`wbsa.estimation.subject.measure.shape_bands`): 20 widths then 20
+        thicknesses, from the lowest up.
+
+    Returns
+    -------
+    str or None
+    """
+    n = len(shape) // 2
+    width, thickness = np.asarray(shape[:n], dtype=np.float64), np.asarray(shape[n:], dtype=np.float64)
+    if width[2] <= 0 or thickness[2] <= 0:
+        return None
+    spread = max(width[0] / width[2], thickness[0] / thickness[2])
+    if spread >= FEET_SPREAD:
+        return None
+    return ("its lowest part is no wider or deeper than the legs above it (no feet), with no floor seen: the legs "
+            "may end over nothing, cut off by the picture")
 
 
 def open_feet(mask: np.ndarray) -> str | None:
@@ -271,7 +309,7 @@ def open_feet(mask: np.ndarray) -> str | None:
     """
     rows = np.flatnonzero(mask.any(axis=1))
     if len(rows) and image_frame(mask).at_bottom(rows[-1]):
-        return "its lowest returns end at the bottom of the frame, with no floor seen"
+        return FEET_AT_EDGE + " (no floor seen)"
     return None
 
 

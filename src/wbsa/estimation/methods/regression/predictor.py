@@ -31,7 +31,8 @@ class RegressionPredictor:
 
     def predict(self, subject: Subject, request: Request) -> Prediction:
         """WBSA of ``subject`` with the model's split-conformal interval; flags ``uncertain_view``,
-        ``out_of_training_range`` and ``interval_unsure``.
+        ``out_of_training_range`` and ``interval_unsure``. The area measures of a subject whose legs are not
+        seen are completed first (:func:`wbsa.estimation.subject.unseen.completed`).
 
         Parameters
         ----------
@@ -40,11 +41,13 @@ class RegressionPredictor:
         """
         from wbsa.estimation.subject.checks import range_flags
         from wbsa.estimation.methods.regression.design import range_values, with_clothing
+        from wbsa.estimation.subject.unseen import completed
 
         model, measures = self.model, subject.measures
         view = model.view.estimate(measures)
         (az, el), flags = view_used(view, request.azimuth_deg, request.elevation_deg)
-        feats = with_clothing({k: np.array([v]) for k, v in measures.features().items()}, request.clothing_m)
+        feats = with_clothing(completed({k: np.array([v]) for k, v in measures.features().items()}, subject.unseen),
+                              request.clothing_m)
         # a stated view counts as sure as the surest estimated one: the models never saw a smaller spread
         az_sd = view.azimuth_sd_deg if request.azimuth_deg is None else model.view.axis_sd_deg
         w, lo, hi = model.predict(feats, measures.shape[None], np.array([az]), np.array([az_sd]),

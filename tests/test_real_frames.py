@@ -119,8 +119,9 @@ def _pick(truth) -> tuple[int, int]:
 
 def test_a_render_cut_at_the_knees_is_refused_unless_its_stature_is_stated(side_by_side):
     """The render's rows below the man's knees blanked (a frame cut there): refused, not read as a child;
-    stated, his stature is used. The legs' area stays unseen: the answer reads low (measured: 20 % below
-    the whole frame's)."""
+    stated, his stature is used and the legs below the cut are completed from the population's proportions:
+    the answer stays within 8 % of the whole frame's, its interval wider. Alone (the room blanked: the legs
+    end over nothing, no floor), the cut is told by the legs' shape and refused the same way."""
     import wbsa
     from wbsa.estimation import SegmentSettings
 
@@ -131,12 +132,18 @@ def test_a_render_cut_at_the_knees_is_refused_unless_its_stature_is_stated(side_
     settings = SegmentSettings(pick=_pick(man))
     whole = wbsa.estimate(depth, "kinect-v2", segment=settings)
     assert "feet_not_seen" not in whole.flags and 1.8 < whole.stature_m < 1.95
-    with pytest.raises(WbsaError, match=r"feet not seen: its lowest returns end at the bottom of the frame") as err:
+    with pytest.raises(WbsaError, match=r"feet not seen: the feet touch the bottom edge of the picture") as err:
         wbsa.estimate(cut, "kinect-v2", segment=settings)
     assert "\n" not in str(err.value)
     stated = wbsa.estimate(cut, "kinect-v2", segment=settings, stature_m=whole.stature_m)
     assert "feet_not_seen" in stated.flags and stated.stature_m == whole.stature_m
-    assert 0.7 * whole.wbsa_m2 < stated.wbsa_m2 < whole.wbsa_m2
+    assert "% of its area) is not seen" in stated.flags["feet_not_seen"]
+    assert abs(stated.wbsa_m2 / whole.wbsa_m2 - 1) < 0.08
+    assert stated.wbsa_hi_m2 - stated.wbsa_lo_m2 > whole.wbsa_hi_m2 - whole.wbsa_lo_m2
+    alone = np.where(man, cut, 0.0)
+    with pytest.raises(WbsaError, match=r"feet not seen: its lowest part is no wider or deeper than the legs"):
+        wbsa.estimate(alone, "kinect-v2")
+    assert "feet_not_seen" in wbsa.estimate(alone, "kinect-v2", stature_m=whole.stature_m).flags
     with pytest.raises(WbsaError, match=r"stated stature .* must be a height of 0.5 to 2.5 m"):
         wbsa.estimate(cut, "kinect-v2", segment=settings, stature_m=18.0)
 

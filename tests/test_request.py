@@ -118,3 +118,18 @@ def test_the_limits_are_one_table_read_by_the_command_line_and_the_checks():
         parser.parse_args(["estimate", "d.png", "--stature-cm", str(100 * stature.high + 1)])
     args = parser.parse_args(["estimate", "d.png", "--stature-cm", str(100 * stature.high)])
     assert args.stature_cm == 100 * stature.high and args.max_depth == LIMITS["depth"].high
+
+
+def test_no_camera_preset_is_looked_up_below_the_request():
+    """The request resolves the camera once (its record, technology and noise model); below it, in
+    ``wbsa.estimation``, nothing looks a preset up again by name or by equality."""
+    import re
+    from pathlib import Path
+
+    import wbsa.estimation
+
+    root = Path(wbsa.estimation.__file__).parent
+    lookup = re.compile(r"\b(preset_record|camera_record|envelope_model)\(|\bCAMERAS\b")
+    found = [f"{p.relative_to(root)}:{n}" for p in sorted(root.rglob("*.py")) if p.name != "request.py"
+             for n, line in enumerate(p.read_text().splitlines(), 1) if lookup.search(line.split("#")[0])]
+    assert found == []

@@ -197,7 +197,9 @@ def estimate(depth, camera, model=None, method: Method = "regression", *, azimut
         Or an explicit layer (m, 0–0.05: :data:`wbsa.estimation.limits.LIMITS`) over the trunk, upper arms, legs
         and feet. Neither given: taken as 0, flagged ``clothes_unstated``.
     stature_m : float, optional
-        The stature (m), stated: needed, and used in place of the measured one, where the feet are not seen.
+        The stature (m), stated: always used in place of the measured one (flagged `stature_disagrees` beyond
+        5 cm); needed where the feet are not seen, whose unseen legs are then completed
+        (:mod:`wbsa.estimation.subject.unseen`).
     level : float
         Coverage of the prediction interval, in (0, 1).
     depth_scale : float, optional

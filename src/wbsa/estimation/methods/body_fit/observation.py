@@ -40,10 +40,11 @@ class Observation:
         fx, fy, cx, cy.
     skew : float
     outside_px : (h', w') float32
-        Distance (pixels) from each pixel of a crop around the mask to the nearest subject pixel; 0 on it.
+        Distance (pixels) from each pixel of a crop around the mask to the nearest subject pixel, its small gaps
+        filled (:func:`wbsa.estimation.subject.seen_surface.fill_gaps`); 0 on it.
     depth : (h', w') float32
-        The nearest subject depth within 2 pixels of each subject pixel of the same crop (metres), +inf off the
-        subject.
+        The nearest subject depth (gaps filled) within 2 pixels of each subject pixel of the same crop
+        (metres), +inf off the subject.
     crop : (int, int)
         Row and column of the crop's first pixel in the image.
     top_m : float
@@ -211,6 +212,7 @@ def observe(depth_m: np.ndarray, mask: np.ndarray, camera, floor, n_points: int,
     from wbsa.core.backproject import ray_directions
     from wbsa.estimation.subject.cloud import above_floor
     from wbsa.estimation.subject.measure import measured_depth_noise
+    from wbsa.estimation.subject.seen_surface import fill_gaps
 
     valid = mask & (depth_m > 0)
     rows, cols = np.nonzero(valid)
@@ -227,14 +229,16 @@ def observe(depth_m: np.ndarray, mask: np.ndarray, camera, floor, n_points: int,
         pts_f = pts_f[np.sort(rng.choice(n_returns, n_points, replace=False))]
     r0, r1 = max(rows.min() - _PAD_PX, 0), min(rows.max() + _PAD_PX + 1, depth_m.shape[0])
     c0, c1 = max(cols.min() - _PAD_PX, 0), min(cols.max() + _PAD_PX + 1, depth_m.shape[1])
-    sub = valid[r0:r1, c0:c1]
-    outside = ndimage.distance_transform_edt(~sub).astype(np.float32)
+    # the silhouette and the free space with the subject's small gaps filled (holes, dropped outline returns),
+    # as the regression's seen surface: a camera's dropout is not a smaller body
+    filled_depth, filled = fill_gaps(np.where(valid, depth_m, 0.0)[r0:r1, c0:c1], valid[r0:r1, c0:c1])
+    outside = ndimage.distance_transform_edt(~filled).astype(np.float32)
     # the nearest surface within 2 pixels: a vertex on an arm's outline that rounds onto the trunk behind it
     # (or onto the floor) must not count as hiding it
-    depth = ndimage.maximum_filter(np.where(sub, -depth_m[r0:r1, c0:c1], -np.inf), size=2 * _FREE_REACH_PX + 1)
-    depth = np.where(sub, -depth, np.inf).astype(np.float32)
+    depth = ndimage.maximum_filter(np.where(filled, -filled_depth, -np.inf), size=2 * _FREE_REACH_PX + 1)
+    depth = np.where(filled, -depth, np.inf).astype(np.float32)
     top = float(np.quantile(pts_f[:, 2], 0.998))
-    contour_px, contour_depth = outline(depth_m[r0:r1, c0:c1], sub, (r0, c0), depth_m.shape, rng)
+    contour_px, contour_depth = outline(depth_m[r0:r1, c0:c1], valid[r0:r1, c0:c1], (r0, c0), depth_m.shape, rng)
     return Observation(points=pts_f, basis=basis, origin=origin, camera_position=-basis @ origin,
                        intrinsics=np.array([camera.fx, camera.fy, camera.cx, camera.cy], dtype=np.float64),
                        skew=float(getattr(camera, "skew", 0.0) or 0.0), outside_px=outside, depth=depth,

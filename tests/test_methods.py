@@ -169,11 +169,12 @@ def test_the_terminal_says_the_fits_flags_in_plain_words_and_the_json_keeps_thei
     import json
 
     from helpers.estimates import estimate_of, fitted_body, route
-    from wbsa.estimation.flags import FLAG_RECORDS
+    from wbsa.estimation.flags import CLOTHES_UNSTATED, FLAG_RECORDS
 
     internals = {"outside_model_range": "p_muscle = 0.00, p_weight = 1.00", "posture_at_limit": "elbow_l_flexion_deg",
                  "poor_fit": "residual 46.5 mm, 61 % of points within 3 cm", "not_converged": "120 steps without settling"}
-    plain = {"several_people": "3 person-sized objects; picked the nearest; give --pick X,Y to choose"}
+    plain = {"several_people": "3 person-sized objects; picked the nearest; give --pick X,Y to choose",
+             "clothes_unstated": CLOTHES_UNSTATED}  # Python's words in the estimate, the option's on the terminal
     fit = route(1.8, 1.7, 1.9, "body-fit (anny)", internals, body=fitted_body(flags=internals))
     est = estimate_of(fit, internals | plain, method="body-fit")
     code, out, err = _printed(monkeypatch, tmp_path, est)
@@ -183,6 +184,7 @@ def test_the_terminal_says_the_fits_flags_in_plain_words_and_the_json_keeps_thei
         assert f"warning: {name}: {record.meaning}. {record.advice}\n" in err and detail not in err
     assert "p_muscle" not in err and "elbow_l" not in err and " mm" not in err.split("fitted body")[0]
     assert f"warning: several_people: {plain['several_people']}\n" in err
+    assert "state them (--clothes underwear, thin-gown, light or street)\n" in err and "clothes='" not in err
     code, out, _ = _printed(monkeypatch, tmp_path, est, "--json")
     assert code == 0 and json.loads(out)["flags"] == internals | plain
 

@@ -205,6 +205,8 @@ def test_named_clothes_widen_the_interval_and_unstated_clothes_are_flagged(side_
     assert (unstated.wbsa_m2, unstated.wbsa_lo_m2, unstated.wbsa_hi_m2) == (zero.wbsa_m2, zero.wbsa_lo_m2,
                                                                             zero.wbsa_hi_m2)
     assert "clothes_unstated" in unstated.flags and "clothes_unstated" not in zero.flags
+    said = unstated.flags["clothes_unstated"]  # in Python, the argument; on the terminal, the option
+    assert "state them (clothes='underwear', 'thin-gown', 'light' or 'street')" in said and "--clothes" not in said
     assert unstated.to_dict()["clothing_stated"] is False and named.to_dict()["clothes"] == "light"
     assert "clothes not stated" in fhir_observation(unstated)["method"]["text"]
     assert "clothes stated: light clothes" in fhir_observation(named)["method"]["text"]
@@ -328,7 +330,7 @@ def test_a_point_cloud_that_cannot_be_read_is_refused_in_one_line(tmp_path):
                                       "property float z\nend_header\n1e30 1e30 1e-30\n")
     assert_one_line_error(*run_cli("estimate", tmp_path / "text.pcd")[::2], "text.pcd has no PCD header")
     assert_one_line_error(*run_cli("estimate", tmp_path / "empty.ply", "--camera", "kinect-v2")[::2],
-                          "empty.ply holds no points")
+                          "empty.ply is empty (0 bytes)")
     code, _, err = run_cli("estimate", tmp_path / "far.ply", "--camera", "kinect-v2")
     assert_one_line_error(code, err, "none of the 1 points falls in the kinect-v2 camera's image")
     from wbsa.core.point_cloud import read_point_cloud

@@ -17,9 +17,10 @@ from wbsa.errors import Worded
 
 _UNSTATED = ("no clothes were stated; they were taken as none or tight-fitting (clothes worn read high, about 9 % per "
              "cm of layer)")
-#: The meaning (and detail) of ``clothes_unstated``, with the page's words for how to state them.
-CLOTHES_UNSTATED = Worded(f"{_UNSTATED}: state them (--clothes underwear, thin-gown, light or street)",
-                          f"{_UNSTATED}: choose them under Clothes")
+#: The meaning (and detail) of ``clothes_unstated``: how to state them in Python, on the page, on the command line.
+CLOTHES_UNSTATED = Worded(f"{_UNSTATED}: state them (clothes='underwear', 'thin-gown', 'light' or 'street')",
+                          f"{_UNSTATED}: choose them under Clothes",
+                          command=f"{_UNSTATED}: state them (--clothes underwear, thin-gown, light or street)")
 
 
 @dataclass(frozen=True)
@@ -174,7 +175,7 @@ DEFAULT_ADVICE = "Check the picture and take it again if in doubt."
 
 def terminal_text(name: str, detail: str) -> str:
     """What the terminal says of a flag (``warning: name: <this>``): the raiser's detail (its numbers, the fix in
-    command-line words), or, for a flag whose detail is the fit's internals (:attr:`Flag.internal`), its meaning
+    command-line words: :func:`wbsa.errors.command_text`), or, for a flag whose detail is the fit's internals (:attr:`Flag.internal`), its meaning
     and what to do, as the page says them; the detail stays in ``--json``.
 
     Parameters
@@ -187,7 +188,9 @@ def terminal_text(name: str, detail: str) -> str:
     >>> terminal_text("poor_fit", "residual 46.5 mm, 61 % of points within 3 cm").startswith("the fitted surface")
     True
     """
+    from wbsa.errors import command_text
+
     record = FLAG_RECORDS.get(name)
     if record is None or not record.internal:
-        return str(detail)
-    return f"{record.meaning}. {record.advice}"
+        return command_text(detail)
+    return f"{command_text(record.meaning)}. {record.advice}"

@@ -321,3 +321,45 @@ def test_survey_population_bytes_are_the_same_on_every_run(tmp_path):
         assert set(table.attrs[RUN_LOG_ATTR]) == {"seconds", "cpu_seconds"}
         write_table(table, tmp_path / f"{name}.parquet")
     assert (tmp_path / "a.parquet").read_bytes() == (tmp_path / "b.parquet").read_bytes()
+
+
+def test_depth_and_camera_files_are_refused_in_plain_words_with_the_fix(tmp_path):
+    """Issue 42's small words: what a picture is (never Pillow's mode letter), an empty file as empty, a float
+    file in millimetres named as such with its option, a camera matrix written row by row named as Open3D's
+    column order; each on the command line (exit 2, one line) and, where the words differ, in Python."""
+    import numpy as np
+    from PIL import Image
+
+    import wbsa
+    from wbsa.camera import Intrinsics, preset
+
+    Image.fromarray(np.full((424, 512), 128, np.uint8)).save(tmp_path / "photo.png")
+    Image.fromarray(np.full((424, 512, 3), 128, np.uint8)).save(tmp_path / "colour.tiff")
+    (tmp_path / "empty.png").write_bytes(b"")
+    for name, words in (("photo.png", "photo.png is an 8-bit grey-scale picture, not a 16-bit depth image; export the "
+                                      "depth frame from the camera's software as a 16-bit PNG in millimetres"),
+                        ("colour.tiff", "colour.tiff is a colour picture (TIFF), not a single-channel depth image; "
+                                        "save the depth as 32-bit float metres or 16-bit millimetres"),
+                        ("empty.png", "empty.png is empty (0 bytes); export the depth frame again")):
+        assert_one_line_error(*run_cli("estimate", tmp_path / name, "--camera", "kinect-v2")[::2], words)
+    depth_mm = np.zeros((424, 512))
+    depth_mm[100:380, 220:290] = 2500.0  # a person 2.5 m away, in millimetres, as float
+    np.save(tmp_path / "mm.npy", depth_mm)
+    assert_one_line_error(*run_cli("estimate", tmp_path / "mm.npy", "--camera", "kinect-v2")[::2],
+                          "has 0 returns between 0.3 and 8 m; its returns lie 2500 m away (median): millimetres "
+                          "read as metres? A float file (.npy, .tiff, .exr) or array is read as metres: for "
+                          "millimetres add --depth-scale 1000 (depth_scale=1000 in Python)")
+    with pytest.raises(WbsaError, match="depth_scale=1000 in Python") as err:
+        wbsa.estimate(tmp_path / "mm.npy", "kinect-v2")
+    assert err.value.code == "depth_scale" and "save the depth in metres" in err.value.page_words()
+    k = preset("kinect-v2")
+    row_major = {"width": k.width, "height": k.height, "intrinsic_matrix": [float(x) for x in k.K.ravel()]}
+    (tmp_path / "cam.json").write_text(json.dumps(row_major))
+    assert_one_line_error(*run_cli("estimate", tmp_path / "mm.npy", "--camera", tmp_path / "cam.json")[::2],
+                          "intrinsic_matrix is not a pinhole camera matrix ([[fx, s, cx], [0, fy, cy], [0, 0, 1]]); "
+                          "Open3D lists it column by column, [fx, 0, 0, s, fy, 0, cx, cy, 1], and this one is "
+                          "written row by row: write it column by column")
+    assert Intrinsics.from_open3d_json(k.to_open3d_json()) == k  # the column order Open3D writes is read
+    with pytest.raises(WbsaError, match=r"\[0, 0, 1\]\]\); Open3D lists it column by column, \[fx, 0, 0, s, fy, "
+                                        r"0, cx, cy, 1\]$"):
+        Intrinsics.from_open3d_json({**row_major, "intrinsic_matrix": [1.0] * 9})  # neither order

@@ -103,6 +103,25 @@ def test_the_person_cut_at_the_knees_is_refused_and_answered_with_a_stature(five
     assert_one_line_error(*run_cli(*base, "--clothes", "light", "--clothing-cm", "1")[::2], "not both")
 
 
+def test_a_640x480_frame_without_a_camera_is_refused_naming_the_cameras_of_that_size(tmp_path):
+    """A 640 x 480 depth image (the size of Kinect v1 and of TUM's calibration, focal lengths 576 and 525 px)
+    without a camera is refused in one line naming both and the word to add, on the command line (exit 2) and in
+    Python (``code="camera_size"``), before any person is looked for (an empty frame: the size alone decides);
+    the real frame's organised ``.pcd`` brings its own camera and is answered (the test above)."""
+    from helpers.cli import assert_one_line_error, run_cli
+    import wbsa
+
+    path = tmp_path / "frame.npy"
+    np.save(path, np.zeros((480, 640)))
+    assert_one_line_error(*run_cli("estimate", path, "--pick", "86,250")[::2],
+                          "640x480 pixels fits 2 cameras of different focal lengths (kinect-v1 576 px, tum 525 px)",
+                          "add --camera kinect-v1 or --camera tum", "intrinsics JSON file")
+    with pytest.raises(WbsaError, match=r"camera='kinect-v1' in Python") as err:
+        wbsa.estimate(path, "auto")
+    assert err.value.code == "camera_size" and err.value.field == "camera"
+    assert "choose the camera under Camera" in err.value.page_words()
+
+
 @pytest.fixture(scope="module")
 def side_by_side(body_model):
     """Two people side by side in a room (:func:`wbsa.testing.frames.side_by_side`): the depth, the man's
@@ -193,6 +212,8 @@ def test_named_clothes_widen_the_interval_and_unstated_clothes_are_flagged(side_
     assert (unstated.wbsa_m2, unstated.wbsa_lo_m2, unstated.wbsa_hi_m2) == (zero.wbsa_m2, zero.wbsa_lo_m2,
                                                                             zero.wbsa_hi_m2)
     assert "clothes_unstated" in unstated.flags and "clothes_unstated" not in zero.flags
+    said = unstated.flags["clothes_unstated"]  # in Python, the argument; on the terminal, the option
+    assert "state them (clothes='underwear', 'thin-gown', 'light' or 'street')" in said and "--clothes" not in said
     assert unstated.to_dict()["clothing_stated"] is False and named.to_dict()["clothes"] == "light"
     assert "clothes not stated" in fhir_observation(unstated)["method"]["text"]
     assert "clothes stated: light clothes" in fhir_observation(named)["method"]["text"]
@@ -316,7 +337,7 @@ def test_a_point_cloud_that_cannot_be_read_is_refused_in_one_line(tmp_path):
                                       "property float z\nend_header\n1e30 1e30 1e-30\n")
     assert_one_line_error(*run_cli("estimate", tmp_path / "text.pcd")[::2], "text.pcd has no PCD header")
     assert_one_line_error(*run_cli("estimate", tmp_path / "empty.ply", "--camera", "kinect-v2")[::2],
-                          "empty.ply holds no points")
+                          "empty.ply is empty (0 bytes)")
     code, _, err = run_cli("estimate", tmp_path / "far.ply", "--camera", "kinect-v2")
     assert_one_line_error(code, err, "none of the 1 points falls in the kinect-v2 camera's image")
     from wbsa.core.point_cloud import read_point_cloud

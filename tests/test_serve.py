@@ -491,7 +491,6 @@ def test_messages_reach_the_page_in_its_own_words(server, browser, frames, tmp_p
 
     cli = [
         message(checks.check_image_size, np.zeros((424, 512)), preset("kinect-v1")),
-        message(read_depth, grey),
         message(check_clothing, 0.2),
         message(BodyFitPredictor().check_request, Request(level=0.8)),
         message(wbsa.estimate, str(frames["two"]["path"]), "kinect-v2", str(small_estimator_model)),
@@ -502,12 +501,14 @@ def test_messages_reach_the_page_in_its_own_words(server, browser, frames, tmp_p
     for text in cli:
         assert COMMAND_LINE_WORDS.search(str(text)), text  # the library's own words: the command line's
         assert not COMMAND_LINE_WORDS.search(page_text(text)), (str(text), page_text(text))
-    assert cli[4].code == "choose_person" and "click on the person" in page_text(cli[4]) and cli[0].code != "choose_person"
+    assert cli[3].code == "choose_person" and "click on the person" in page_text(cli[3]) and cli[0].code != "choose_person"
+    picture = message(read_depth, grey)  # plain words for both: what the picture is, never Pillow's mode letter
+    assert page_text(picture) == str(picture) and not COMMAND_LINE_WORDS.search(str(picture))
     url, _ = server
     _upload(browser, url, grey)
     _wait(browser, "!document.getElementById('error').hidden && document.body.dataset.busy === '0'")
     error = _answer(browser)["error"]
-    assert "photo.png is an ordinary grey or colour picture, not a depth image" in error
+    assert "photo.png is an 8-bit grey-scale picture, not a 16-bit depth image" in error
     assert not COMMAND_LINE_WORDS.search(_page_text(browser))
     assert not _shown(browser, "result")  # nothing measured: no cards at all
 

@@ -51,25 +51,31 @@ class WbsaError(ValueError):
 
 
 class Worded(str):
-    """A flag's detail: the text itself in the command line's words, :attr:`page` in the page's.
+    """A flag's detail: the text itself in the library's words, :attr:`page` in the page's, :attr:`command` in the
+    command line's where they differ (None: the text names the option and the argument alike, or no option).
 
-    It is a ``str`` (JSON, the terminal and every comparison see the command line's text); the page reads
-    :attr:`page` through :func:`page_text`.
+    It is a ``str`` (Python, JSON and every comparison see the text); the page reads :attr:`page` through
+    :func:`page_text`, the terminal :attr:`command` through :func:`command_text`.
 
     >>> detail = Worded("give --azimuth if you know it", "type the azimuth if you know it")
-    >>> detail, page_text(detail)
-    ('give --azimuth if you know it', 'type the azimuth if you know it')
+    >>> detail, page_text(detail), command_text(detail)
+    ('give --azimuth if you know it', 'type the azimuth if you know it', 'give --azimuth if you know it')
+    >>> said = Worded("state them (clothes='light')", "choose them under Clothes", command="state them (--clothes light)")
+    >>> said, command_text(said)
+    ("state them (clothes='light')", 'state them (--clothes light)')
     """
 
     page: str
+    command: str | None
 
-    def __new__(cls, text: str, page: str) -> Worded:
+    def __new__(cls, text: str, page: str, command: str | None = None) -> Worded:
         obj = super().__new__(cls, text)
         obj.page = page
+        obj.command = command
         return obj
 
     def __reduce__(self):
-        return Worded, (str(self), self.page)
+        return Worded, (str(self), self.page, self.command)
 
 
 def page_text(message: object) -> str:
@@ -83,6 +89,17 @@ def page_text(message: object) -> str:
     if isinstance(message, WbsaError):
         return message.page_words()
     return message.page if isinstance(message, Worded) else str(message)
+
+
+def command_text(message: object) -> str:
+    """The command line's words of a flag's detail (:attr:`Worded.command`), or its text where it has none of
+    its own.
+
+    Parameters
+    ----------
+    message : Worded or str
+    """
+    return message.command if isinstance(message, Worded) and message.command is not None else str(message)
 
 
 def worded(exc: WbsaError) -> str:

@@ -185,8 +185,12 @@ class Intrinsics:
         if m.size != 9 or not np.all(np.isfinite(m)):
             raise WbsaError(f"{where}: intrinsic_matrix must be 9 finite numbers (column-major 3x3), got {m.size}")
         K = m.reshape(3, 3).T  # Open3D stores the matrix column-major
-        if abs(K[1, 0]) > 1e-12 or abs(K[2, 0]) > 1e-12 or abs(K[2, 1]) > 1e-12 or abs(K[2, 2] - 1.0) > 1e-12:
-            raise WbsaError(f"{where}: intrinsic_matrix is not a pinhole K ([[fx, s, cx], [0, fy, cy], [0, 0, 1]])")
+        if not _is_pinhole(K):
+            order = ("Open3D lists it column by column, [fx, 0, 0, s, fy, 0, cx, cy, 1], and this one is written row "
+                     "by row: write it column by column (open3d.io.write_pinhole_camera_intrinsic does)"
+                     if _is_pinhole(K.T) else "Open3D lists it column by column, [fx, 0, 0, s, fy, 0, cx, cy, 1]")
+            raise WbsaError(f"{where}: intrinsic_matrix is not a pinhole camera matrix ([[fx, s, cx], [0, fy, cy], "
+                            f"[0, 0, 1]]); {order}", code="camera_matrix", field="camera")
         for key in ("width", "height", "min_range_m", "max_range_m"):
             value = source.get(key)
             if key in source and not (value is None and key.endswith("_m")) and (isinstance(value, bool) or not isinstance(value, (int, float))
@@ -199,6 +203,11 @@ class Intrinsics:
             name=str(source.get("name", "custom")), min_range_m=float(source.get("min_range_m") or 0.0),
             max_range_m=math.inf if max_range is None else float(max_range),
         )
+
+
+def _is_pinhole(K: np.ndarray) -> bool:
+    """Whether a 3×3 matrix has a pinhole camera matrix's zeros and one: ``[[fx, s, cx], [0, fy, cy], [0, 0, 1]]``."""
+    return bool(abs(K[1, 0]) <= 1e-12 and abs(K[2, 0]) <= 1e-12 and abs(K[2, 1]) <= 1e-12 and abs(K[2, 2] - 1.0) <= 1e-12)
 
 
 #: Fields of view (degrees, either axis) a depth camera can have; focal lengths beyond them are typing errors.

@@ -50,9 +50,6 @@ class CameraRecord:
         Farthest distance at which the estimator's segmentation tells the feet from the floor in 99 % of the
         benchmark's frames (``benchmarks/bench_estimate.py``, segmentation by camera and band); beyond it an
         estimate is flagged ``feet_unsure``. None: the whole working range.
-    by_image_size : bool
-        Whether ``camera="auto"`` may pick this preset from the image's size (:func:`camera_for_image`); False
-        for a preset that is another calibration of a camera of the same size (TUM's Kinect v1).
     """
 
     intrinsics: Intrinsics
@@ -61,7 +58,6 @@ class CameraRecord:
     trained: bool
     note: str
     feet_within_m: float | None = None
-    by_image_size: bool = True
 
     def __post_init__(self) -> None:
         if self.disparity is not None:
@@ -88,9 +84,9 @@ class CameraRecord:
 
 def _record(name: str, size: tuple[int, int], focal: tuple[float, float], centre: tuple[float, float],
             range_m: tuple[float, float], technology: DepthTechnology, disparity: tuple[float, float] | None,
-            trained: bool, note: str, feet_within_m: float | None = None, by_image_size: bool = True) -> CameraRecord:
+            trained: bool, note: str, feet_within_m: float | None = None) -> CameraRecord:
     return CameraRecord(Intrinsics(*size, *focal, *centre, name=name, min_range_m=range_m[0], max_range_m=range_m[1]),
-                        technology, disparity, trained, note, feet_within_m, by_image_size)
+                        technology, disparity, trained, note, feet_within_m)
 
 
 #: Every camera preset, by name (the order of :data:`wbsa.typing.PresetName`).
@@ -100,7 +96,7 @@ CAMERAS: dict[str, CameraRecord] = {r.name: r for r in (
     _record("kinect-v2", (512, 424), (365.456, 365.456), (254.878, 205.395), (0.5, 4.5), "time-of-flight", None, True,
             "Kinect v2 depth camera"),
     _record("tum", (640, 480), (525.0, 525.0), (319.5, 239.5), (0.8, 4.0), "structured-light", (0.075, 1 / 8),
-            False, "TUM RGB-D default, a Kinect v1", by_image_size=False),
+            False, "TUM RGB-D default, a Kinect v1"),
     _record("azure-kinect-nfov", (640, 576), (503.9, 504.0), (332.1, 325.9), (0.5, 3.86), "time-of-flight", None,
             True, "Azure Kinect NFOV unbinned"),
     _record("azure-kinect-wfov", (512, 512), (252.0, 252.0), (261.8, 253.0), (0.25, 2.88), "time-of-flight", None,
@@ -195,7 +191,10 @@ def camera_for_image(depth_shape: tuple[int, int]) -> Intrinsics:
 
 
 def record_for_image(depth_shape: tuple[int, int]) -> CameraRecord:
-    """The one preset told by its image size (:attr:`CameraRecord.by_image_size`) whose image is ``depth_shape``.
+    """The one preset whose image is ``depth_shape``.
+
+    A size several presets share (640 × 480: Kinect v1 and TUM's calibration of it; 848 × 480: RealSense D435
+    and D455) is refused: their focal lengths differ by up to 10 %, which moves the area by up to 20 %.
 
     Parameters
     ----------
@@ -205,18 +204,25 @@ def record_for_image(depth_shape: tuple[int, int]) -> CameraRecord:
     Raises
     ------
     WbsaError
-        No preset or several have that size.
+        No preset or several have that size (``code="camera_size"``).
     """
     h, w = depth_shape
-    found = [name for name, r in CAMERAS.items()
-             if r.by_image_size and (r.intrinsics.width, r.intrinsics.height) == (w, h)]
-    if len(found) != 1:
-        have = ", ".join(found) if found else "none of the presets"
-        raise WbsaError(f"a {w}x{h} depth image fits {have}; give --camera PRESET or an intrinsics JSON",
+    found = [r for r in CAMERAS.values() if (r.intrinsics.width, r.intrinsics.height) == (w, h)]
+    if len(found) > 1:
+        names = [r.name for r in found]
+        focal = ", ".join(f"{r.name} {r.intrinsics.fx:.0f} px" for r in found)
+        said = f"a depth image of {w}x{h} pixels fits {len(found)} cameras of different focal lengths ({focal})"
+        raise WbsaError(f"{said}, so its camera cannot be told from its size; add "
+                        f"{' or '.join(f'--camera {n}' for n in names)} (camera={names[0]!r} in Python), or, for "
+                        "another camera of this size, its intrinsics JSON file",
                         code="camera_size", field="camera", value="auto",
-                        page=f"a {w}x{h} depth image fits {have}; choose the camera under Camera, or add its "
-                             "intrinsics file")
-    return CAMERAS[found[0]]
+                        page=f"{said}; choose the camera under Camera, or add its intrinsics file")
+    if not found:
+        raise WbsaError(f"a {w}x{h} depth image fits none of the presets; give --camera PRESET or an intrinsics JSON",
+                        code="camera_size", field="camera", value="auto",
+                        page=f"a {w}x{h} depth image fits none of the presets; choose the camera under Camera, or add "
+                             "its intrinsics file")
+    return found[0]
 
 
 def resolve_camera(spec: str | os.PathLike | Intrinsics, depth_shape: tuple[int, int] | None = None) -> Intrinsics:

@@ -145,10 +145,8 @@ def read_depth_png(path: str | os.PathLike, *, depth_scale: float = MM_PER_M) ->
     except (UnidentifiedImageError, OSError) as exc:
         raise WbsaError(f"{path} is not a readable image ({type(exc).__name__}); give a 16-bit depth PNG") from None
     if mode not in ("I;16", "I;16B", "I;16L", "I") or units.ndim != 2:
-        raise WbsaError(f"{path} is a {mode} image, not a single-channel 16-bit depth image; "
-                        "save depth as 16-bit PNG in millimetres", code="not_depth", field="depth",
-                        page=f"{path} {_picture_words(mode)}; export the depth frame from the camera's software as a "
-                             "16-bit PNG in millimetres")
+        raise WbsaError(f"{path} is {_picture_words(mode)}, not a 16-bit depth image; export the depth frame from "
+                        "the camera's software as a 16-bit PNG in millimetres", code="not_depth", field="depth")
     if units.min(initial=0) < 0 or units.max(initial=0) > _UINT16_MAX:
         raise WbsaError(f"{path} holds values outside the 16-bit range; it is not a depth PNG")
     return png_mm_to_depth(units.astype(np.uint16), depth_scale=depth_scale)
@@ -158,19 +156,24 @@ def read_depth_png(path: str | os.PathLike, *, depth_scale: float = MM_PER_M) ->
 DEPTH_SUFFIXES = (".png", ".npy", ".tif", ".tiff", ".exr")
 
 
-#: Image modes of ordinary pictures (PIL's), in the page's words: a grey or colour picture, a colour one.
-_PICTURE_MODES = ((("L", "LA", "P", "PA", "1"), "is an ordinary grey or colour picture, not a depth image"),
-                  (("RGB", "RGBA", "RGBX", "CMYK", "YCbCr", "HSV", "LAB"), "is a colour picture, not a depth image"))
+#: What an image of each Pillow mode is, in plain words (the messages never name a mode).
+_PICTURE_MODES = {
+    "1": "a black-and-white (1-bit) picture", "L": "an 8-bit grey-scale picture",
+    "LA": "an 8-bit grey-scale picture with transparency", "P": "an 8-bit colour picture with a palette",
+    "PA": "an 8-bit colour picture with a palette", "RGB": "a colour picture", "RGBA": "a colour picture with "
+    "transparency", "RGBX": "a colour picture", "CMYK": "a colour picture for print (CMYK)", "YCbCr": "a colour picture",
+    "HSV": "a colour picture", "LAB": "a colour picture", "F": "a 32-bit floating-point image",
+}
 
 
 def _picture_words(mode: str) -> str:
-    """What an image of PIL mode ``mode`` is, in the page's words (``is a colour picture, not a depth image``)."""
-    return next((words for modes, words in _PICTURE_MODES if mode in modes), "is not a depth image")
+    """What an image of Pillow mode ``mode`` is, in plain words (``an 8-bit grey-scale picture``)."""
+    return _PICTURE_MODES.get(mode, "an image of several channels or an unusual kind")
 
 
 def check_depth_path(path: Path) -> None:
     """Refuse a depth path that is not a regular file, saying what it is (missing, a folder, a FIFO or device,
-    a symbolic-link loop) rather than "does not exist" for all of them.
+    a symbolic-link loop) rather than "does not exist" for all of them, or an empty file (0 bytes).
 
     Parameters
     ----------
@@ -195,6 +198,8 @@ def check_depth_path(path: Path) -> None:
         kind = "a FIFO (named pipe)" if stat.S_ISFIFO(mode) else "a device" if (
             stat.S_ISCHR(mode) or stat.S_ISBLK(mode)) else "a socket" if stat.S_ISSOCK(mode) else "not a regular file"
         raise WbsaError(f"depth image {path} is {kind}, not a file; save the depth image to a file first")
+    if os.stat(path).st_size == 0:
+        raise WbsaError(f"{path} is empty (0 bytes); export the depth frame again")
 
 
 @contextlib.contextmanager
@@ -206,12 +211,27 @@ def _open_image(path: Path) -> Iterator:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", Image.DecompressionBombWarning)  # wbsa's own, lower limit follows
             img = Image.open(path)
-    except Image.DecompressionBombError:  # Pillow's limit: far above wbsa's
-        raise WbsaError(f"depth image {path} announces more than {2 * Image.MAX_IMAGE_PIXELS / 1e6:.0f} megapixels, "
-                        f"above wbsa's limit of {MAX_IMAGE_PIXELS / 1e6:.1f} megapixels; use a smaller image") from None
+    except Image.DecompressionBombError:  # Pillow's limit: far above wbsa's; its size said as any other's
+        check_image_size(*_announced_size(path), f"depth image {path}")
+        raise  # pragma: no cover (the size is above Pillow's limit, so above wbsa's)
     with img:
         check_image_size(img.width, img.height, f"depth image {path}")
         yield img
+
+
+def _announced_size(path: Path) -> tuple[int, int]:
+    """(width, height) in an image file's header, read by Pillow's reader of its type without Pillow's own size
+    limit (nothing is decoded); raises :class:`WbsaError` where the header cannot be read."""
+    from PIL import Image
+
+    try:  # the reader is loaded: Pillow has just read the header with it
+        kind = Image.EXTENSION[path.suffix.lower()]
+        with Image.OPEN[kind][0](str(path)) as img:
+            return img.size
+    except Exception as exc:  # a header Pillow reads only to refuse it: whatever its reader raises
+        raise WbsaError(f"depth image {path} announces more than {2 * Image.MAX_IMAGE_PIXELS / 1e6:.0f} million "
+                        f"pixels, above wbsa's limit of 4096 x 4096 ({MAX_IMAGE_PIXELS / 1e6:.1f} million); use a "
+                        f"smaller image or camera resolution ({type(exc).__name__})") from None
 
 
 def _npy_shape(path: Path) -> tuple[int, ...]:
@@ -339,10 +359,9 @@ def _read_tiff(path: Path) -> np.ndarray:
     try:
         with _open_image(path) as img:
             if img.mode not in ("F", "I", "I;16", "I;16B", "I;16L"):
-                raise WbsaError(f"{path} is a {img.mode} TIFF, not single-channel depth; save 32-bit float metres "
-                                "or 16-bit millimetres", code="not_depth", field="depth",
-                                page=f"{path} is a TIFF picture, not a depth image; save 32-bit float metres or "
-                                     "16-bit millimetres")
+                raise WbsaError(f"{path} is {_picture_words(img.mode)} (TIFF), not a single-channel depth image; "
+                                "save the depth as 32-bit float metres or 16-bit millimetres", code="not_depth",
+                                field="depth")
             return np.asarray(img)
     except (UnidentifiedImageError, OSError) as exc:
         raise WbsaError(f"{path} is not a readable TIFF ({type(exc).__name__}); save depth as 32-bit float "

@@ -104,8 +104,10 @@ def run_estimate(args: argparse.Namespace) -> int:
         body_fit=_body_fit_settings(args))
     est = estimate_request(request, args.depth, args.model, depth_scale=args.depth_scale)
     _write_outputs(args, est)
+    from wbsa.estimation.flags import terminal_text
+
     for name, text in est.flags.items():
-        sys.stderr.write(f"warning: {name}: {text}\n")
+        sys.stderr.write(f"warning: {name}: {terminal_text(name, text)}\n")
     from wbsa.strict_json import json_text
 
     if args.fhir:
@@ -125,7 +127,7 @@ def run_estimate(args: argparse.Namespace) -> int:
             b = est.body
             print(f"fitted body: stature {b.stature_m:.3f} m, mass {b.mass_kg:.1f} kg (BMI {b.bmi:.1f}, from its "
                   f"volume {1000 * b.volume_m3:.1f} L), {b.sex}, residual {1000 * b.residual_m:.1f} mm, "
-                  f"{b.seconds:.1f} s")
+                  f"fitted in {b.seconds:.1f} s")
     return 0
 
 

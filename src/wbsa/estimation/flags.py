@@ -1,7 +1,8 @@
 """Every flag an estimate can carry: one record each, its meaning, what to do about it and which routes raise it.
 
 A flag is a name and a sentence in ``Estimate.flags`` (``warning: name: detail`` lines on the terminal, the
-page's "check before you use the number" rows). The detail is the raiser's own (it carries the numbers and, on
+page's "check before you use the number" rows; a detail that is the fit's internals stays in the JSON, the
+terminal saying the meaning and the advice instead: :func:`terminal_text`). The detail is the raiser's own (it carries the numbers and, on
 the terminal, the fix in command-line terms); the meaning and the page's advice are here, once. Routes:
 ``image`` the estimate's own checks whatever the method (:mod:`wbsa.estimation.subject.checks`,
 :func:`wbsa.estimation.single_view.estimate`), ``regression``, ``body-fit`` (its :class:`BodyFit` carries them
@@ -16,9 +17,10 @@ from wbsa.errors import Worded
 
 _UNSTATED = ("no clothes were stated; they were taken as none or tight-fitting (clothes worn read high, about 9 % per "
              "cm of layer)")
-#: The meaning (and detail) of ``clothes_unstated``, with the page's words for how to state them.
-CLOTHES_UNSTATED = Worded(f"{_UNSTATED}: state them (--clothes underwear, thin-gown, light or street)",
-                          f"{_UNSTATED}: choose them under Clothes")
+#: The meaning (and detail) of ``clothes_unstated``: how to state them in Python, on the page, on the command line.
+CLOTHES_UNSTATED = Worded(f"{_UNSTATED}: state them (clothes='underwear', 'thin-gown', 'light' or 'street')",
+                          f"{_UNSTATED}: choose them under Clothes",
+                          command=f"{_UNSTATED}: state them (--clothes underwear, thin-gown, light or street)")
 
 _NO_FLOOR = ("no floor was found, so the feet could not be checked to stand on one (the elevation comes from the "
              "body's long axis)")
@@ -41,11 +43,15 @@ class Flag:
         What to do about it, in words a nurse can act on (the page shows it).
     routes : tuple of str
         Which routes raise it: ``image``, ``regression``, ``body-fit``, ``both``.
+    internal : bool
+        Whether the raiser's detail is the fit's internals (parameter and joint names, residuals): the terminal
+        then says the meaning and the advice instead (:func:`terminal_text`); the detail stays in the JSON.
     """
 
     meaning: str
     advice: str
     routes: tuple[str, ...]
+    internal: bool = False
 
 
 #: Flag name -> its record.
@@ -132,7 +138,7 @@ FLAG_RECORDS: dict[str, Flag] = {
         "the fit used all its steps without settling; the body may be off",
         "The body fit did not settle: take the picture again with the person standing still, arms slightly away "
         "from the body.",
-        ("body-fit",)),
+        ("body-fit",), internal=True),
     "time_budget": Flag(
         "the fit reached its wall-clock safety stop and returned its best body so far",
         "The body fit ran out of time; its body may be off. Take the picture again, or use the regression.",
@@ -141,18 +147,18 @@ FLAG_RECORDS: dict[str, Flag] = {
         "a joint angle sits at the edge of the standing postures the fit allows",
         "Ask the person to stand upright, feet slightly apart, arms slightly away from the body, and take the "
         "picture again.",
-        ("body-fit",)),
+        ("body-fit",), internal=True),
     "outside_model_range": Flag(
         "a body parameter sits at the edge of anny's range: the person may be outside the model",
         "The person's shape is at the edge of what the body model can take; treat the body fit's answer with "
         "caution and compare it with the regression.",
-        ("body-fit",)),
+        ("body-fit",), internal=True),
     "poor_fit": Flag(
         "the fitted surface leaves many observed points unexplained (not a standing person, clothes, occlusion or "
         "a body outside the model)",
         "The fitted body explains the picture poorly (clothes, something in front of the person, or not a person): "
         "check the outline and take the picture again.",
-        ("body-fit",)),
+        ("body-fit",), internal=True),
     "steep_view": Flag(
         "the camera looks at the body from more than 45° above or below",
         "Put the camera at about chest height, level, and take the picture again.",
@@ -177,3 +183,26 @@ FLAGS: dict[str, str] = {name: flag.meaning for name, flag in FLAG_RECORDS.items
 
 #: What the page advises for a flag it does not know.
 DEFAULT_ADVICE = "Check the picture and take it again if in doubt."
+
+
+def terminal_text(name: str, detail: str) -> str:
+    """What the terminal says of a flag (``warning: name: <this>``): the raiser's detail (its numbers, the fix in
+    command-line words: :func:`wbsa.errors.command_text`), or, for a flag whose detail is the fit's internals (:attr:`Flag.internal`), its meaning
+    and what to do, as the page says them; the detail stays in ``--json``.
+
+    Parameters
+    ----------
+    name : str
+        The flag's name (a key of :data:`FLAG_RECORDS`).
+    detail : str
+        The estimate's detail of it.
+
+    >>> terminal_text("poor_fit", "residual 46.5 mm, 61 % of points within 3 cm").startswith("the fitted surface")
+    True
+    """
+    from wbsa.errors import command_text
+
+    record = FLAG_RECORDS.get(name)
+    if record is None or not record.internal:
+        return command_text(detail)
+    return f"{command_text(record.meaning)}. {record.advice}"

@@ -116,7 +116,9 @@ class Estimate:
         """JSON-ready estimate, view and flags (without the mask and the surface).
 
         A number that was not estimated (the spread of a fitted body's azimuth) is NaN here and ``null`` in the
-        JSON (:func:`wbsa.strict_json.json_text`).
+        JSON (:func:`wbsa.strict_json.json_text`). Each quantity is said once: the fitted body's area and
+        interval are its route's (the top level with ``body-fit``, ``routes["body-fit"]`` with ``both``), so
+        ``body`` holds its other measures, and its ``seconds`` is the time of every fit the route ran.
         """
         out = {k: getattr(self, k) for k in ("wbsa_m2", "wbsa_lo_m2", "wbsa_hi_m2", "level", "vbsa_m2", "stature_m",
                                              "distance_m", "n_pixels", "clothing_m", "method", "model", "camera")}
@@ -127,7 +129,7 @@ class Estimate:
         out["stature_stated_m"] = self.stature_stated_m
         out["flags"] = dict(self.flags)
         if self.body is not None:
-            out["body"] = self.body.to_dict()
+            out["body"] = {k: v for k, v in self.body.to_dict().items() if k not in _ROUTE_NUMBERS}
         if self.routes:
             out["routes"] = {name: {"wbsa_m2": round(p.wbsa_m2, 5), "wbsa_lo_m2": round(p.wbsa_lo_m2, 5),
                                     "wbsa_hi_m2": round(p.wbsa_hi_m2, 5), "model": p.model_name, "flags": dict(p.flags)}
@@ -142,6 +144,10 @@ class Estimate:
                 f"{self.vbsa_m2:.3f} m2 and {stature} measured on the point cloud, view "
                 f"azimuth {self.view_used[0]:.0f} deg / elevation {self.view_used[1]:.0f} deg, model {self.model}; "
                 f"{self.clothes.text()}")
+
+
+#: A fitted body's numbers that its route states (:meth:`Estimate.to_dict` says them there only).
+_ROUTE_NUMBERS = ("wbsa_m2", "wbsa_lo_m2", "wbsa_hi_m2", "level")
 
 
 def _depth_array(depth, depth_scale: float | None) -> np.ndarray:
@@ -507,7 +513,8 @@ def _clothes_widened(prediction, routes: dict, predictors: list, subject, reques
     """The lead prediction and the routes with their intervals widened by the clothes' uncertainty
     (:func:`wbsa.estimation.clothes.widened`): each predictor predicts again with the layer thicker by it; a
     route that refuses a layer that thick keeps its interval (the body fit takes it: it fits again, dressed thicker;
-    that second fit reports no steps, so the progress shown is the answer's own fit)."""
+    that second fit reports no steps, so the progress shown is the answer's own fit). A route's fitted body
+    carries the widened interval and the time of both fits, so the body and its route say one thing."""
     thicker = dataclasses.replace(request, clothing_m=clothes.layer_m + clothes.sd_m, progress=None)
     by_name = {p.name: p for p in predictors if p is not None}
     out = {}
@@ -517,8 +524,13 @@ def _clothes_widened(prediction, routes: dict, predictors: list, subject, reques
         except WbsaError:
             out[name] = route
             continue
-        lo, hi = widened(route.wbsa_lo_m2, route.wbsa_hi_m2, route.wbsa_m2, by_name[name].predict(subject, thicker).wbsa_m2)
-        out[name] = dataclasses.replace(route, wbsa_lo_m2=lo, wbsa_hi_m2=hi)
+        again = by_name[name].predict(subject, thicker)
+        lo, hi = widened(route.wbsa_lo_m2, route.wbsa_hi_m2, route.wbsa_m2, again.wbsa_m2)
+        body = route.body
+        if body is not None:
+            body = dataclasses.replace(body, wbsa_lo_m2=lo, wbsa_hi_m2=hi,
+                                       seconds=body.seconds + getattr(again.body, "seconds", 0.0))
+        out[name] = dataclasses.replace(route, wbsa_lo_m2=lo, wbsa_hi_m2=hi, body=body)
     return out[predictors[0].name], ({k: out[k] for k in routes} if routes else {})
 
 

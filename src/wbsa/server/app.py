@@ -177,7 +177,7 @@ def create_app(model=None, *, workers: int = 2, max_pending: int = 32, max_uploa
         from wbsa.estimation.methods.regression.default_model import load_model
 
         model = load_model(model)
-    presets = sorted(CAMERAS, key=lambda name: not CAMERAS[name].by_image_size)  # those auto may pick first
+    presets = list(CAMERAS)
     methods = list(METHODS)
     root = Path(tempfile.mkdtemp(prefix="wbsa-serve-", dir=temp_dir))
     runner = Runner(workers=workers, max_pending=max_pending)

@@ -90,6 +90,33 @@ def person_shape_flags(stature_m: float, width_m: float, silhouette_m2: float) -
                                    f"{said}; check the white outline in the depth picture and click on the person")}
 
 
+#: Why lengths 1000 times too long are millimetres read as metres, and the fix (command line, Python; the page).
+MILLIMETRES_AS_METRES = Worded(
+    "millimetres read as metres? A float file (.npy, .tiff, .exr) or array is read as metres: for millimetres add "
+    "--depth-scale 1000 (depth_scale=1000 in Python)",
+    "millimetres read as metres? A float file (.npy, .tiff, .exr) is read as metres: save the depth in metres, or "
+    "as a 16-bit PNG in millimetres")
+
+
+def millimetres_refusal(said: str, metres: float, expected: tuple[float, float]) -> WbsaError | None:
+    """The refusal ``said``, with :data:`MILLIMETRES_AS_METRES`, of a length (m) that is ``expected`` when read
+    as millimetres (1000 times too long); None when it is not.
+
+    Parameters
+    ----------
+    said : str
+        What was found, e.g. ``the subject measures 1750.00 m tall``.
+    metres : float
+        The length as read (m).
+    expected : (float, float)
+        The range it should lie in (m).
+    """
+    if not (math.isfinite(metres) and expected[0] <= metres / 1000.0 <= expected[1]):
+        return None
+    return WbsaError(f"{said}: {MILLIMETRES_AS_METRES}", code="depth_scale", field="depth_scale",
+                     page=f"{said}: {MILLIMETRES_AS_METRES.page}")
+
+
 def check_height(stature_m: float) -> None:
     """Raise if a height measured on the point cloud cannot be a person's.
 
@@ -100,8 +127,11 @@ def check_height(stature_m: float) -> None:
     """
     lo, hi = HUMAN_HEIGHT_M
     if not (math.isfinite(stature_m) and lo <= stature_m <= hi):
-        raise WbsaError(f"the subject measures {stature_m:.2f} m tall in the point cloud, outside {lo:g}–{hi:g} m; "
-                        "the depth scale (units per metre) or the camera intrinsics are probably wrong")
+        said = f"the subject measures {stature_m:.2f} m tall in the point cloud, outside {lo:g}–{hi:g} m"
+        refusal = millimetres_refusal(said, stature_m, HUMAN_HEIGHT_M)
+        if refusal is not None:
+            raise refusal
+        raise WbsaError(f"{said}; the depth scale (units per metre) or the camera intrinsics are probably wrong")
 
 
 def is_real_number(value: object) -> bool:

@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from wbsa.errors import WbsaError
+from wbsa.estimation.subject.checks import millimetres_refusal
 from wbsa.estimation.subject.cloud import Plane
 from wbsa.estimation.subject.clusters import MAX_FOOTPRINT_M, attach_low, merge_occluding
 from wbsa.estimation.subject.feet import grow_feet
@@ -188,8 +189,16 @@ def find_people(depth_m: np.ndarray, intrinsics, settings: SegmentSettings = Seg
     h, w = depth.shape
     ok = np.isfinite(depth) & (depth >= settings.min_depth_m) & (depth <= settings.max_depth_m)
     if np.count_nonzero(ok) < 100:
-        raise WbsaError(f"the depth image has {np.count_nonzero(ok)} returns between {settings.min_depth_m:g} and "
-                        f"{settings.max_depth_m:g} m; check the depth scale (units per metre) and the depth range")
+        said = (f"the depth image has {np.count_nonzero(ok)} returns between {settings.min_depth_m:g} and "
+                f"{settings.max_depth_m:g} m")
+        returns = depth[np.isfinite(depth) & (depth > 0)]
+        if returns.size:
+            median = float(np.median(returns))
+            refusal = millimetres_refusal(f"{said}; its returns lie {median:.0f} m away (median)", median,
+                                          (settings.min_depth_m, settings.max_depth_m))
+            if refusal is not None:
+                raise refusal
+        raise WbsaError(f"{said}; check the depth scale (units per metre) and the depth range")
     pix = np.flatnonzero(ok.ravel())
     points = backproject_depth(np.where(ok, depth, 0.0), intrinsics).reshape(-1, 3)[pix].astype(np.float64)
     cloud, voxel_of = _voxelise(points, settings.voxel_m)

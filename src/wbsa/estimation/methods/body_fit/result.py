@@ -51,7 +51,9 @@ class BodyFit:
     flags : dict of str to str
         Named warnings (:data:`wbsa.estimation.flags.FLAGS`, route ``body-fit``); empty when every check passed.
     seconds : float
-        Wall time of the fit (without loading anny, done once per process).
+        Wall time of the fit (without loading anny, done once per process); in an estimate with named clothes,
+        of both fits its route ran (as stated, and thicker by the clothes' uncertainty, which widens the interval
+        given here).
     steps, restarts : int
     rest_vertices : (n, 3) float64
         The fitted body at rest (anny's frame: +Z up, facing −Y, standing on z = 0).

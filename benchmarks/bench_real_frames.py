@@ -2,7 +2,7 @@
 
 Each case is reproduced on a render (two people side by side in a room, Kinect v2 at 3 m:
 ``wbsa.testing.frames.side_by_side``; the frame's bottom blanked from the knees, or its top down to the
-hips) and on PCL's real frame ``tests/fixtures/pcl/five_people.pcd`` (five people in a corridor, 2.0–2.8 m
+hips; the man alone, the room blanked, whole and cut) and on PCL's real frame ``tests/fixtures/pcl/five_people.pcd`` (five people in a corridor, 2.0–2.8 m
 away, the nearest cut by the frame at the knees; read as a point cloud, its camera recovered from its points).
 Every estimate uses the shipped model; each row prints
 the answer (WBSA, interval, stature, flags) or the one-line refusal. Deterministic: the same table each run.
@@ -42,7 +42,7 @@ def _middle(mask: np.ndarray) -> tuple[int, int]:
 
 def main() -> None:
     from wbsa.bodies.body_model import BodyModel
-    from wbsa.testing.frames import side_by_side
+    from wbsa.testing.frames import read_pcd_depth, side_by_side
 
     depth, man, people = side_by_side(BodyModel())
     rows = np.flatnonzero(man.any(axis=1))
@@ -65,10 +65,17 @@ def main() -> None:
         ("render: the frame's bottom blanked from the man's knees", knees, "kinect-v2", dict(pick=man_px)),
         (f"render: the same, stature stated ({stature_m:.2f} m)", knees, "kinect-v2",
          dict(pick=man_px, stature_m=stature_m)),
+        ("render: the man alone (the room blanked: no floor), whole", np.where(man, depth, 0.0), "kinect-v2", {}),
+        ("render: the man alone, cut at the knees (the legs end over nothing)", np.where(man, knees, 0.0),
+         "kinect-v2", {}),
+        (f"render: the same, stature stated ({stature_m:.2f} m)", np.where(man, knees, 0.0), "kinect-v2",
+         dict(stature_m=stature_m)),
         ("render: the frame's top blanked down to the hips (only legs)", legs, "kinect-v2", dict(pick="nearest")),
         ("render: nobody (both people's pixels blanked)", np.where(people, 0.0, depth), "kinect-v2", {}),
         ("render: pick on the wall, 40 px from anyone", depth, "kinect-v2", dict(pick=(40, 100))),
         ("five_people.pcd: no pick", five, "auto", {}),
+        ("five_people.pcd's depth as a 640 × 480 array, no camera given", read_pcd_depth(FIVE_PEOPLE), "auto",
+         dict(pick=(86, 250))),
     ]
     for k, x in enumerate((86, 190, 320, 420)):
         cases.append((f"five_people.pcd: person {k + 1}, pick ({x}, 250)", five, "auto", dict(pick=(x, 250))))

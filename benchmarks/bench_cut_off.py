@@ -86,18 +86,42 @@ def summary(df: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(lines)
 
 
+def calibration(df: pd.DataFrame) -> tuple[float, float]:
+    """(mean, standard deviation) of the cut estimates' log error per unit of unseen area share, fitted through 0
+    (:data:`wbsa.estimation.subject.unseen.CUT_LOG_ERROR_PER_SHARE`). Run it on a model without that correction
+    (both 0) and a seed that is not held out."""
+    from wbsa.bodies.area_profile import area_below_share
+
+    ok = df.dropna(subset=["cut_wbsa_m2"])
+    u = area_below_share(ok["cut_share"].to_numpy())[0]
+    e = np.log(ok["cut_wbsa_m2"].to_numpy() / ok["wbsa_m2"].to_numpy())
+    mean = float(np.sum(e * u) / np.sum(u * u))
+    sd = float(np.sqrt(np.sum((e - mean * u) ** 2) / np.sum(u * u)))
+    return mean, sd
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--subjects", type=int, default=24, help="held-out subjects per scene (default 24)")
     ap.add_argument("--seed", type=int, default=1000)
     ap.add_argument("--out", default=None, help="write the per-capture rows here (.csv)")
+    ap.add_argument("--rows-from", default=None, metavar="CSV", help="read the rows of an earlier --out instead")
+    ap.add_argument("--calibrate", action="store_true",
+                    help="also print CUT_LOG_ERROR_PER_SHARE fitted on these captures (a seed not held out)")
     args = ap.parse_args()
-    df = pd.DataFrame([r for scene in ("room", "alone") for r in rows(args.subjects, args.seed, scene)])
+    if args.rows_from:
+        df = pd.read_csv(args.rows_from)
+    else:
+        df = pd.DataFrame([r for scene in ("room", "alone") for r in rows(args.subjects, args.seed, scene)])
     if args.out:
         df.to_csv(args.out, index=False)
-    print(f"{len(df)} captures, seed {args.seed}, cut at {CUT_SHARES[0]:.0%}–{CUT_SHARES[1]:.0%} of the stature, "
+    seed = "" if args.rows_from else f", seed {args.seed}"
+    print(f"{len(df)} captures{seed}, cut at {CUT_SHARES[0]:.0%}–{CUT_SHARES[1]:.0%} of the stature, "
           "the true stature stated on the cut frames")
     print(summary(df).to_string(index=False, float_format=lambda v: f"{v:.3f}"))
+    if args.calibrate:
+        mean, sd = calibration(df)
+        print(f"CUT_LOG_ERROR_PER_SHARE = ({mean:.3f}, {sd:.3f})")
 
 
 if __name__ == "__main__":

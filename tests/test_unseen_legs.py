@@ -11,7 +11,7 @@ import pytest
 
 from wbsa.bodies.area_profile import AREA_BELOW, HEIGHT_SHARES, area_below_share, measure_area_profile, skin_share_below
 from wbsa.estimation.subject.people import FEET_SPREAD, feet_shape_unseen
-from wbsa.estimation.subject.unseen import completed, unseen_legs, widened
+from wbsa.estimation.subject.unseen import CUT_LOG_ERROR_PER_SHARE, completed, corrected, unseen_legs, widened
 
 
 def _tube(n_rings: int = 41, n_around: int = 32, height_m: float = 2.0):
@@ -58,15 +58,18 @@ def test_the_area_measures_are_completed_by_the_unseen_share_and_nothing_else():
     assert unseen_legs(1.80, 0.0) is None  # seen down to the floor: nothing is missing
 
 
-def test_the_interval_widens_by_the_unseen_shares_spread_in_quadrature():
+def test_the_interval_widens_by_the_unseen_legs_spread_in_quadrature_and_the_mean_error_is_taken_off():
     unseen = unseen_legs(1.70, 0.60)
     lo, hi = widened(1.8, 2.2, 2.0, unseen, 0.95)
-    extra = 1.959964 * unseen.area_share_sd / (1 - unseen.area_share)
+    extra = 1.959964 * math.hypot(unseen.area_share_sd / (1 - unseen.area_share),
+                                  CUT_LOG_ERROR_PER_SHARE[1] * unseen.area_share)
     assert math.log(2.0 / lo) == pytest.approx(math.hypot(math.log(2.0 / 1.8), extra), rel=1e-5)
     assert math.log(hi / 2.0) == pytest.approx(math.hypot(math.log(2.2 / 2.0), extra), rel=1e-5)
     assert widened(1.8, 2.2, 2.0, None, 0.95) == (1.8, 2.2)
-    no_spread = dataclasses.replace(unseen, area_share_sd=0.0)
-    assert widened(1.8, 2.2, 2.0, no_spread, 0.95) == pytest.approx((1.8, 2.2))
+    nothing_unseen = dataclasses.replace(unseen, area_share=0.0, area_share_sd=0.0)
+    assert widened(1.8, 2.2, 2.0, nothing_unseen, 0.95) == pytest.approx((1.8, 2.2))
+    assert corrected(2.0, None) == 2.0
+    assert corrected(2.0, unseen) == pytest.approx(2.0 * math.exp(-CUT_LOG_ERROR_PER_SHARE[0] * unseen.area_share))
 
 
 def test_feet_are_told_from_legs_that_end_over_nothing_by_their_spread():

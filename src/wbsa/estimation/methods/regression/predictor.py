@@ -32,7 +32,8 @@ class RegressionPredictor:
     def predict(self, subject: Subject, request: Request) -> Prediction:
         """WBSA of ``subject`` with the model's split-conformal interval; flags ``uncertain_view``,
         ``out_of_training_range`` and ``interval_unsure``. The area measures of a subject whose legs are not
-        seen are completed first (:func:`wbsa.estimation.subject.unseen.completed`).
+        seen are completed first, and the estimate corrected by the mean error on cut frames
+        (:func:`wbsa.estimation.subject.unseen.completed`, :func:`~wbsa.estimation.subject.unseen.corrected`).
 
         Parameters
         ----------
@@ -41,7 +42,7 @@ class RegressionPredictor:
         """
         from wbsa.estimation.subject.checks import range_flags
         from wbsa.estimation.methods.regression.design import range_values, with_clothing
-        from wbsa.estimation.subject.unseen import completed
+        from wbsa.estimation.subject.unseen import completed, corrected
 
         model, measures = self.model, subject.measures
         view = model.view.estimate(measures)
@@ -50,8 +51,8 @@ class RegressionPredictor:
                               request.clothing_m)
         # a stated view counts as sure as the surest estimated one: the models never saw a smaller spread
         az_sd = view.azimuth_sd_deg if request.azimuth_deg is None else model.view.axis_sd_deg
-        w, lo, hi = model.predict(feats, measures.shape[None], np.array([az]), np.array([az_sd]),
-                                  np.array([el]), request.level)
+        w, lo, hi = (x * corrected(1.0, subject.unseen) for x in model.predict(
+            feats, measures.shape[None], np.array([az]), np.array([az_sd]), np.array([el]), request.level))
         values = range_values({**feats, "elevation_deg": np.array([el])})
         flags.update(range_flags({k: float(v[0]) for k, v in values.items()}, model.ranges))
         if not model.quantile_is_sure(request.level):

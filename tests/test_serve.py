@@ -394,7 +394,7 @@ def test_the_readme_picture_is_the_shipped_default_models_answer(browser, frames
 
     app = create_app(None, temp_dir=str(tmp_path))
     url, stop = start_in_thread(app)
-    est = wbsa.estimate(str(frames["one"]["path"]), "kinect-v2", clothes="underwear")
+    est = wbsa.estimate(str(frames["one"]["path"]), "kinect-v2", clothes="underwear", stature_m=1.86)  # as typed
     try:
         for name, width, height, mobile in (("serve-page.png", 1280, 900, False),
                                             ("serve-page-phone.png", 390, 844, True)):

@@ -177,6 +177,8 @@ def answer_json(est, result_id: str, name: str, options, files: dict) -> dict:
         "id": result_id, "name": name,
         "wbsa_m2": round(est.wbsa_m2, 3), "wbsa_lo_m2": round(est.wbsa_lo_m2, 3),
         "wbsa_hi_m2": round(est.wbsa_hi_m2, 3), "level": est.level, "method": est.method,
+        # the page shows two decimals of the estimate itself, never of a value already rounded to three
+        "shown": {k: f"{getattr(est, k):.2f}" for k in ("wbsa_m2", "wbsa_lo_m2", "wbsa_hi_m2")},
         "method_text": est.method_text(), "model": est.model, "camera": est.camera,
         "estimate": est.to_dict(), "pick": list(options.pick) if isinstance(options.pick, tuple) else options.pick,
         "flags": flag_rows(est.flags), "image_flags": flag_rows(shared_flags(est)),

@@ -180,7 +180,7 @@ function fmt(v, digits) { return Number(v).toFixed(digits); }
 // " ± 3°" for a spread that was estimated, nothing for one that was not (a fitted body's view)
 function spread(v) { return v === null || v === undefined ? "" : ` ± ${fmt(v, 0)}°`; }
 
-function interval(level, lo, hi) { return `${Math.round(100 * level)} % interval ${fmt(lo, 2)} – ${fmt(hi, 2)} m²`; }
+function interval(level, lo, hi) { return `${Math.round(100 * level)} % interval ${lo} – ${hi} m²`; }
 
 function show(a) {
   $("batch").hidden = true;
@@ -206,9 +206,9 @@ function show(a) {
   // large: as wide as the page allows while the whole picture stays in the window below the message
   $("depth-img").style.width = choose ? `min(100%, calc((100vh - 190px) * ${a.depth.width / a.depth.height}), ${4 * a.depth.width}px)` : "";
   $("result").classList.toggle("choose", choose);
-  $("wbsa-value").textContent = ok ? fmt(a.wbsa_m2, 2) : "";
+  $("wbsa-value").textContent = ok ? a.shown.wbsa_m2 : "";
   $("wbsa-value").dataset.wbsaM2 = ok ? a.wbsa_m2 : "";
-  $("interval").textContent = ok ? interval(a.level, a.wbsa_lo_m2, a.wbsa_hi_m2) : "";
+  $("interval").textContent = ok ? interval(a.level, a.shown.wbsa_lo_m2, a.shown.wbsa_hi_m2) : "";
   $("method-line").textContent = ok ? `Method: ${a.method_text}` : "";
   $("file-line").textContent = a.name ? `File: ${a.name}` + (ok ? `, camera ${a.camera}` : "") : "";
   showDepth(a.depth);
@@ -275,7 +275,7 @@ function showRoutes(r, level) {
       box.append(el("p", { class: "error-inline" }, `No answer: ${row.failed}`));
     } else {
       box.append(el("div", { class: "route-value" }, `${fmt(row.wbsa_m2, 2)} m²`));
-      box.append(el("div", { class: "small" }, interval(level, row.wbsa_lo_m2, row.wbsa_hi_m2)));
+      box.append(el("div", { class: "small" }, interval(level, fmt(row.wbsa_lo_m2, 2), fmt(row.wbsa_hi_m2, 2))));
       const flags = row.flags || [];
       if (flags.length) {
         const ul = el("ul", { class: "route-flags" });

@@ -93,7 +93,14 @@ def completed(features: dict[str, np.ndarray], unseen: UnseenLegs | None) -> dic
 
 def corrected(wbsa_m2: float, unseen: UnseenLegs | None) -> float:
     """The regression's estimate of a completed subject less its mean error on cut frames
-    (:data:`CUT_LOG_ERROR_PER_SHARE`); unchanged when the whole body is seen."""
+    (:data:`CUT_LOG_ERROR_PER_SHARE`); unchanged when the whole body is seen.
+
+    Parameters
+    ----------
+    wbsa_m2 : float
+        The estimate (or a bound of its interval).
+    unseen : UnseenLegs or None
+    """
     return wbsa_m2 if unseen is None else wbsa_m2 * math.exp(-CUT_LOG_ERROR_PER_SHARE[0] * unseen.area_share)
 
 

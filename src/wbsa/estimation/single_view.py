@@ -352,14 +352,13 @@ def measure(depth_m: np.ndarray, mixed: np.ndarray, request: EstimateRequest) ->
                 f"picked {seg.subject.describe(True)} ({pick}); others: "
                 + "; ".join(c.describe(True) for c in seg.others))
         feet = feet_unseen(seg.subject, floor)
+    if feet is not None and stature_m is None:  # refused before the measures, which it does not need
+        raise _feet_not_seen(feet)
     m = measure_subject(depth_m, mask, camera.intrinsics, floor, mixed)
     if feet is None and floor is None:
         feet = feet_shape_unseen(m.shape)
-    if feet is not None and stature_m is None:
-        why = (f"feet not seen: {feet}; without the feet the WBSA is not measured (a cut-off adult would read as a "
-               "child): capture the whole person, feet on the floor, or state the stature")
-        raise WbsaError(f"{why} (--stature-cm, stature_m)", code="feet_not_seen", field="stature_m",
-                        page=f"{why} (type the height in cm under Height)")
+        if feet is not None and stature_m is None:
+            raise _feet_not_seen(feet)
     unseen = None
     if stature_m is not None:
         bottom_m = None if request.segment is None or floor is None else seg.subject.bottom_m
@@ -375,6 +374,14 @@ def measure(depth_m: np.ndarray, mixed: np.ndarray, request: EstimateRequest) ->
     flags.update(checks.working_range_flags(m.distance_m, camera))
     flags.update(checks.feet_flags(m.distance_m, camera))
     return Subject(depth_m, mask, camera, floor, m, request.sensor, unseen), flags
+
+
+def _feet_not_seen(feet: str) -> WbsaError:
+    """The one-line refusal of a subject whose feet are not seen (``feet``: why) and whose stature is not stated."""
+    why = (f"feet not seen: {feet}; without the feet the WBSA is not measured (a cut-off adult would read as a "
+           "child): capture the whole person, feet on the floor, or state the stature")
+    return WbsaError(f"{why} (--stature-cm, stature_m)", code="feet_not_seen", field="stature_m",
+                     page=f"{why} (type the height in cm under Height)")
 
 
 def stated_stature(m: SubjectMeasures, stature_m: float, feet: str | None,

@@ -91,13 +91,13 @@ def completed(features: dict[str, np.ndarray], unseen: UnseenLegs | None) -> dic
     return {**features, **{k: np.asarray(features[k], dtype=np.float64) * scale for k in AREA_MEASURES}}
 
 
-def corrected(wbsa_m2: float, unseen: UnseenLegs | None) -> float:
+def corrected(wbsa_m2, unseen: UnseenLegs | None):
     """The regression's estimate of a completed subject less its mean error on cut frames
     (:data:`CUT_LOG_ERROR_PER_SHARE`); unchanged when the whole body is seen.
 
     Parameters
     ----------
-    wbsa_m2 : float
+    wbsa_m2 : float or (n,) float64
         The estimate (or a bound of its interval).
     unseen : UnseenLegs or None
     """

@@ -51,7 +51,7 @@ class RegressionPredictor:
                               request.clothing_m)
         # a stated view counts as sure as the surest estimated one: the models never saw a smaller spread
         az_sd = view.azimuth_sd_deg if request.azimuth_deg is None else model.view.axis_sd_deg
-        w, lo, hi = (x * corrected(1.0, subject.unseen) for x in model.predict(
+        w, lo, hi = (corrected(x, subject.unseen) for x in model.predict(
             feats, measures.shape[None], np.array([az]), np.array([az_sd]), np.array([el]), request.level))
         values = range_values({**feats, "elevation_deg": np.array([el])})
         flags.update(range_flags({k: float(v[0]) for k, v in values.items()}, model.ranges))

@@ -12,11 +12,14 @@ the sex of the grid start's best guess (:func:`wbsa.estimation.methods.body_fit.
 fit starts from today). Survey people that the start's training drew are dropped from the figures (counted).
 
     python benchmarks/bench_start.py --model RUN/start.npz --subjects 60 --seed 1000 --grid [--out rows.csv]
+    python benchmarks/bench_start.py --model RUN/start.npz --subjects 60 --grid --captures held-out.npz  # kept
 """
 
 from __future__ import annotations
 
 import argparse
+import io
+import json
 import sys
 import time
 
@@ -24,15 +27,17 @@ import numpy as np
 import pandas as pd
 
 
-def judge_chunk(population: pd.DataFrame, others: pd.DataFrame, first: int, seed: int, model_path: str,
-                grid: bool) -> pd.DataFrame:
-    """Capture, segment, crop and read every subject of ``population``; with ``grid`` also the grid start."""
+def judge_chunk(population: pd.DataFrame, others: pd.DataFrame, first: int, seed: int,
+                grid: bool) -> tuple[pd.DataFrame, np.ndarray]:
+    """Capture, segment and crop every subject of ``population``; with ``grid`` also read the grid start's sex.
+
+    Returns the rows (truth, capture, crop's height, the grid's gender) and the (n, 2, rows, cols) crops (zeros
+    where the capture failed: ``error``)."""
     import torch
 
     from wbsa.bodies.body_model import BodyModel
     from wbsa.errors import WbsaError
-    from wbsa.estimation.methods.body_fit.start_crop import start_crop
-    from wbsa.estimation.methods.body_fit.start_net import GAUSSIAN_TARGETS, StartModel, scalar_inputs
+    from wbsa.estimation.methods.body_fit.start_crop import CROP_SHAPE, start_crop
     from wbsa.estimation.subject.segment import SegmentSettings, segment_subject
     from wbsa.parallel import single_threaded_math
     from wbsa.sensor.technology import envelope_model
@@ -40,9 +45,7 @@ def judge_chunk(population: pd.DataFrame, others: pd.DataFrame, first: int, seed
 
     torch.set_num_threads(1)
     settings = RoomTestSettings(seed=seed)
-    model = StartModel.load(model_path)
-    net = model.network()
-    rows = []
+    rows, images = [], []
     with single_threaded_math():
         body_model = BodyModel()
         for tc in room_test_captures(population, others, first, settings, body_model):
@@ -57,21 +60,36 @@ def judge_chunk(population: pd.DataFrame, others: pd.DataFrame, first: int, seed
                 seg = segment_subject(tc.depth_m, cam, SegmentSettings(pick=settings.pick), sensor=sensor)
                 t0 = time.perf_counter()
                 crop = start_crop(tc.depth_m, seg.mask, cam, seg.floor)
-                pred = model.predict(crop.image[None], scalar_inputs([crop.height_m], [crop.floor_seen]), net)
-                row.update(start_seconds=time.perf_counter() - t0, crop_height_m=crop.height_m,
-                           floor_seen=crop.floor_seen, p_male=float(pred["p_male"][0]),
-                           est_azimuth_deg=float(pred["azimuth_deg"][0]))
-                for j, name in enumerate(GAUSSIAN_TARGETS):
-                    row[f"est_{name}"] = float(pred["mean"][0, j])
-                    row[f"sd_{name}"] = float(pred["sd"][0, j])
+                row.update(crop_seconds=time.perf_counter() - t0, crop_height_m=crop.height_m,
+                           floor_seen=crop.floor_seen)
+                image = crop.image
                 if grid:
                     t0 = time.perf_counter()
                     row.update(grid_p_gender=_grid_gender(tc.depth_m, seg.mask, cam, seg.floor, sensor, tc.index),
                                grid_seconds=time.perf_counter() - t0)
             except WbsaError as exc:
                 row.update(error=str(exc))
+                image = np.zeros((2, *CROP_SHAPE), np.float32)
             rows.append(row)
-    return pd.DataFrame(rows)
+            images.append(image)
+    return pd.DataFrame(rows), np.stack(images)
+
+
+def read_crops(table: pd.DataFrame, images: np.ndarray, model_path: str) -> pd.DataFrame:
+    """``table`` with the start model's reading of each crop (``p_male``, ``est_azimuth_deg``, ``est_<output>``
+    and ``sd_<output>`` of every :data:`GAUSSIAN_TARGETS` output); NaN where the capture failed."""
+    from wbsa.estimation.methods.body_fit.start_net import GAUSSIAN_TARGETS, StartModel, scalar_inputs
+
+    out = table.copy()
+    ok = (out["error"] == "").to_numpy()
+    model = StartModel.load(model_path)
+    pred = model.predict(images[ok], scalar_inputs(out.loc[ok, "crop_height_m"], out.loc[ok, "floor_seen"]))
+    out.loc[ok, "p_male"] = pred["p_male"]
+    out.loc[ok, "est_azimuth_deg"] = pred["azimuth_deg"]
+    for j, name in enumerate(GAUSSIAN_TARGETS):
+        out.loc[ok, f"est_{name}"] = pred["mean"][:, j]
+        out.loc[ok, f"sd_{name}"] = pred["sd"][:, j]
+    return out
 
 
 def _grid_gender(depth, mask, camera, floor, sensor, index: int) -> float:
@@ -131,6 +149,17 @@ def summarise(table: pd.DataFrame, threshold_m: float) -> pd.DataFrame:
     return pd.DataFrame(out)
 
 
+def vars_of(args: argparse.Namespace) -> dict:
+    """The options the captures depend on."""
+    return {"subjects": args.subjects, "survey_share": args.survey_share, "seed": args.seed, "grid": args.grid}
+
+
+def record_table(path) -> str:
+    """The rows kept with the crops in a ``--captures`` file (JSON)."""
+    with np.load(path, allow_pickle=False) as z:
+        return str(z["table"])
+
+
 def main(argv=None) -> int:
     """Run the benchmark (see the module doc)."""
     from pathlib import Path
@@ -140,7 +169,8 @@ def main(argv=None) -> int:
     from wbsa.testing.testset import held_out_population
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--model", required=True, help="the start.npz wbsa train-start wrote")
+    ap.add_argument("--model", default=None, help="the start.npz wbsa train-start wrote (without it: only capture "
+                                                  "into --captures)")
     ap.add_argument("--subjects", type=int, default=60)
     ap.add_argument("--survey-share", type=float, default=0.4)
     ap.add_argument("--seed", type=int, default=1000, help="the held-out benchmark's seed (default 1000)")
@@ -148,16 +178,40 @@ def main(argv=None) -> int:
     ap.add_argument("--workers", type=int, default=1)
     ap.add_argument("--chunk", type=int, default=10)
     ap.add_argument("--out", default=None, help="CSV of one row per capture")
+    ap.add_argument("--captures", default=None, metavar="FILE.npz",
+                    help="keep the segmented crops there, and read them from there on a later run with the same "
+                         "options (another model judged on the same captures without capturing them again)")
     args = ap.parse_args(argv)
-    if not Path(args.model).is_file():
+    if args.model is None and args.captures is None:
+        sys.exit("error: give --model RUN/start.npz, or --captures FILE.npz to capture only")
+    if args.model is not None and not Path(args.model).is_file():
         sys.exit(f"error: --model {args.model} is not a file; give the start.npz wbsa train-start wrote")
-    card = StartModel.load(args.model).card
     t0 = time.perf_counter()
-    pop = held_out_population(args.subjects, args.survey_share, args.seed)
-    others = pop.iloc[np.roll(np.arange(len(pop)), 1)].reset_index(drop=True)
-    chunks = [(pop.iloc[s:s + args.chunk].reset_index(drop=True), others.iloc[s:s + args.chunk].reset_index(drop=True),
-               s, args.seed, args.model, args.grid) for s in range(0, len(pop), args.chunk)]
-    table = pd.concat(map_chunks(judge_chunk, chunks, workers=args.workers, tag="bench-start"), ignore_index=True)
+    cache = Path(args.captures) if args.captures else None
+    if cache is not None and cache.is_file():  # the captures of an earlier run with the same options
+        with np.load(cache, allow_pickle=False) as z:
+            images, record = z["images"], json.loads(str(z["record"]))
+        if record != vars_of(args):
+            sys.exit(f"error: {cache} holds captures of other options ({record}); give another --captures file")
+        table = pd.read_json(io.StringIO(record_table(cache)))
+    else:
+        pop = held_out_population(args.subjects, args.survey_share, args.seed)
+        others = pop.iloc[np.roll(np.arange(len(pop)), 1)].reset_index(drop=True)
+        chunks = [(pop.iloc[s:s + args.chunk].reset_index(drop=True),
+                   others.iloc[s:s + args.chunk].reset_index(drop=True), s, args.seed, args.grid)
+                  for s in range(0, len(pop), args.chunk)]
+        parts = map_chunks(judge_chunk, chunks, workers=args.workers, tag="bench-start")
+        table = pd.concat([p[0] for p in parts], ignore_index=True)
+        images = np.concatenate([p[1] for p in parts])
+        if cache is not None:
+            with open(cache, "wb") as fh:
+                np.savez_compressed(fh, images=images, record=np.array(json.dumps(vars_of(args))),
+                                    table=np.array(table.to_json()))
+    if args.model is None:
+        print(f"captured {len(table)} held-out subjects into {cache} ({time.perf_counter() - t0:.0f} s)")
+        return 0
+    card = StartModel.load(args.model).card
+    table = read_crops(table, images, args.model)
     seen = training_survey_ids(card)
     overlap = table["survey_id"].isin(seen).to_numpy() if "survey_id" in table else np.zeros(len(table), bool)
     if args.out:

@@ -148,6 +148,7 @@ def test_network_outputs_and_training_are_deterministic(tmp_path):
     assert not all(np.array_equal(v, c.state[k]) for k, v in a.state.items())
 
     path = a.save(tmp_path / "start.npz")
+    assert path.read_bytes() == b.save(tmp_path / "again.npz").read_bytes()  # same seed and data, same bytes
     back = StartModel.load(path)
     from wbsa.estimation.methods.body_fit.start_net import scalar_inputs
 

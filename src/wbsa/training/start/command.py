@@ -34,6 +34,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help=f"captures per person (default {d.render.views_per_subject})")
     p.add_argument("--epochs", type=int, default=d.epochs, metavar="N",
                    help=f"passes over the training crops (default {d.epochs})")
+    p.add_argument("--batch", type=int, default=d.batch, metavar="N",
+                   help=f"crops per training step (default {d.batch}; fewer for a small trial run)")
     p.add_argument("--chunk-subjects", type=int, default=d.chunk_subjects, metavar="N",
                    help=f"people per stored chunk of crops (default {d.chunk_subjects})")
     p.add_argument("--seed", type=int, default=d.seed, help=f"seed of everything drawn (default {d.seed}; never "
@@ -60,9 +62,11 @@ def settings_from_args(args: argparse.Namespace):
         raise WbsaError("--subjects and --survey-subjects must add up to at least 8 people, e.g. --subjects 300")
     if args.epochs < 1 or args.chunk_subjects < 1:
         raise WbsaError("--epochs and --chunk-subjects must be at least 1")
+    if args.batch < 2:
+        raise WbsaError(f"--batch {args.batch} must be at least 2 crops, e.g. 64")
     return StartSettings(n_random=args.subjects, n_survey=args.survey_subjects,
                          render=replace(d.render, views_per_subject=args.views), epochs=args.epochs,
-                         chunk_subjects=args.chunk_subjects, seed=args.seed)
+                         batch=args.batch, chunk_subjects=args.chunk_subjects, seed=args.seed)
 
 
 def run_train_start(args: argparse.Namespace) -> int:

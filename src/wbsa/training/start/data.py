@@ -106,7 +106,8 @@ def crop_chunk(population: pd.DataFrame, first_sample: int, settings: StartSetti
 
 
 class CropStore(RenderStore):
-    """Finished crop chunks of one data set (``chunk-<first sample>.npz``, written atomically), refusing a
+    """Finished crop chunks of one data set (``chunk-<first sample>.npz``, written atomically, the
+    same bytes for the same crops), refusing a
     folder of other settings as :class:`~wbsa.training.store.RenderStore` does."""
 
     def _path(self, first_sample: int) -> Path:
@@ -126,11 +127,9 @@ class CropStore(RenderStore):
 
     def write(self, part: dict) -> None:
         """Keep a finished chunk (:func:`crop_chunk`'s arrays; named by its first sample)."""
-        from wbsa.atomic import atomic_path
+        from wbsa.io import write_npz
 
-        with atomic_path(self._path(int(part["sample"][0])), keep_suffix=True) as tmp:
-            with open(tmp, "wb") as fh:
-                np.savez_compressed(fh, **part)
+        write_npz(part, self._path(int(part["sample"][0])))
 
 
 def start_crops(settings: StartSettings, folder=None, *, population: pd.DataFrame | None = None, workers: int = 1,

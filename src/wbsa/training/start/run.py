@@ -54,9 +54,13 @@ def train_start(settings: StartSettings, out=None, *, workers: int = 1, show_pro
     ok = data["ok"].astype(bool)
     model = fit_start(data, ~held, settings, log)
     val = held & ok
-    figures = start_figures(predict_crops(model, data, val), {k: data[k][val] for k in data})
-    train_adults = ~held & ok
-    cut = stature_sex_rule(data["height_m"][train_adults], data["male"][train_adults], data["age_years"][train_adults])
+    figures = start_figures(predict_crops(model, data, val), {k: data[k][val] for k in data}) if val.any() \
+        else {"n": 0}
+    trained = ~held & ok
+    if (data["age_years"][trained] >= ADULT_YEARS).any():
+        cut = stature_sex_rule(data["height_m"][trained], data["male"][trained], data["age_years"][trained])
+    else:  # a trial run without an adult: no rule to compare with
+        cut = float("nan")
     adult = val & (data["age_years"] >= ADULT_YEARS)
     rule_right = (data["height_m"][adult] > cut) == data["male"][adult].astype(bool)
     import torch
@@ -87,7 +91,8 @@ def settings_options(settings: StartSettings) -> list[str]:
     for name, value, default in (("--subjects", settings.n_random, d.n_random),
                                  ("--survey-subjects", settings.n_survey, d.n_survey),
                                  ("--views", settings.render.views_per_subject, d.render.views_per_subject),
-                                 ("--epochs", settings.epochs, d.epochs), ("--seed", settings.seed, d.seed),
+                                 ("--epochs", settings.epochs, d.epochs), ("--batch", settings.batch, d.batch),
+                                 ("--seed", settings.seed, d.seed),
                                  ("--chunk-subjects", settings.chunk_subjects, d.chunk_subjects)):
         if value != default:
             opts += [name, str(value)]

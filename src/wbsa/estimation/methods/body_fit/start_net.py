@@ -166,25 +166,21 @@ class StartModel:
                 "azimuth_deg": np.degrees(np.arctan2(s, c)) % 360.0}
 
     def save(self, path: str | os.PathLike) -> Path:
-        """Write the model as one ``.npz`` of numbers, atomically.
+        """Write the model as one ``.npz`` of numbers, atomically (the same bytes for the same model).
 
         Parameters
         ----------
         path : path-like
             The ``.npz`` file to write.
         """
-        from wbsa.io import atomic_path
+        from wbsa.io import write_npz
 
         arrays = {f"state/{k}": np.asarray(v) for k, v in self.state.items()}
         arrays.update(target_mean=self.target_mean, target_sd=self.target_sd, scalar_mean=self.scalar_mean,
                       scalar_sd=self.scalar_sd, crop_shape=np.asarray(self.crop_shape, dtype=np.int64))
         meta = {"format": FORMAT, "version": VERSION, "targets": list(GAUSSIAN_TARGETS), "card": self.card}
         arrays["meta_json"] = np.array(json.dumps(meta, sort_keys=True))
-        path = Path(path)
-        with atomic_path(path, keep_suffix=True) as tmp:
-            with open(tmp, "wb") as fh:
-                np.savez_compressed(fh, **arrays)
-        return path
+        return write_npz(arrays, path)
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> "StartModel":

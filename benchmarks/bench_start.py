@@ -104,7 +104,7 @@ def _grid_gender(depth, mask, camera, floor, sensor, index: int) -> float:
     from wbsa.estimation.methods.body_fit.settings import BodyFitSettings
 
     s = BodyFitSettings()
-    _, fit_model, _ = _models(s.spacing_m)
+    _, fit_model, _ = _models(s.vertex_spacing_m)
     depth, mask = check_inputs(depth, mask, camera)
     rng = np.random.default_rng(np.random.SeedSequence([int(index), 0xB0D7]))
     obs = observe(depth, mask, camera, floor, s.n_points, rng, sensor)

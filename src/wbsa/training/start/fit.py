@@ -12,8 +12,6 @@ compared with: one stature threshold learnt on the training crops.
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 
 from wbsa.estimation.methods.body_fit.start_net import GAUSSIAN_TARGETS, StartModel, build_net, scalar_inputs
@@ -64,7 +62,7 @@ def fit_start(data: dict, train: np.ndarray, settings: StartSettings, log=None) 
     Returns
     -------
     StartModel
-        Its card holds the training's size, seed and seconds.
+        Its card holds the training's size (no timings: the same crops and settings give the same bytes).
     """
     import torch
 
@@ -89,7 +87,6 @@ def fit_start(data: dict, train: np.ndarray, settings: StartSettings, log=None) 
 
     threads = torch.get_num_threads()
     torch.set_num_threads(1)
-    t0 = time.perf_counter()
     try:
         net = build_net(CROP_SHAPE, settings.seed)
         opt = torch.optim.AdamW(net.parameters(), lr=settings.learning_rate, weight_decay=settings.weight_decay)
@@ -121,11 +118,10 @@ def fit_start(data: dict, train: np.ndarray, settings: StartSettings, log=None) 
                 log(f"epoch {epoch + 1}/{settings.epochs}: loss {total / max(n // settings.batch, 1):.4f}")
     finally:
         torch.set_num_threads(threads)
-    seconds = time.perf_counter() - t0
     state = {k: v.detach().numpy().copy() for k, v in net.state_dict().items()}
     n_params = int(sum(p.numel() for p in net.parameters()))
     card = {"n_train_crops": int(n), "n_train_bodies": int(len(np.unique(data["subject_id"][train]))),
-            "n_parameters": n_params, "train_seconds": round(seconds, 1)}
+            "n_parameters": n_params}
     return StartModel(state, t_mean, t_sd, s_mean, s_sd, CROP_SHAPE, card)
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import time
 from dataclasses import asdict
 from pathlib import Path
 
@@ -30,7 +31,7 @@ def train_start(settings: StartSettings, out=None, *, workers: int = 1, show_pro
     settings : StartSettings
     out : path-like, optional
         The run's folder (default :func:`start_folder`): ``crops/`` (the chunks), :data:`MODEL_NAME`,
-        :data:`CARD_NAME`.
+        :data:`CARD_NAME`, and the run's timings in ``start.npz.log.json``.
     workers : int
         Local worker processes for the captures (the crops do not depend on it).
     show_progress : bool, optional
@@ -43,16 +44,19 @@ def train_start(settings: StartSettings, out=None, *, workers: int = 1, show_pro
         The model and its card.
     """
     from wbsa.core.versions import WBSA_VERSION
-    from wbsa.io import write_json
+    from wbsa.io import write_json, write_run_log
     from wbsa.training.start.data import data_key, start_crops
     from wbsa.training.start.fit import (ADULT_YEARS, fit_start, predict_crops, start_figures, stature_sex_rule,
                                          validation_subjects)
 
     folder = Path(out) if out is not None else start_folder(settings)
+    t0, c0 = time.perf_counter(), time.process_time()
     data = start_crops(settings, folder / "crops", workers=workers, show_progress=show_progress)
+    t1, c1 = time.perf_counter(), time.process_time()
     held = validation_subjects(data["subject_id"], settings)
     ok = data["ok"].astype(bool)
     model = fit_start(data, ~held, settings, log)
+    t2, c2 = time.perf_counter(), time.process_time()
     val = held & ok
     figures = start_figures(predict_crops(model, data, val), {k: data[k][val] for k in data}) if val.any() \
         else {"n": 0}
@@ -81,6 +85,10 @@ def train_start(settings: StartSettings, out=None, *, workers: int = 1, show_pro
     })
     model_path = model.save(folder / MODEL_NAME)
     card_path = write_json(model.card, folder / CARD_NAME)
+    # timings are run information, not data: beside the model, not in it (same settings, same bytes)
+    write_run_log({"crops_seconds": round(t1 - t0, 1), "train_seconds": round(t2 - t1, 1),
+                   "train_cpu_seconds": round(c2 - c1, 1), "crops_main_process_cpu_seconds": round(c1 - c0, 1),
+                   "workers": workers}, model_path)
     return model_path, card_path
 
 

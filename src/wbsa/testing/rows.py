@@ -97,13 +97,30 @@ def write_rows(rows_dir: str | Path, first: int, part: pd.DataFrame) -> None:
     """
     from wbsa.atomic import atomic_path
 
-    with atomic_path(Path(rows_dir) / f"chunk-{first:06d}.parquet") as tmp:
+    with atomic_path(chunk_path(rows_dir, first)) as tmp:
         part.to_parquet(tmp, index=False)
+
+
+def chunk_path(rows_dir: str | Path, first: int) -> Path:
+    """Where the rows of the chunk whose first image is ``first`` are kept.
+
+    Parameters
+    ----------
+    rows_dir : str or Path
+    first : int
+
+    Returns
+    -------
+    Path
+        ``rows_dir/chunk-<first, six digits>.parquet``.
+    """
+    return Path(rows_dir) / f"chunk-{first:06d}.parquet"
 
 
 def map_resumable(fn: Callable[..., pd.DataFrame], args: Sequence[tuple], starts: Sequence[int], *,
                   rows_dir: str | Path | None, record: dict, workers: int = 1, tag: str,
-                  on_result: Callable[[pd.DataFrame], None] | None = None) -> list[pd.DataFrame]:
+                  on_result: Callable[[pd.DataFrame], None] | None = None,
+                  on_resumed: Callable[[list[int]], None] | None = None) -> list[pd.DataFrame]:
     """``[fn(*a) for a in args]`` (:func:`wbsa.parallel.map_chunks`), each chunk's rows kept in ``rows_dir``.
 
     The chunks already in ``rows_dir`` (:func:`read_rows`) are read, not run; each chunk run is written there
@@ -128,6 +145,8 @@ def map_resumable(fn: Callable[..., pd.DataFrame], args: Sequence[tuple], starts
         Name of the dask tasks.
     on_result : callable, optional
         Called with each chunk's rows: those read from ``rows_dir`` first, then each run one as it comes back.
+    on_resumed : callable, optional
+        Called once, before any chunk runs, with the starts of the chunks read from ``rows_dir``.
 
     Returns
     -------
@@ -149,6 +168,8 @@ def map_resumable(fn: Callable[..., pd.DataFrame], args: Sequence[tuple], starts
         if on_result is not None:
             on_result(part)
 
+    if on_resumed is not None:
+        on_resumed(list(done))
     if on_result is not None:
         for part in done.values():
             on_result(part)

@@ -14,6 +14,10 @@ and build, beside Du Bois and Mosteller given the TRUE height and mass.
     python benchmarks/bench_body_fit.py --calibrate --subjects 40 --seed 2000   # rebuild the interval calibration
     python benchmarks/bench_body_fit.py --drift --subjects 10 --draws 3   # truth-started drift, seed 3000
     python benchmarks/bench_body_fit.py --subjects 40 --renderer both   # the plain renderer's captures beside
+    python benchmarks/bench_body_fit.py --subjects 150 --renderer both --rows runs/fit-rows-both [--workers 2]
+        # each capture's rows kept in runs/fit-rows-both as it is fitted: the same command again fits only the rest
+    python benchmarks/bench_body_fit.py --subjects 150 --count 40 --noise-sweep 0,0.3,1,3 --rows runs/fit-rows-sweep
+        # the same 40 captures with each camera's noise model scaled: the mean signed error at each scale minus at 1x
 
 ``--displace``: each subject's skin gets seeded smooth local displacements of 1–3 cm (3–7 Gaussian bumps of
 6–15 cm along the normals of the trunk and legs, centred between 0.3 and 0.75 of stature; truth: the displaced
@@ -22,6 +26,13 @@ mass, so their figures there are not comparable.
 ``--calibrate``: fit these subjects (give a seed other than the benchmark's 1000 and training's 0, 1) and store
 the split-conformal bounds of the WBSA error (:mod:`wbsa.estimation.methods.body_fit.interval`) in ``src/wbsa/data``.
 ``--model``: also run the regression route (``wbsa.estimate``) on the same images and print it beside.
+``--rows DIR``: each capture's rows are written to DIR (``chunk-<image>.parquet``, atomically) as it is fitted,
+beside ``run.json`` (the capture and fit settings, ``--displace``, ``--model`` and the subjects); the same command
+again reads them and fits only the rest (any ``--first``/``--count`` of the same run may share the folder); a
+folder written with other settings is refused. ``--noise-sweep F,F,...`` (1 among them): the same captures with
+``noise_scale=(f, f)`` (1: the captures above), a table by scale and the paired mean signed WBSA error at each
+scale minus at 1× (target within ±1 %); with ``--rows`` each scale in its subfolder ``scale-<f>``.
+``--workers N``: fit in N worker processes (the fits do not depend on N).
 ``--drift``: fits started at the true body (its shape, posture and placement), per camera × distance band
 (``benchmarks/body_fit_drift.py``): how far the fit's minimum lies from the truth under each camera's noise, apart from the
 start, the segmentation and the floor (the subject's true pixels and floor are given). Fits keep the shipped

@@ -158,11 +158,11 @@ def fit_row(tc, drawn: tuple, subject: pd.Series, settings, displace: bool, mode
     from wbsa.sensor.technology import envelope_model
 
     renderer_name, camera, depth = drawn[:3]
-    index, cap, t = tc.index, tc.capture, subject
+    index, cap = tc.index, tc.capture
     truth_wbsa = (float(triangle_areas_m2(tc.vertices, body_model.skin_faces).sum()) if displace
-                  else float(t["wbsa_m2"]))
-    row = {k: t[k] for k in ("subject_id", "population", "sex", "age_years", "stature_m", "mass_kg",
-                             "volume_m3") if k in t.index}
+                  else float(subject["wbsa_m2"]))
+    row = {k: subject[k] for k in ("subject_id", "population", "sex", "age_years", "stature_m", "mass_kg",
+                                   "volume_m3") if k in subject.index}
     row.update(wbsa_m2=truth_wbsa, image=index, renderer=renderer_name, posture=tc.posture, camera=camera.name,
                noise_scale=cap.sensor.effective_noise_scale, azimuth_deg=cap.view.azimuth_deg,
                elevation_deg=cap.view.elevation_deg, distance_m=cap.view.distance_m,
@@ -194,7 +194,7 @@ def fit_row(tc, drawn: tuple, subject: pd.Series, settings, displace: bool, mode
             row.update(reg_error=str(exc))
     print(f"image {index} ({renderer_name}): {tc.posture}, az {cap.view.azimuth_deg:.0f}: "
           f"WBSA {100 * (fit.wbsa_m2 / truth_wbsa - 1):+.2f} %, "
-          f"stature {100 * (fit.stature_m - t['stature_m']):+.1f} cm, "
+          f"stature {100 * (fit.stature_m - subject['stature_m']):+.1f} cm, "
           f"az err {row['azimuth_error_deg']:.1f}°, {fit.seconds:.1f} s, flags {list(fit.flags)}", flush=True)
     return row
 
@@ -416,6 +416,9 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
                  "project and --noise-sweep out")
     if args.calibrate and args.data_term is not None:
         ap.error("--calibrate stores the interval of the shipped fit: leave its settings at their defaults")
+    if not 0 <= args.first < args.subjects or (args.count is not None and args.count < 1):
+        ap.error(f"--first {args.first} --count {args.count}: give images within the {args.subjects} subjects "
+                 "(0 ≤ --first < --subjects, --count ≥ 1)")
     if args.workers < 1:
         ap.error(f"--workers {args.workers}: give 1 (this process) or more")
     if args.noise_sweep:

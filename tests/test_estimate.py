@@ -129,6 +129,27 @@ def test_an_arm_joins_an_upper_body_clear_of_the_floor_but_a_standing_or_torso_s
     assert not merged(2.0, 0.85, None)  # without a floor every union is held to the footprint
 
 
+def test_the_hips_of_a_body_cut_at_the_knees_are_measured_over_the_floor_not_at_its_hands():
+    """Bench cut-off set (images 3, 11, 12, 16): a body with its arms out, the frame cut at the knees, was refused
+    as "people touching": its 10–40 % band, from its lowest return, held its hands. Over a seen floor the band
+    is 10–40 % of the top's height over the floor, where its hips are; two people side by side are still wide."""
+    from wbsa.estimation.subject.cloud import Plane
+    from wbsa.estimation.subject.clusters import MAX_FOOTPRINT_M, footprint_m
+
+    floor = Plane(np.array([0.0, -1.0, 0.0]), -1.2)  # 1.2 m below the camera (y down)
+    up = np.array([0.0, -1.0, 0.0])
+    _, legs = _block((20, 120), (80, 100), -0.15, 0.15, -0.5, 0.7, 2.0)  # 0.5–1.7 m over the floor: cut at the knees
+    _, hands = _block((80, 90), (40, 160), -0.6, 0.6, 0.25, 0.4, 2.0)  # arms out, hands 0.8–0.95 m up
+    cut = np.r_[legs, hands]
+    assert footprint_m(cut, up) > MAX_FOOTPRINT_M  # from its lowest return: the hands
+    assert footprint_m(cut, up, floor.height(cut)) < 0.5  # over the floor: the thighs
+    _, left = _block((20, 170), (60, 80), -0.55, -0.25, -0.5, 1.2, 2.0)  # two people standing on the floor
+    _, right = _block((20, 170), (120, 140), 0.25, 0.55, -0.5, 1.2, 2.0)
+    two = np.r_[left, right]
+    assert footprint_m(two, up, floor.height(two)) > MAX_FOOTPRINT_M
+    assert footprint_m(two, up, floor.height(two)) == pytest.approx(footprint_m(two, up), rel=0.02)
+
+
 def test_a_far_arm_seen_past_the_near_side_joins_across_a_metre_but_a_seam_a_head_or_a_near_part_does_not():
     """Bench images 19, 118 and 209 (side views, arms out): the far hand, seen past the near arm about a
     metre in front of it, was left out (up to 281 pixels). Only an arm-sized part behind what it touches,

@@ -167,7 +167,8 @@ def describe_clusters(pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarr
         cues["off_plane_m"] = float(np.linalg.svd(sub - sub.mean(axis=0), compute_uv=False)[2] / math.sqrt(len(sub)))
         cues["noise_m"] = _own_noise_m(rows, cols, p[:, 2]) or float(depth_noise_m(np.median(p[:, 2])))
         out.append(Cluster(int(lab), n, (int(np.median(cols)), int(np.median(rows))), distance, height, width_m,
-                           footprint_m(p, up if up @ np.array([0.0, -1.0, 0.0]) >= 0 else -up),
+                           footprint_m(p, up if up @ np.array([0.0, -1.0, 0.0]) >= 0 else -up,
+                                       None if floor is None else floor.height(p)),
                            (int(cols.min()), int(rows.min()), int(cols.max()), int(rows.max())),
                            top_cut=bool(frame.at_top(rows.min())),
                            bottom_cut=bool(frame.at_bottom(rows.max())), **cues))

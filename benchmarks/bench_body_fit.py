@@ -49,6 +49,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from wbsa.typing import TEST_RENDERERS
+
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 TARGETS = {"mape_all": 1.0, "mape_fb": 0.8, "bias": 0.3, "stature_cm": 1.0, "mass_mape": 5.0, "az_median": 3.0,
@@ -391,7 +393,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
                     help="--drift: the cameras, comma-separated (default all trained presets)")
     ap.add_argument("--out", default=None, help="write the per-image results here (.csv)")
     ap.add_argument("--calibrate", action="store_true", help="store the interval calibration from these fits")
-    ap.add_argument("--renderer", choices=("project", "plain", "both"), default="project",
+    ap.add_argument("--renderer", choices=TEST_RENDERERS, default="project",
                     help="who draws the captures: the project's renderer (default), the plain one "
                          "(wbsa.testing.plain_render) or both, side by side")
     ap.add_argument("--rows", default=None, metavar="DIR",

@@ -17,7 +17,7 @@ from wbsa.estimation.methods.regression.model import EstimatorModel
 from wbsa.training.settings import TrainSettings
 
 #: Bumped whenever the measures, the renders or the model change what a trained model means.
-MODEL_REVISION = 20
+MODEL_REVISION = 21
 #: The command that rebuilds the shipped model (also written into its card).
 REBUILD_COMMAND = "wbsa train --default"
 

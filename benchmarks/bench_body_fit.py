@@ -14,6 +14,10 @@ and build, beside Du Bois and Mosteller given the TRUE height and mass.
     python benchmarks/bench_body_fit.py --calibrate --subjects 40 --seed 2000   # rebuild the interval calibration
     python benchmarks/bench_body_fit.py --drift --subjects 10 --draws 3   # truth-started drift, seed 3000
     python benchmarks/bench_body_fit.py --subjects 40 --renderer both   # the plain renderer's captures beside
+    python benchmarks/bench_body_fit.py --subjects 150 --renderer both --rows runs/fit-rows-both [--workers 2]
+        # each capture's rows kept in runs/fit-rows-both as it is fitted: the same command again fits only the rest
+    python benchmarks/bench_body_fit.py --subjects 150 --count 40 --noise-sweep 0,0.3,1,3 --rows runs/fit-rows-sweep
+        # the same 40 captures with each camera's noise model scaled: the mean signed error at each scale minus at 1x
 
 ``--displace``: each subject's skin gets seeded smooth local displacements of 1–3 cm (3–7 Gaussian bumps of
 6–15 cm along the normals of the trunk and legs, centred between 0.3 and 0.75 of stature; truth: the displaced
@@ -22,6 +26,13 @@ mass, so their figures there are not comparable.
 ``--calibrate``: fit these subjects (give a seed other than the benchmark's 1000 and training's 0, 1) and store
 the split-conformal bounds of the WBSA error (:mod:`wbsa.estimation.methods.body_fit.interval`) in ``src/wbsa/data``.
 ``--model``: also run the regression route (``wbsa.estimate``) on the same images and print it beside.
+``--rows DIR``: each capture's rows are written to DIR (``chunk-<image>.parquet``, atomically) as it is fitted,
+beside ``run.json`` (the capture and fit settings, ``--displace``, ``--model`` and the subjects); the same command
+again reads them and fits only the rest (any ``--first``/``--count`` of the same run may share the folder); a
+folder written with other settings is refused. ``--noise-sweep F,F,...`` (1 among them): the same captures with
+``noise_scale=(f, f)`` (1: the captures above), a table by scale and the paired mean signed WBSA error at each
+scale minus at 1× (target within ±1 %); with ``--rows`` each scale in its subfolder ``scale-<f>``.
+``--workers N``: fit in N worker processes (the fits do not depend on N).
 ``--drift``: fits started at the true body (its shape, posture and placement), per camera × distance band
 (``benchmarks/body_fit_drift.py``): how far the fit's minimum lies from the truth under each camera's noise, apart from the
 start, the segmentation and the floor (the subject's true pixels and floor are given). Fits keep the shipped
@@ -37,6 +48,8 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+
+from wbsa.typing import TEST_RENDERERS
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
@@ -72,74 +85,201 @@ def displaced(vertices: np.ndarray, faces: np.ndarray, skin_faces: np.ndarray, m
     return out
 
 
-def fit_chunk(population: pd.DataFrame, others: pd.DataFrame, first: int, seed: int, displace: bool,
-              model_path: str | None, fit_settings, renderer: str = "project") -> pd.DataFrame:
-    """Capture, segment and fit every subject (the captures of :func:`wbsa.testing.testset.room_test_captures`,
-    those of ``bench_estimate.py``)."""
+#: Captures per chunk of ``--rows`` (one Parquet file, one task of ``--workers``, the unit of resuming): a fit
+#: takes 15–40 s, so each capture is kept as it finishes and any ``--first``/``--count`` share one folder.
+CHUNK = 1
+
+
+def held_out_settings(seed: int, renderer: str, noise_scale: float = 1.0):
+    """The held-out captures of ``bench_estimate.py`` (:class:`wbsa.testing.testset.RoomTestSettings`) with each
+    camera's noise model scaled by ``noise_scale`` (1: today's captures; the scale is drawn last, so the other
+    draws do not change with it)."""
+    from dataclasses import replace
+
+    from wbsa.testing.testset import RoomTestSettings
+
+    capture = replace(RoomTestSettings().capture, noise_scale=(noise_scale, noise_scale))
+    return RoomTestSettings(capture=capture, seed=seed, renderer=renderer)
+
+
+def fit_chunk(population: pd.DataFrame, others: pd.DataFrame, first: int, settings, displace: bool,
+              model_path: str | None, fit_settings) -> pd.DataFrame:
+    """Capture, segment and fit every subject of ``population`` (the captures of
+    :func:`wbsa.testing.testset.room_test_captures`, those of ``bench_estimate.py``; ``others``: the possible
+    second people; ``first``: the first subject's image number; ``settings``: the captures'
+    :class:`~wbsa.testing.testset.RoomTestSettings`), one row per capture and renderer (:func:`fit_row`).
+    One torch and BLAS thread (:func:`wbsa.parallel.single_threaded_math`), as in a worker: the rows do not
+    depend on ``--workers``."""
     from wbsa.bodies.body_model import BodyModel
+    from wbsa.parallel import single_threaded_math
+    from wbsa.testing.testset import rendered, room_test_captures
+
+    rows = []
+    with single_threaded_math():
+        body_model = BodyModel()
+
+        def bumped(vertices: np.ndarray, index: int) -> np.ndarray:
+            drng = np.random.default_rng(np.random.SeedSequence([settings.seed, index, DISPLACE_STREAM]))
+            out = displaced(vertices, body_model.closed_faces, body_model.skin_faces, body_model.trunk_vertex_mask,
+                            drng)
+            out[:, 2] -= out[:, 2].min()
+            return out
+
+        for tc in room_test_captures(population, others, first, settings, body_model, bumped if displace else None):
+            for drawn in rendered(tc, settings, body_model):
+                rows.append(fit_row(tc, drawn, population.iloc[tc.index - first], settings, displace, model_path,
+                                    fit_settings, body_model))
+    return pd.DataFrame(rows)
+
+
+def fit_row(tc, drawn: tuple, subject: pd.Series, settings, displace: bool, model_path: str | None, fit_settings,
+            body_model) -> dict:
+    """Segment and fit one capture drawn by one renderer; its row (truth, capture, fit; ``error`` when refused).
+
+    Parameters
+    ----------
+    tc : wbsa.testing.testset.HeldOutCapture
+    drawn : tuple
+        ``(renderer, camera, depth_m (h, w), truth (h, w), triangle_id (h, w), room, azimuth_deg)`` of
+        :func:`wbsa.testing.testset.rendered`.
+    subject : pandas.Series
+        The subject's row of the population (its truth).
+    settings : wbsa.testing.testset.RoomTestSettings
+    displace : bool
+        The skin was displaced (the truth is then the displaced skin's area).
+    model_path : str or None
+        Also run the regression route with this model.
+    fit_settings : wbsa.estimation.methods.body_fit.BodyFitSettings
+    body_model : wbsa.bodies.body_model.BodyModel
+    """
     from wbsa.core.mesh import triangle_areas_m2
     from wbsa.errors import WbsaError
     from wbsa.estimation.methods.body_fit import fit_body
+    from wbsa.estimation.methods.view import azimuth_error_deg
     from wbsa.estimation.subject.segment import SegmentSettings, segment_subject
     from wbsa.sensor.technology import envelope_model
-    from wbsa.estimation.methods.view import azimuth_error_deg
-    from wbsa.testing.testset import RoomTestSettings, rendered, room_test_captures
 
-    settings = RoomTestSettings(seed=seed, renderer=renderer)
-    body_model = BodyModel()
+    renderer_name, camera, depth = drawn[:3]
+    index, cap = tc.index, tc.capture
+    truth_wbsa = (float(triangle_areas_m2(tc.vertices, body_model.skin_faces).sum()) if displace
+                  else float(subject["wbsa_m2"]))
+    row = {k: subject[k] for k in ("subject_id", "population", "sex", "age_years", "stature_m", "mass_kg",
+                                   "volume_m3") if k in subject.index}
+    row.update(wbsa_m2=truth_wbsa, image=index, renderer=renderer_name, posture=tc.posture, camera=camera.name,
+               noise_scale=cap.sensor.effective_noise_scale, azimuth_deg=cap.view.azimuth_deg,
+               elevation_deg=cap.view.elevation_deg, distance_m=cap.view.distance_m,
+               second_person=bool(tc.second_person), displaced=displace)
+    t0 = time.perf_counter()
+    try:
+        sensor = envelope_model(camera)
+        seg = segment_subject(depth, camera, SegmentSettings(pick=settings.pick), sensor=sensor)
+        fit = fit_body(depth, seg.mask, camera, seg.floor, settings=fit_settings, seed=index, sensor=sensor)
+    except WbsaError as exc:
+        row.update(error=str(exc), seconds=time.perf_counter() - t0)
+        print(f"image {index} ({renderer_name}): {exc}", flush=True)
+        return row
+    row.update(error="", seconds=fit.seconds, fit_lo_m2=fit.wbsa_lo_m2, fit_hi_m2=fit.wbsa_hi_m2,
+               seg_seconds=time.perf_counter() - t0 - fit.seconds,
+               fit_wbsa_m2=fit.wbsa_m2, fit_stature_m=fit.stature_m, fit_mass_kg=fit.mass_kg,
+               fit_volume_m3=fit.volume_m3, fit_azimuth_deg=fit.azimuth_deg, fit_elevation_deg=fit.elevation_deg,
+               fit_distance_m=fit.distance_m, residual_m=fit.residual_m, inlier_share=fit.inlier_share,
+               converged=fit.converged, steps=fit.steps, flags=",".join(fit.flags), fit_sex=fit.sex,
+               fit_age_years=fit.age_years,
+               azimuth_error_deg=float(azimuth_error_deg(fit.azimuth_deg, cap.view.azimuth_deg)))
+    if model_path:
+        from wbsa.estimation.single_view import estimate
 
-    def bumped(vertices: np.ndarray, index: int) -> np.ndarray:
-        drng = np.random.default_rng(np.random.SeedSequence([settings.seed, index, DISPLACE_STREAM]))
-        out = displaced(vertices, body_model.closed_faces, body_model.skin_faces, body_model.trunk_vertex_mask, drng)
-        out[:, 2] -= out[:, 2].min()
-        return out
-
-    rows = []
-    captures = ((tc, drawn) for tc in room_test_captures(population, others, first, settings, body_model,
-                                                         bumped if displace else None)
-                for drawn in rendered(tc, settings, body_model))
-    for tc, (renderer_name, camera, depth, _, _, _, _) in captures:
-        index, cap = tc.index, tc.capture
-        t = population.iloc[index - first]
-        truth_wbsa = (float(triangle_areas_m2(tc.vertices, body_model.skin_faces).sum()) if displace
-                      else float(t["wbsa_m2"]))
-        posture, people = tc.posture, tc.second_person
-        row = {k: t[k] for k in ("subject_id", "population", "sex", "age_years", "stature_m", "mass_kg",
-                                 "volume_m3") if k in t.index}
-        row.update(wbsa_m2=truth_wbsa, image=index, renderer=renderer_name, posture=posture, camera=camera.name,
-                   azimuth_deg=cap.view.azimuth_deg, elevation_deg=cap.view.elevation_deg,
-                   distance_m=cap.view.distance_m, second_person=bool(people), displaced=displace)
-        t0 = time.perf_counter()
         try:
-            sensor = envelope_model(camera)
-            seg = segment_subject(depth, camera, SegmentSettings(pick=settings.pick), sensor=sensor)
-            fit = fit_body(depth, seg.mask, camera, seg.floor, settings=fit_settings, seed=index, sensor=sensor)
+            est = estimate(depth, camera, model_path, segment=SegmentSettings(pick=settings.pick))
+            row.update(reg_wbsa_m2=est.wbsa_m2, reg_lo_m2=est.wbsa_lo_m2, reg_hi_m2=est.wbsa_hi_m2)
         except WbsaError as exc:
-            row.update(error=str(exc), seconds=time.perf_counter() - t0)
-            rows.append(row)
-            continue
-        row.update(error="", seconds=fit.seconds, fit_lo_m2=fit.wbsa_lo_m2, fit_hi_m2=fit.wbsa_hi_m2, seg_seconds=time.perf_counter() - t0 - fit.seconds,
-                   fit_wbsa_m2=fit.wbsa_m2, fit_stature_m=fit.stature_m, fit_mass_kg=fit.mass_kg,
-                   fit_volume_m3=fit.volume_m3, fit_azimuth_deg=fit.azimuth_deg, fit_elevation_deg=fit.elevation_deg,
-                   fit_distance_m=fit.distance_m, residual_m=fit.residual_m, inlier_share=fit.inlier_share,
-                   converged=fit.converged, steps=fit.steps, flags=",".join(fit.flags), fit_sex=fit.sex,
-                   fit_age_years=fit.age_years,
-                   azimuth_error_deg=float(azimuth_error_deg(fit.azimuth_deg, cap.view.azimuth_deg)))
-        if model_path:
-            from wbsa.estimation.single_view import estimate
+            row.update(reg_error=str(exc))
+    print(f"image {index} ({renderer_name}): {tc.posture}, az {cap.view.azimuth_deg:.0f}: "
+          f"WBSA {100 * (fit.wbsa_m2 / truth_wbsa - 1):+.2f} %, "
+          f"stature {100 * (fit.stature_m - subject['stature_m']):+.1f} cm, "
+          f"az err {row['azimuth_error_deg']:.1f}°, {fit.seconds:.1f} s, flags {list(fit.flags)}", flush=True)
+    return row
 
-            try:
-                est = estimate(depth, camera, model_path, segment=SegmentSettings(pick=settings.pick))
-                row.update(reg_wbsa_m2=est.wbsa_m2, reg_lo_m2=est.wbsa_lo_m2, reg_hi_m2=est.wbsa_hi_m2)
-            except WbsaError as exc:
-                row.update(reg_error=str(exc))
-        rows.append(row)
-        print(f"image {index} ({renderer_name}): {posture}, az {cap.view.azimuth_deg:.0f}: "
-              + (f"WBSA {100 * (fit.wbsa_m2 / truth_wbsa - 1):+.2f} %, stature "
-                 f"{100 * (fit.stature_m - t['stature_m']):+.1f} cm, az err {rows[-1]['azimuth_error_deg']:.1f}°, "
-                 f"{fit.seconds:.1f} s, flags {list(fit.flags)}" if not row.get("error") else row["error"]),
-              flush=True)
-    return pd.DataFrame(rows)
+
+def fit_rows(pop: pd.DataFrame, settings, fit_settings, *, first: int, stop: int, displace: bool,
+             model_path: str | None, workers: int = 1, rows_dir: str | None = None) -> pd.DataFrame:
+    """:func:`fit_chunk` on images ``first..stop-1`` of ``pop``, :data:`CHUNK` at a time, kept in ``rows_dir``.
+
+    ``rows_dir``: each chunk's rows are written there as it finishes, beside ``run.json`` (the capture and fit
+    settings, ``displace``, the model and the subjects); the same call again reads what is there and fits
+    only the rest (:func:`wbsa.testing.rows.map_resumable`). A folder written with other settings is refused.
+    The second people are ``pop`` shifted by one, as in ``bench_estimate.py``.
+
+    Parameters
+    ----------
+    pop : pandas.DataFrame
+        The held-out subjects (all of them: image ``i`` is subject ``i``).
+    settings : wbsa.testing.testset.RoomTestSettings
+    fit_settings : wbsa.estimation.methods.body_fit.BodyFitSettings
+    first, stop : int
+        The images fitted.
+    displace : bool
+    model_path : str or None
+    workers : int
+        Worker processes (1: this one); the rows do not depend on it.
+    rows_dir : str or None
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per image and renderer, by image.
+    """
+    from dataclasses import asdict
+
+    from wbsa.testing.rows import map_resumable, run_record
+
+    others = pop.iloc[np.roll(np.arange(len(pop)), 1)].reset_index(drop=True)
+    starts = list(range(first, stop, CHUNK))
+    args = [(pop.iloc[s:min(s + CHUNK, stop)].reset_index(drop=True),
+             others.iloc[s:min(s + CHUNK, stop)].reset_index(drop=True), s, settings, displace, model_path,
+             fit_settings) for s in starts]
+    record = run_record(pop, CHUNK, benchmark="body-fit", settings=asdict(settings), fit=asdict(fit_settings),
+                        displace=displace, model=str(model_path))
+
+    def resumed(kept: list[int]) -> None:
+        if kept:
+            rest = f"fitting the other {len(starts) - len(kept)}" if len(kept) < len(starts) else "nothing left to fit"
+            print(f"{rows_dir}: {len(kept)} of {len(starts)} chunks of images {first}–{stop - 1} read, {rest}",
+                  flush=True)
+
+    parts = map_resumable(fit_chunk, args, starts, rows_dir=rows_dir, record=record, workers=workers,
+                          tag="body-fit", on_resumed=resumed)
+    return pd.concat(parts, ignore_index=True)
+
+
+def noise_sweep(pop: pd.DataFrame, scales: list[float], fit_settings, *, seed: int, renderer: str,
+                rows_dir: str | None = None, **kwargs) -> pd.DataFrame:
+    """:func:`fit_rows` on the same captures with each camera's noise model scaled by each of ``scales``.
+
+    Parameters
+    ----------
+    pop : pandas.DataFrame
+    scales : list of float
+        Noise scales (``noise_scale=(f, f)`` of the capture settings; 1: today's captures).
+    fit_settings : wbsa.estimation.methods.body_fit.BodyFitSettings
+    seed : int
+    renderer : {'project', 'plain', 'both'}
+    rows_dir : str or None
+        Each scale keeps its rows in its own subfolder ``scale-<f>``.
+    **kwargs
+        ``first``, ``stop``, ``displace``, ``model_path``, ``workers`` of :func:`fit_rows`.
+
+    Returns
+    -------
+    pandas.DataFrame
+        The rows of every scale, with its ``noise_factor``.
+    """
+    parts = []
+    for f in scales:
+        rows = str(Path(rows_dir) / f"scale-{f:g}") if rows_dir else None
+        parts.append(fit_rows(pop, held_out_settings(seed, renderer, f), fit_settings, rows_dir=rows, **kwargs)
+                     .assign(noise_factor=f))
+    return pd.concat(parts, ignore_index=True)
 
 
 def summarise(g: pd.DataFrame) -> pd.Series:
@@ -232,7 +372,8 @@ def report(res: pd.DataFrame, wall_s: float, displace: bool) -> None:
     print("\nflags raised:", flags[flags != ""].value_counts().to_dict())
 
 
-def main() -> None:
+def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
+    """The command line, checked (before anything slow runs)."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--subjects", type=int, default=20, help="held-out images, one per subject (default 20)")
     ap.add_argument("--survey-share", type=float, default=0.4, help="share of survey-matched subjects (default 0.4)")
@@ -252,21 +393,51 @@ def main() -> None:
                     help="--drift: the cameras, comma-separated (default all trained presets)")
     ap.add_argument("--out", default=None, help="write the per-image results here (.csv)")
     ap.add_argument("--calibrate", action="store_true", help="store the interval calibration from these fits")
-    ap.add_argument("--renderer", choices=("project", "plain", "both"), default="project",
+    ap.add_argument("--renderer", choices=TEST_RENDERERS, default="project",
                     help="who draws the captures: the project's renderer (default), the plain one "
                          "(wbsa.testing.plain_render) or both, side by side")
-    args = ap.parse_args()
+    ap.add_argument("--rows", default=None, metavar="DIR",
+                    help="keep each capture's rows in this folder as it is fitted; the same command again fits only "
+                         "the rest")
+    ap.add_argument("--noise-sweep", default=None, metavar="F,F,...",
+                    help="fit the same captures at each of these noise scales (e.g. 0,0.3,1,3; 1 must be among "
+                         "them) and print the mean signed error at each minus at 1x")
+    ap.add_argument("--workers", type=int, default=1,
+                    help="fit in this many worker processes (default 1: this one); the rows are the same")
+    args = ap.parse_args(argv)
     if args.seed is None:
         args.seed = 3000 if args.drift else 1000
     if args.drift and args.seed in (0, 1, 1000, 2000):
         ap.error("--drift needs subjects outside the benchmark, the calibration and training: e.g. --seed 3000")
+    if args.drift and (args.rows or args.noise_sweep or args.workers != 1):
+        ap.error("--rows, --noise-sweep and --workers go with the held-out fits: leave them out with --drift")
     if args.calibrate and args.seed in (0, 1, 1000):
         ap.error("--calibrate needs subjects outside the benchmark and training: give another --seed, e.g. 2000")
+    if args.calibrate and (args.renderer != "project" or args.noise_sweep):
+        ap.error("--calibrate calibrates on the project's renderer at the cameras' noise: leave --renderer at "
+                 "project and --noise-sweep out")
+    if args.calibrate and args.data_term is not None:
+        ap.error("--calibrate stores the interval of the shipped fit: leave its settings at their defaults")
+    if not 0 <= args.first < args.subjects or (args.count is not None and args.count < 1):
+        ap.error(f"--first {args.first} --count {args.count}: give images within the {args.subjects} subjects "
+                 "(0 ≤ --first < --subjects, --count ≥ 1)")
+    if args.workers < 1:
+        ap.error(f"--workers {args.workers}: give 1 (this process) or more")
+    if args.noise_sweep:
+        from bench_estimate import noise_scales
+
+        args.scales = noise_scales(args.noise_sweep)
+    return args
+
+
+def main(argv: list[str] | None = None) -> None:
+    args = parse_args(argv)
 
     import torch
 
-    from bench_estimate import population
+    from bench_estimate import population, sweep_report
 
+    from wbsa.errors import WbsaError
     from wbsa.estimation.methods.body_fit import BodyFitSettings
 
     torch.set_num_threads(1)
@@ -275,27 +446,27 @@ def main() -> None:
     fit_settings = BodyFitSettings(**changes)
     pop = population(args.subjects, args.survey_share, args.seed)
     if args.drift:
-        from body_fit_drift import DRIFT_BANDS_M, DRIFT_CAMERAS, drift_chunk, report_drift
-
-        cameras = tuple(args.cameras.split(",")) if args.cameras else DRIFT_CAMERAS
-        res = drift_chunk(pop, args.seed, args.draws, cameras, DRIFT_BANDS_M, fit_settings)
-        if args.out:
-            res.to_csv(args.out, index=False)
-        print(f"\n{len(pop)} subjects, seed {args.seed}, {args.draws} noise draws each, data term "
-              f"{fit_settings.data_term}, {time.perf_counter() - t0:.0f} s wall")
-        report_drift(res)
+        drift(pop, args, fit_settings, t0)
         return
-    others = pop.iloc[np.roll(np.arange(len(pop)), 1)].reset_index(drop=True)
     stop = len(pop) if args.count is None else min(len(pop), args.first + args.count)
-    part = slice(args.first, stop)
-    if args.calibrate and args.renderer != "project":
-        ap.error("--calibrate calibrates on the project's renderer: leave --renderer at project")
-    res = fit_chunk(pop.iloc[part].reset_index(drop=True), others.iloc[part].reset_index(drop=True), args.first,
-                    args.seed, args.displace, args.model, fit_settings, args.renderer)
+    common = dict(first=args.first, stop=stop, displace=args.displace, model_path=args.model, workers=args.workers)
+    try:
+        if args.noise_sweep:
+            res = noise_sweep(pop, args.scales, fit_settings, seed=args.seed, renderer=args.renderer,
+                              rows_dir=args.rows, **common)
+        else:
+            res = fit_rows(pop, held_out_settings(args.seed, args.renderer), fit_settings, rows_dir=args.rows,
+                           **common)
+    except WbsaError as exc:
+        raise SystemExit(f"error: {exc}") from None
     if args.out:
         res.to_csv(args.out, index=False)
     print(f"\n{len(pop)} subjects ({(pop['population'] == 'survey').sum()} survey-matched), seed {args.seed}, images "
           f"{args.first}–{stop - 1}" + (", displaced skin (outside anny's shapes)" if args.displace else ""))
+    if args.noise_sweep:
+        print(f"\nnoise sweep of the body fit, noise scales {', '.join(f'{f:g}' for f in args.scales)}:")
+        sweep_report(res, "fit_wbsa_m2", "fit_stature_m", "stature_m")
+        return
     for renderer, group in res.groupby("renderer", sort=False):
         if res["renderer"].nunique() > 1:
             print(f"\n======== renderer: {renderer} ========")
@@ -303,17 +474,32 @@ def main() -> None:
     if res["renderer"].nunique() > 1:
         side_by_side(res)
     if args.calibrate:
-        from wbsa.estimation.methods.body_fit.interval import calibrate, fit_fingerprint, save
+        calibrate_interval(res, args, fit_settings)
 
-        ok = res[res["error"] == ""]
-        command = (f"python benchmarks/bench_body_fit.py --calibrate --subjects {args.subjects} --seed {args.seed}"
-                   + (f" --survey-share {args.survey_share:g}" if args.survey_share != 0.4 else ""))
-        if changes.keys() - {"time_budget_s"}:
-            ap.error("--calibrate stores the interval of the shipped fit: leave its settings at their defaults")
-        cal = calibrate((ok["fit_wbsa_m2"] / ok["wbsa_m2"] - 1).to_numpy(), 0.95, command,
-                        fit_fingerprint(fit_settings))
-        print(f"\ninterval calibration: {cal.n} fits, relative error bounds {100 * cal.error_lo:+.2f} % … "
-              f"{100 * cal.error_hi:+.2f} %; written to {save(cal)}")
+
+def drift(pop: pd.DataFrame, args: argparse.Namespace, fit_settings, t0: float) -> None:
+    """``--drift``: truth-started fits per camera × distance band (``benchmarks/body_fit_drift.py``)."""
+    from body_fit_drift import DRIFT_BANDS_M, DRIFT_CAMERAS, drift_chunk, report_drift
+
+    cameras = tuple(args.cameras.split(",")) if args.cameras else DRIFT_CAMERAS
+    res = drift_chunk(pop, args.seed, args.draws, cameras, DRIFT_BANDS_M, fit_settings)
+    if args.out:
+        res.to_csv(args.out, index=False)
+    print(f"\n{len(pop)} subjects, seed {args.seed}, {args.draws} noise draws each, data term "
+          f"{fit_settings.data_term}, {time.perf_counter() - t0:.0f} s wall")
+    report_drift(res)
+
+
+def calibrate_interval(res: pd.DataFrame, args: argparse.Namespace, fit_settings) -> None:
+    """``--calibrate``: the split-conformal bounds of these fits' WBSA error, stored in ``src/wbsa/data``."""
+    from wbsa.estimation.methods.body_fit.interval import calibrate, fit_fingerprint, save
+
+    ok = res[res["error"] == ""]
+    command = (f"python benchmarks/bench_body_fit.py --calibrate --subjects {args.subjects} --seed {args.seed}"
+               + (f" --survey-share {args.survey_share:g}" if args.survey_share != 0.4 else ""))
+    cal = calibrate((ok["fit_wbsa_m2"] / ok["wbsa_m2"] - 1).to_numpy(), 0.95, command, fit_fingerprint(fit_settings))
+    print(f"\ninterval calibration: {cal.n} fits, relative error bounds {100 * cal.error_lo:+.2f} % … "
+          f"{100 * cal.error_hi:+.2f} %; written to {save(cal)}")
 
 
 if __name__ == "__main__":

@@ -282,6 +282,7 @@ def main() -> None:
     args = ap.parse_args()
     if args.clothing_unstated and not args.clothing_m:
         ap.error("--clothing-unstated goes with --clothing-m T (a layer to leave unstated)")
+    scales = noise_scales(args.noise_sweep) if args.noise_sweep else None
 
     from wbsa.estimation.methods.regression.default_model import default_model, default_model_path
     from wbsa.testing.testset import RoomTestSettings, run_room_tests
@@ -292,8 +293,8 @@ def main() -> None:
         model_path = str(default_model_path())
     t0 = time.perf_counter()
     pop = population(args.subjects, args.survey_share, args.seed)
-    if args.noise_sweep:
-        noise_sweep(pop, args, model_path)
+    if scales:
+        noise_sweep(pop, args, model_path, scales)
         return
     capture = replace(RoomTestSettings().capture, noise_scale=(args.noise_scale, args.noise_scale),
                       ideal_share=1.0 if args.ideal else 0.0)
@@ -321,18 +322,32 @@ def main() -> None:
         draw_agreement(res, args.figure, f"{len(pop)} held-out subjects, seed {args.seed}")
 
 
-def noise_sweep(pop: pd.DataFrame, args: argparse.Namespace, model_path: str) -> None:
-    """The held-out captures at each noise scale of ``args.noise_sweep``: error by scale, and minus at 1×."""
+def noise_scales(text: str) -> list[float]:
+    """The scales of ``--noise-sweep`` (e.g. ``'0,0.3,1,3'``): numbers ≥ 0, each once, 1 and at least one other.
+
+    Raises
+    ------
+    SystemExit
+        With a one-line message naming the fix.
+    """
+    try:
+        scales = [float(x) for x in text.split(",")]
+    except ValueError:
+        raise SystemExit(f"error: --noise-sweep {text!r} must be numbers separated by commas, e.g. 0,0.3,1,3") from None
+    if 1.0 not in scales:
+        raise SystemExit("error: --noise-sweep must include 1 (the scale the others are compared with)")
+    if any(not f >= 0.0 for f in scales) or len(set(scales)) != len(scales) or len(scales) < 2:
+        raise SystemExit(f"error: --noise-sweep {text!r} must list scales ≥ 0, each once, 1 and at least one other, "
+                         "e.g. 0,0.3,1,3")
+    return scales
+
+
+def noise_sweep(pop: pd.DataFrame, args: argparse.Namespace, model_path: str, scales: list[float]) -> None:
+    """The held-out captures at each noise scale of ``scales``: error by scale, and minus at 1×."""
     from pathlib import Path
 
     from wbsa.testing.testset import RoomTestSettings, run_room_tests
 
-    try:
-        scales = [float(x) for x in args.noise_sweep.split(",")]
-    except ValueError:
-        raise SystemExit(f"error: --noise-sweep {args.noise_sweep!r} must be numbers separated by commas, e.g. 0,0.3,1,3")
-    if 1.0 not in scales:
-        raise SystemExit("error: --noise-sweep must include 1 (the scale the others are compared with)")
     parts = []
     for f in scales:
         capture = replace(RoomTestSettings().capture, noise_scale=(f, f))
@@ -343,9 +358,20 @@ def noise_sweep(pop: pd.DataFrame, args: argparse.Namespace, model_path: str) ->
     res = pd.concat(parts, ignore_index=True)
     if args.out:
         res.to_csv(args.out, index=False)
+    print(f"\nnoise sweep, {len(pop)} held-out subjects, seed {args.seed}, model {model_path}:")
+    sweep_report(res, "est_wbsa_m2", "est_stature_m", "posed_height_m")
+
+
+def sweep_report(res: pd.DataFrame, wbsa_col: str, stature_col: str, truth_stature_col: str) -> None:
+    """Print a noise sweep (rows with a ``noise_factor`` column, one set of captures per factor, 1 among them).
+
+    By renderer and factor: n, MAPE, bias, median stature error (``stature_col`` minus ``truth_stature_col``, cm)
+    and the refused; then the mean signed WBSA error (``wbsa_col`` against ``wbsa_m2``) at each factor minus at
+    1×, paired on the same captures, with the verdict of the ±1 % target.
+    """
     ok = res[res["error"] == ""].copy()
-    ok["err_pct"] = 100 * (ok["est_wbsa_m2"] / ok["wbsa_m2"] - 1)
-    ok["stature_err_cm"] = 100 * (ok["est_stature_m"] - ok["posed_height_m"])
+    ok["err_pct"] = 100 * (ok[wbsa_col] / ok["wbsa_m2"] - 1)
+    ok["stature_err_cm"] = 100 * (ok[stature_col] - ok[truth_stature_col])
     table = ok.groupby(["renderer", "noise_factor"]).agg(
         n=("err_pct", "size"), mape_pct=("err_pct", lambda e: e.abs().mean()), bias_pct=("err_pct", "mean"),
         stature_median_cm=("stature_err_cm", "median"))
@@ -353,7 +379,6 @@ def noise_sweep(pop: pd.DataFrame, args: argparse.Namespace, model_path: str) ->
     table["refused"] = refused
     wide = ok.pivot_table(index=["renderer", "image"], columns="noise_factor", values="err_pct")
     paired = wide.sub(wide[1.0], axis=0).groupby(level="renderer").mean()
-    print(f"\nnoise sweep, {len(pop)} held-out subjects, seed {args.seed}, model {model_path}:")
     print(table.round(3).to_string())
     print("\nmean signed WBSA error minus at 1x, paired on the same captures, % (target within ±1):")
     print(paired.round(3).to_string())

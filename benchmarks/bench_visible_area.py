@@ -37,19 +37,21 @@ def heights_m(depth: np.ndarray, mask: np.ndarray, camera, pose) -> np.ndarray:
 
 
 def top_m(depth: np.ndarray, mask: np.ndarray, camera, pose) -> tuple[float, float]:
-    """(former, seen-surface) estimates of the subject's top, metres over the true floor."""
+    """(former, seen-surface) estimates of the subject's top, metres over the true floor: the 99.8th percentile
+    of the returns' heights, and the estimator's (:func:`wbsa.estimation.subject.measure.seen_top_m`)."""
+    import math
+
     from wbsa.core.backproject import ray_directions
-    from wbsa.estimation.subject.measure import CROWN_RADIUS_M
+    from wbsa.estimation.subject.measure import seen_top_m
     from wbsa.estimation.subject.seen_surface import seen_surface
 
     former = float(np.quantile(heights_m(depth, mask, camera, pose), 0.998))
     seen = seen_surface(depth, mask, camera)
-    h = heights_m(seen.depth_m, seen.mask, camera, pose)
-    k = int(np.argmax(h))
     r, c = np.nonzero(seen.mask)
-    sight = ray_directions(camera, r[k:k + 1], c[k:k + 1])[0] * seen.depth_m[r[k], c[k]]
-    rise = float(np.clip((sight @ pose.R)[2] / np.linalg.norm(sight), 0.0, 1.0))  # up (world z) in camera frame
-    return former, float(h[k]) + CROWN_RADIUS_M * (1.0 - np.sqrt(1.0 - rise * rise))
+    points = ray_directions(camera, r, c) * seen.depth_m[r, c][:, None]
+    world = (points - pose.T) @ pose.R
+    q = np.column_stack([world @ pose.R[0], world[:, 2], np.zeros(len(world))])  # across the image, up
+    return former, seen_top_m(points, q, pose.R[:, 2], math.sqrt(float(camera.fx) * float(camera.fy)))
 
 
 def main() -> None:

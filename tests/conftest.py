@@ -7,6 +7,13 @@ import os
 import pytest
 
 os.environ.setdefault("WBSA_PROGRESS", "0")
+# One thread for OpenMP (scikit-learn's gradient-boosted trees, torch) and BLAS, in this process and the ones it
+# starts (set before any of them is loaded; a value in the environment wins). The suite's target machine has
+# two cores, one of them kept busy by another job: two OpenMP threads then wait on each other at every barrier,
+# and tests/test_estimate.py's out-of-fold view test (six small boosted models) took over 300 s instead of
+# 11 s of CPU at one thread. Results do not depend on it; the suite's processes run side by side instead.
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
 
 
 @pytest.fixture(scope="session")

@@ -129,6 +129,27 @@ def test_an_arm_joins_an_upper_body_clear_of_the_floor_but_a_standing_or_torso_s
     assert not merged(2.0, 0.85, None)  # without a floor every union is held to the footprint
 
 
+def test_the_hips_of_a_body_cut_at_the_knees_are_measured_over_the_floor_not_at_its_hands():
+    """Bench cut-off set (images 3, 11, 12, 16): a body with its arms out, the frame cut at the knees, was refused
+    as "people touching": its 10–40 % band, from its lowest return, held its hands. Over a seen floor the band
+    is 10–40 % of the top's height over the floor, where its hips are; two people side by side are still wide."""
+    from wbsa.estimation.subject.cloud import Plane
+    from wbsa.estimation.subject.clusters import MAX_FOOTPRINT_M, footprint_m
+
+    floor = Plane(np.array([0.0, -1.0, 0.0]), -1.2)  # 1.2 m below the camera (y down)
+    up = np.array([0.0, -1.0, 0.0])
+    _, legs = _block((20, 120), (80, 100), -0.15, 0.15, -0.5, 0.7, 2.0)  # 0.5–1.7 m over the floor: cut at the knees
+    _, hands = _block((80, 90), (40, 160), -0.6, 0.6, 0.25, 0.4, 2.0)  # arms out, hands 0.8–0.95 m up
+    cut = np.r_[legs, hands]
+    assert footprint_m(cut, up) > MAX_FOOTPRINT_M  # from its lowest return: the hands
+    assert footprint_m(cut, up, floor.height(cut)) < 0.5  # over the floor: the thighs
+    _, left = _block((20, 170), (60, 80), -0.55, -0.25, -0.5, 1.2, 2.0)  # two people standing on the floor
+    _, right = _block((20, 170), (120, 140), 0.25, 0.55, -0.5, 1.2, 2.0)
+    two = np.r_[left, right]
+    assert footprint_m(two, up, floor.height(two)) > MAX_FOOTPRINT_M
+    assert footprint_m(two, up, floor.height(two)) == pytest.approx(footprint_m(two, up), rel=0.02)
+
+
 def test_a_far_arm_seen_past_the_near_side_joins_across_a_metre_but_a_seam_a_head_or_a_near_part_does_not():
     """Bench images 19, 118 and 209 (side views, arms out): the far hand, seen past the near arm about a
     metre in front of it, was left out (up to 281 pixels). Only an arm-sized part behind what it touches,
@@ -963,3 +984,38 @@ def test_a_scan_render_has_no_sensor_effects_and_keeps_the_capture():
         assert (scan.camera, scan.view, scan.camera_height_m, scan.fits) == (cap.camera, cap.view,
                                                                            cap.camera_height_m, cap.fits)
         assert not cap.sensor.is_ideal
+    # the room seen between two people side by side: inside their boxes together, though in neither alone
+    left = Cluster(7, 20_000, (400, 200), 2.5, 1.8, 0.6, 0.4, (360, 40, 450, 400))
+    right = Cluster(8, 20_000, (490, 200), 2.2, 1.7, 0.6, 0.4, (440, 60, 540, 400))
+    between = Cluster(9, 2_000, (445, 270), 4.9, 0.9, 0.2, 0.2, (430, 220, 460, 320))
+    assert seen_past([left, right, between]) == {9}
+    # a gap between the two boxes leaves it in view
+    apart = Cluster(8, 20_000, (500, 200), 2.2, 1.7, 0.6, 0.4, (455, 60, 540, 400))
+    assert seen_past([left, apart, between]) == set()
+
+
+def test_a_body_under_depth_noise_twice_its_relief_is_not_flat_and_a_board_under_it_is():
+    """The relief of a person (a torso 4 cm round, arms 3 cm behind it: 3 cm off its plane) stays above
+    FLAT_MIN_M under independent depth noise of σ = 6 cm, twice the relief, though the noise is read 15 % high
+    (on a render at 3× Kinect v2's noise the noise measured on the subject, 6.5 cm, exceeded its whole RMS off
+    the plane, 6.2 cm); a board under the same noise stays below it."""
+    from wbsa.estimation.subject.measure import measured_depth_noise
+    from wbsa.estimation.subject.people import FLAT_MIN_M, relief_m
+
+    rng = np.random.default_rng(5)
+    rows, cols = np.mgrid[0:160, 0:60]
+    rows, cols = rows.ravel(), cols.ravel()
+    x, y = (cols - 30) * 0.01, (rows - 80) * 0.01
+    torso = 2.5 - 0.04 * np.sqrt(np.clip(1 - ((cols - 30) / 20.0) ** 2, 0, 1))
+    body_z = np.where(np.abs(cols - 30) < 20, torso, 2.53)
+
+    def shape_m(z, sigma):
+        noisy = z + rng.normal(0.0, sigma, z.shape)
+        sigma_m = 1.15 * measured_depth_noise(noisy.reshape(160, 60), np.ones((160, 60), bool))
+        off, noise = relief_m(rows, cols, np.stack([x * noisy, y * noisy, noisy], axis=1), sigma_m)
+        return np.sqrt(max(off ** 2 - noise ** 2, 0.0))
+
+    clean = shape_m(body_z, 0.0)
+    assert clean > 1.5 * FLAT_MIN_M
+    assert abs(shape_m(body_z, 0.06) - clean) < 0.3 * clean
+    assert shape_m(np.full(body_z.shape, 2.5), 0.06) < FLAT_MIN_M / 2

@@ -478,7 +478,7 @@ def test_messages_reach_the_page_in_its_own_words(server, browser, frames, tmp_p
     from wbsa.estimation.methods.view import ViewEstimate, view_used
     from wbsa.estimation.clothes import check_clothing
     from wbsa.estimation.subject import checks
-    from wbsa.errors import page_text
+    from wbsa.errors import command_text, page_text
 
     def message(call, *args) -> WbsaError:
         with pytest.raises(WbsaError) as err:
@@ -499,8 +499,10 @@ def test_messages_reach_the_page_in_its_own_words(server, browser, frames, tmp_p
         _fitted_at_the_model_edge(),  # the body fit's outside_model_range detail, as it writes it
     ]
     for text in cli:
-        assert COMMAND_LINE_WORDS.search(str(text)), text  # the library's own words: the command line's
+        assert COMMAND_LINE_WORDS.search(command_text(text)), text  # the terminal's words name its options
         assert not COMMAND_LINE_WORDS.search(page_text(text)), (str(text), page_text(text))
+    for flag in cli[4:6]:  # a flag's detail in Python names the argument, not the option
+        assert "--" not in str(flag) and "--" in command_text(flag), (str(flag), command_text(flag))
     assert cli[3].code == "choose_person" and "click on the person" in page_text(cli[3]) and cli[0].code != "choose_person"
     picture = message(read_depth, grey)  # plain words for both: what the picture is, never Pillow's mode letter
     assert page_text(picture) == str(picture) and not COMMAND_LINE_WORDS.search(str(picture))

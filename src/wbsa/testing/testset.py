@@ -419,73 +419,23 @@ def run_room_tests(population: pd.DataFrame, settings: RoomTestSettings, model_p
     ``rows_dir``: a folder where each chunk's rows are written as it finishes (``chunk-<first>.parquet``, atomically),
     beside ``run.json`` (the settings, model and subjects); a run given the same folder again reads the
     chunks already there and captures only the others, so a long benchmark resumes after a stop. A folder
-    written with other settings is refused.
+    written with other settings is refused (:mod:`wbsa.testing.rows`).
     """
-    from wbsa.parallel import map_chunks
+    import dataclasses
+
     from wbsa.progress import progress
+    from wbsa.testing.rows import map_resumable, run_record
 
     others = population.iloc[np.roll(np.arange(len(population)), 1)].reset_index(drop=True)
     starts = list(range(0, len(population), chunk))
-    done = _resume(rows_dir, population, settings, model_path, chunk)
-    todo = [s for s in starts if s not in done]
     args = [(population.iloc[s:s + chunk].reset_index(drop=True), others.iloc[s:s + chunk].reset_index(drop=True),
-             s, settings, model_path) for s in todo]
-
-    def keep(part: pd.DataFrame) -> None:
-        if rows_dir is not None and len(part):
-            _write_chunk(rows_dir, int(part["image"].min()) // chunk * chunk, part)
-        bar.update(len(part) // (2 if settings.renderer == "both" else 1))
-
+             s, settings, model_path) for s in starts]
+    record = run_record(population, chunk, settings=dataclasses.asdict(settings), model=str(model_path))
     bar = progress(total=len(population), desc="test captures", unit="image", enabled=show_progress)
-    bar.update(sum(min(chunk, len(population) - s) for s in done))
     try:
-        parts = map_chunks(room_capture_chunk, args, workers=workers, tag="estimator-test", on_result=keep)
+        parts = map_resumable(room_capture_chunk, args, starts, rows_dir=rows_dir, record=record, workers=workers,
+                              tag="estimator-test", on_result=lambda part: bar.update(part["image"].nunique() if len(part) else 0))
     finally:
         bar.close()
-    table = pd.concat([*done.values(), *parts], ignore_index=True)
+    table = pd.concat(parts, ignore_index=True)
     return table.sort_values(["image", "renderer"], kind="stable").reset_index(drop=True)
-
-
-def _run_record(population: pd.DataFrame, settings: RoomTestSettings, model_path: str | None, chunk: int) -> dict:
-    import dataclasses
-    import hashlib
-    import json
-
-    subjects = hashlib.sha256(pd.util.hash_pandas_object(population, index=False).values.tobytes()).hexdigest()[:12]
-    return json.loads(json.dumps({"settings": dataclasses.asdict(settings), "model": str(model_path), "chunk": chunk,
-                                  "subjects": subjects, "n": len(population)}, default=str))
-
-
-def _resume(rows_dir: str | None, population: pd.DataFrame, settings: RoomTestSettings, model_path: str | None,
-            chunk: int) -> dict[int, pd.DataFrame]:
-    """The chunks already in ``rows_dir`` (first image → rows), after checking they were made the same way."""
-    import json
-    from pathlib import Path
-
-    from wbsa.atomic import atomic_path
-
-    if rows_dir is None:
-        return {}
-    folder = Path(rows_dir)
-    record = _run_record(population, settings, model_path, chunk)
-    meta = folder / "run.json"
-    if meta.exists():
-        if json.loads(meta.read_text()) != record:
-            raise WbsaError(f"{folder} holds rows of another run (other settings, model or subjects); give a new "
-                            "folder or remove it")
-    else:
-        with atomic_path(meta) as tmp:
-            tmp.write_text(json.dumps(record, indent=1, sort_keys=True))
-    done = {}
-    for path in sorted(folder.glob("chunk-*.parquet")):
-        done[int(path.stem.split("-")[1])] = pd.read_parquet(path)
-    return done
-
-
-def _write_chunk(rows_dir: str, first: int, part: pd.DataFrame) -> None:
-    from pathlib import Path
-
-    from wbsa.atomic import atomic_path
-
-    with atomic_path(Path(rows_dir) / f"chunk-{first:06d}.parquet") as tmp:
-        part.to_parquet(tmp, index=False)

@@ -19,7 +19,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                        description="Render virtual people with the cameras, distances and population given, measure "
                                    "them with the estimator's own code, fit the model and calibrate its interval on "
                                    "held-out subjects. The renders are kept as they finish: run the same command "
-                                   "again after a kill and it resumes. The default settings take about 45 minutes "
+                                   "again after a kill and it resumes. The default settings take about 70 minutes "
                                    "on 2 cores; the model (model.npz in the run's folder) goes to wbsa estimate "
                                    "--model. Needs scikit-learn: pip install 'wbsa[train]'.")
     p.add_argument("--out", default=None, metavar="DIR",

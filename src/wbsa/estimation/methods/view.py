@@ -93,8 +93,9 @@ def view_used(view: ViewEstimate, azimuth_deg: float | None,
     if azimuth_deg is None and not view.azimuth_sd_deg <= UNCERTAIN_AZIMUTH_SD_DEG:
         said = (f"azimuth {view.azimuth_deg:.0f}° ± {view.azimuth_sd_deg:.0f}° (camera in front with probability "
                 f"{view.p_front:.2f})")
-        flags["uncertain_view"] = Worded(f"{said}; give --azimuth if you know it",
-                                         f"{said}; type the azimuth if you know it")
+        flags["uncertain_view"] = Worded(f"{said}; give azimuth_deg if you know it",
+                                         f"{said}; type the azimuth if you know it",
+                                         command=f"{said}; give --azimuth if you know it")
     return (az, el), flags
 
 

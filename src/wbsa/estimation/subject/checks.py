@@ -86,8 +86,11 @@ def person_shape_flags(stature_m: float, width_m: float, silhouette_m2: float) -
             f"is {width_m:.2f} m wide for {stature_m:.2f} m tall (a person at least {PERSON_MIN_WIDTH_PER_STATURE:g} "
             "of the height)")
     said = f"the object {what}: a board, post or wall? the estimate is not a person's"
-    return {"not_a_person": Worded(f"{said}; check the segmentation (--mask-out) and pick the subject",
-                                   f"{said}; check the white outline in the depth picture and click on the person")}
+    return {"not_a_person": Worded(f"{said}; check the segmentation (the estimate's mask) and pick the subject "
+                                   "(segment=SegmentSettings(pick=(x, y)), a pixel of the person)",
+                                   f"{said}; check the white outline in the depth picture and click on the person",
+                                   command=f"{said}; check the segmentation (--mask-out) and pick the subject "
+                                           "(--pick X,Y)")}
 
 
 #: Why lengths 1000 times too long are millimetres read as metres, and the fix (command line, Python; the page).

@@ -36,7 +36,7 @@ FAR_ARM_REACH = 0.55
 LOOP_GAP_M = 0.65
 
 
-def footprint_m(points: np.ndarray, up: np.ndarray) -> float:
+def footprint_m(points: np.ndarray, up: np.ndarray, heights_m: np.ndarray | None = None) -> float:
     """Horizontal extent (m, bounding-box diagonal) of the points between 10 % and 40 % of the object's height.
 
     Parameters
@@ -45,9 +45,14 @@ def footprint_m(points: np.ndarray, up: np.ndarray) -> float:
         The object's points (camera frame, m).
     up : (3,) float64
         Unit up direction (the floor's normal).
+    heights_m : (k,) float64, optional
+        The points' heights over the floor, where one is seen: the band is then 10–40 % of the top's height
+        over the floor, where the hips are even when the frame cuts the legs off (from the object's lowest
+        point, a body cut at the knees would be measured at its hands).
     """
-    along = points @ up
-    lo, top = np.quantile(along, 0.002), np.quantile(along, 0.998)
+    along = points @ up if heights_m is None else np.asarray(heights_m, dtype=np.float64)
+    top = np.quantile(along, 0.998)
+    lo = np.quantile(along, 0.002) if heights_m is None else 0.0
     band = points[(along >= lo + 0.1 * (top - lo)) & (along <= lo + 0.4 * (top - lo))]
     if len(band) < 3:
         return 0.0

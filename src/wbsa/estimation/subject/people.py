@@ -7,16 +7,16 @@ tall, at most 2.6 m wide and 0.9 m at the hips) and, with a floor seen:
 * its lower half is seen: its lowest return is at most half its top's height over the floor (a head or a
   lamp seen over other people is not a person to measure);
 * it has a head: its top :data:`HEAD_BAND_M` spans at most :data:`HEAD_MAX_WIDTH_M` across the floor;
-* it is not flat: its returns lie off their best plane by at least :data:`FLAT_MIN_M` (RMS, its depth
-  noise taken out in quadrature: the noise measured on it,
+* it is not flat: its returns lie off their best plane by at least :data:`FLAT_MIN_M` (:func:`relief_m`: RMS
+  over windows of pixels, its depth noise taken out in quadrature: the noise measured on it,
   :func:`~wbsa.estimation.subject.measure.measured_depth_noise`, or where quantised depth reads none, the
   noise envelope at its distance, :func:`~wbsa.estimation.subject.cloud.depth_noise_m`): a board, a door or a
   piece of wall is flat.
 
 Measured on PCL's ``five_people.pcd`` (tests/fixtures): the five people are 2.0–2.8 m away, heads 0.21–0.32 m
-wide, 4.3–13 times the noise off their plane; the room's pieces that passed the size test stand 2.6–3.8 m
-tall over the floor, or show only their top, or span 0.4–1.6 m at the top, or lie within 1.0 times the noise
-of a plane.
+wide, 4.5–9.3 cm off their plane beyond the noise; the room's pieces that passed the size test stand 2.6–3.8 m
+tall over the floor, or show only their top, or span 0.4–1.6 m at the top, or lie 0.7 cm off a plane, or are
+seen between two nearer people (:func:`seen_past`).
 
 People standing side by side who touch form one object; :func:`split_touching` splits it at the valleys
 between their heads (:func:`~wbsa.estimation.subject.clusters.split_people`) when every part is a person.
@@ -41,11 +41,14 @@ HEAD_BAND_M = 0.2
 HEAD_BAND_SHARE = 0.12
 #: ... which spans at most this across the floor (m): a head 0.16 m wide, with hair and mixed returns.
 HEAD_MAX_WIDTH_M = 0.5
-#: A person's returns lie off their best plane (RMS, less its depth noise) by at least this (m): rendered
-#: people 2.5–6.8 cm (adults of 1.71–2.04 m and a child of 0.82 m, front, side and back views, Kinect v2 with
-#: Kinect v1's noise; the child 2.5 cm from the front), PCL's five people 4.5–9.2 cm; a board 0 cm, the
-#: cabinet and a panel of five_people 0 cm.
+#: A person's returns lie off their best plane (:func:`relief_m`, less its depth noise) by at least this (m):
+#: rendered people 2.2–6.7 cm (three adults and a child of 0.82 m in a room, 0°, 90° and 135°, Kinect v2; the
+#: child 2.2 cm from the front), people at 3× the noise models' σ 2.2–5.0 cm (seed 2000's renders, Kinect v2
+#: and phone LiDAR at 3.5–4.2 m), PCL's five people 4.5–9.3 cm; a board and a wall piece 0 cm, a post
+#: 0.9 cm, the cabinet of five_people 0.7 cm.
 FLAT_MIN_M = 0.018
+#: Side of the window of pixels over which :func:`relief_m` averages an object's distance from its plane.
+RELIEF_WINDOW_PX = 3
 #: The lowest return of a person is at most this share of its top's height over the floor.
 LOWER_HALF = 0.5
 #: A person standing on a seen floor has returns this close to it (m): the feet.
@@ -163,11 +166,11 @@ def describe_clusters(pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarr
             top, bottom = float(np.quantile(over, 0.998)), float(np.quantile(over, 0.002))
             cues = dict(top_m=top, bottom_m=bottom,
                         head_width_m=_across(p[over > top - min(HEAD_BAND_M, HEAD_BAND_SHARE * (top - bottom))], up))
-        sub = p[:: max(1, len(p) // 3000)]
-        cues["off_plane_m"] = float(np.linalg.svd(sub - sub.mean(axis=0), compute_uv=False)[2] / math.sqrt(len(sub)))
-        cues["noise_m"] = _own_noise_m(rows, cols, p[:, 2]) or float(depth_noise_m(np.median(p[:, 2])))
+        noise_m = _own_noise_m(rows, cols, p[:, 2]) or float(depth_noise_m(np.median(p[:, 2])))
+        cues["off_plane_m"], cues["noise_m"] = relief_m(rows, cols, p, noise_m)
         out.append(Cluster(int(lab), n, (int(np.median(cols)), int(np.median(rows))), distance, height, width_m,
-                           footprint_m(p, up if up @ np.array([0.0, -1.0, 0.0]) >= 0 else -up),
+                           footprint_m(p, up if up @ np.array([0.0, -1.0, 0.0]) >= 0 else -up,
+                                       None if floor is None else floor.height(p)),
                            (int(cols.min()), int(rows.min()), int(cols.max()), int(rows.max())),
                            top_cut=bool(frame.at_top(rows.min())),
                            bottom_cut=bool(frame.at_bottom(rows.max())), **cues))
@@ -180,6 +183,53 @@ def _own_noise_m(rows: np.ndarray, cols: np.ndarray, z: np.ndarray) -> float:
     depth = np.zeros((rows.max() - r0 + 1, cols.max() - c0 + 1))
     depth[rows - r0, cols - c0] = z
     return measured_depth_noise(depth, depth > 0)
+
+
+def relief_m(rows: np.ndarray, cols: np.ndarray, points: np.ndarray, noise_m: float) -> tuple[float, float]:
+    """How far an object's surface lies off its best plane, averaged over windows of pixels, and the depth
+    noise left in that average.
+
+    Each return's distance from the best plane of the returns is averaged over the
+    :data:`RELIEF_WINDOW_PX` × :data:`RELIEF_WINDOW_PX` window around it (windows at least half covered by the
+    object): a body's relief spans many pixels and survives the average, independent depth noise of σ falls to
+    σ / √k over k returns. So a person stays a person under a noise as large as its relief (Kinect v2's noise
+    model at 3× its σ reads 6.6 cm at 3.5 m, where a body lies 4–5 cm off its plane), and a board stays flat.
+
+    Parameters
+    ----------
+    rows, cols : (n,) int
+        The object's pixels.
+    points : (n, 3) float64
+        Their returns in the camera frame (m).
+    noise_m : float
+        The depth noise of one return (m).
+
+    Returns
+    -------
+    off_plane_m : float
+        RMS of the window averages of the distances from the plane (m).
+    noise_m : float
+        The noise left in it, σ · √(mean of 1 / k) (m).
+    """
+    from scipy import ndimage
+
+    sub = points[:: max(1, len(points) // 3000)]
+    centre = sub.mean(axis=0)
+    normal = np.linalg.svd(sub - centre, full_matrices=False)[2][2]
+    r0, c0 = rows.min(), cols.min()
+    grid = (rows.max() - r0 + 1, cols.max() - c0 + 1)
+    off = np.zeros(grid)
+    seen = np.zeros(grid)
+    off[rows - r0, cols - c0] = (points - centre) @ normal
+    seen[rows - r0, cols - c0] = 1.0
+    k = RELIEF_WINDOW_PX
+    total = ndimage.uniform_filter(off, k, mode="constant") * k * k
+    count = np.rint(ndimage.uniform_filter(seen, k, mode="constant") * k * k)
+    ok = (seen > 0) & (count >= k * k / 2)
+    if not ok.any():
+        return float(np.sqrt(np.mean(((points - centre) @ normal) ** 2))), float(noise_m)
+    mean = total[ok] / count[ok]
+    return float(np.sqrt(np.mean(mean ** 2))), float(noise_m * np.sqrt(np.mean(1.0 / count[ok])))
 
 
 def _across(points: np.ndarray, up: np.ndarray) -> float:
@@ -314,8 +364,9 @@ def open_feet(mask: np.ndarray) -> str | None:
 
 
 def seen_past(clusters: list[Cluster]) -> set[int]:
-    """Labels of the clusters seen past a nearer, larger object: inside its bounding box in the image and at
-    least :data:`SEEN_PAST_M` farther away (the wall between a subject's legs or inside a bent arm).
+    """Labels of the clusters seen past nearer, larger objects: inside their bounding boxes in the image (one
+    box, or boxes side by side that each span its rows) and at least :data:`SEEN_PAST_M` farther away (the wall
+    between a subject's legs or inside a bent arm, the room between two people).
 
     Such a piece can be person-sized, and lie under the image's centre, where the operator aimed at the
     subject; it is never the subject. Any larger object may hide one, person-sized or not: two people
@@ -336,7 +387,7 @@ def seen_past(clusters: list[Cluster]) -> set[int]:
 
 
 def seen_past_object(c: Cluster, clusters: list[Cluster]) -> Cluster | None:
-    """The first nearer, larger object ``c`` is seen past (see :func:`seen_past`), or None.
+    """The leftmost of the nearer, larger objects ``c`` is seen past (see :func:`seen_past`), or None.
 
     Parameters
     ----------
@@ -349,12 +400,16 @@ def seen_past_object(c: Cluster, clusters: list[Cluster]) -> Cluster | None:
     Cluster or None
     """
     x0, y0, x1, y1 = c.bbox_px
-    for o in clusters:
-        ox0, oy0, ox1, oy1 = o.bbox_px
-        if (o.n_pixels > c.n_pixels and c.distance_m > o.distance_m + SEEN_PAST_M
-                and ox0 <= x0 and x1 <= ox1 and oy0 <= y0 and y1 <= oy1):
-            return o
-    return None
+    nearer = sorted((o for o in clusters
+                     if o.n_pixels > c.n_pixels and c.distance_m > o.distance_m + SEEN_PAST_M
+                     and o.bbox_px[1] <= y0 and y1 <= o.bbox_px[3] and o.bbox_px[0] <= x1 and o.bbox_px[2] >= x0),
+                    key=lambda o: o.bbox_px[0])
+    reach = x0 - 1
+    for o in nearer:
+        if o.bbox_px[0] > reach + 1:
+            break
+        reach = max(reach, o.bbox_px[2])
+    return nearer[0] if nearer and reach >= x1 else None
 
 
 def split_touching(clusters: list[Cluster], pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarray,

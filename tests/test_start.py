@@ -140,7 +140,7 @@ def test_network_outputs_and_training_are_deterministic(tmp_path):
     assert not all(torch.equal(v, other[k]) for k, v in net.state_dict().items())
 
     data = _tiny_data()
-    settings = StartSettings(n_random=8, n_survey=0, epochs=2, batch=8, seed=5)
+    settings = StartSettings(n_random=8, n_survey=0, epochs=1, batch=8, seed=5)
     a = fit_start(data, np.ones(48, bool), settings)
     b = fit_start(data, np.ones(48, bool), settings)
     c = fit_start(data, np.ones(48, bool), replace(settings, seed=6))

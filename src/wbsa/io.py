@@ -115,6 +115,34 @@ def _without_timestamps(path: Path) -> None:
             zout.writestr(fixed, data)
 
 
+def write_npz(arrays: dict, path: str | os.PathLike) -> Path:
+    """Write named arrays as a compressed ``.npz`` (what :func:`numpy.load` reads) atomically, with fixed entry
+    times, so equal arrays give equal bytes (:func:`numpy.savez_compressed` stamps the time of writing).
+
+    Parameters
+    ----------
+    arrays : dict of str to array_like
+        Entry names (without ``.npy``) and arrays; no object arrays.
+    path : path-like
+        The ``.npz`` file.
+    """
+    import io
+    import zipfile
+
+    import numpy as np
+
+    path = Path(path)
+    with atomic_path(path, keep_suffix=True) as tmp:
+        with zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as zout:
+            for name, value in arrays.items():
+                buf = io.BytesIO()
+                np.lib.format.write_array(buf, np.asanyarray(value), allow_pickle=False)
+                info = zipfile.ZipInfo(f"{name}.npy", date_time=_ZIP_EPOCH)
+                info.compress_type = zipfile.ZIP_DEFLATED
+                zout.writestr(info, buf.getvalue())
+    return path
+
+
 def write_json(obj: object, path: str | os.PathLike) -> Path:
     """Write ``obj`` atomically as indented, strict JSON (a non-finite number as ``null``:
     :func:`wbsa.strict_json.json_text`)."""

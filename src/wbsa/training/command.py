@@ -54,6 +54,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="rebuild the model shipped with wbsa (the recipe; no other option) into the package's data "
                         "folder, with its model card")
     p.set_defaults(func=run_train)
+    from wbsa.training.start.command import register as register_start
+
+    register_start(sub)  # wbsa train-start: the body fit's learned start
 
 
 def _camera(spec: str, disparity: tuple[float, float] | None):

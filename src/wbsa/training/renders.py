@@ -13,6 +13,8 @@ stream ``SeedSequence([seed, i])``: the same seed gives the same rows whatever t
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import pandas as pd
 
@@ -37,83 +39,128 @@ def render_floor(pose, rng: np.random.Generator, error_m: float, tilt_deg: float
     return Plane(n / np.linalg.norm(n), d + float(rng.normal(0.0, error_m)), sensor=sensor)
 
 
-def render_chunk(population: pd.DataFrame, first_sample: int, settings: RenderSettings, seed: int = 0,
-                 posture_names: tuple[str, ...] | None = None) -> Samples:
-    """Render and measure ``settings.views_per_subject`` captures of every body of ``population``.
+@dataclass(frozen=True)
+class DrawnCapture:
+    """One training capture as the estimator receives it, before it is measured.
 
-    Sample numbers start at ``first_sample`` (its seeds are ``SeedSequence([seed, sample])``).
+    Attributes
+    ----------
+    row : dict
+        The sample's table row so far: :data:`TRUTH_COLUMNS`, ``sample``, the capture's conditions (see
+        :class:`~wbsa.training.samples.Samples`), ``alone`` in a room, and without a room the render's
+        ``vbsa_visible_m2`` and ``vbsa_recon_grid_m2``.
+    camera : wbsa.camera.Intrinsics
+        The camera that took it.
+    depth_m : (h, w) float64
+        The sensed depth image, metres (0: no return), its mixed pixels repaired.
+    mixed : (h, w) bool or None
+        The returns :func:`~wbsa.estimation.subject.mixed_pixels.repair_mixed_pixels` found mixed.
+    mask : (h, w) bool or None
+        The subject's pixels as found (segmented in a room); None where no subject was found or the render had
+        almost no returns.
+    floor : Plane or None
+        The floor found (in a room) or the render's floor with its drawn error (without one).
+    """
+
+    row: dict
+    camera: object
+    depth_m: np.ndarray
+    mixed: np.ndarray | None
+    mask: np.ndarray | None
+    floor: Plane | None
+
+
+def draw_captures(population: pd.DataFrame, first_sample: int, settings: RenderSettings, seed: int = 0,
+                  posture_names: tuple[str, ...] | None = None):
+    """Yield the :class:`DrawnCapture` of ``settings.views_per_subject`` captures of every body of ``population``.
+
+    Sample numbers start at ``first_sample`` (its seeds are ``SeedSequence([seed, sample])``). Run under
+    :func:`wbsa.parallel.single_threaded_math` as :func:`render_chunk` does: the captures are its, before
+    they are measured.
     """
     from wbsa.bodies.body_model import BodyModel
     from wbsa.bodies.clothing import COVERED_BONES, dressed_vertices
     from wbsa.camera.extrinsics import pose_from_view
     from wbsa.camera.scene import MeshScene
-    from wbsa.estimation.subject.measure import measure_subject
     from wbsa.estimation.subject.mixed_pixels import repair_mixed_pixels
     from wbsa.training.room import with_edge_pixels
     from wbsa.bodies.posture import RandomPosture
-    from wbsa.parallel import keep_large_allocations, single_threaded_math
     from wbsa.simulate import simulate_view
+
+    model = BodyModel()
+    poser = RandomPosture(model, settings.postures if posture_names is None else posture_names)
+    bodies = model.rest_bodies(population)
+    covered = model.vertices_of_bones(COVERED_BONES)
+    sample = first_sample
+    for b in range(len(population)):
+        truth = population.iloc[b]
+        for _ in range(settings.views_per_subject):
+            rng = np.random.default_rng(np.random.SeedSequence([seed, sample]))
+            # the sixth stream is the scan draw's, the seventh the clothes': spawning more leaves the first
+            # ones as they were
+            pose_rng, capture_rng, floor_rng, room_rng, edge_rng, scan_rng, clothes_rng = rng.spawn(7)
+            vertices, posture = poser(bodies.vertices[b], bodies.bone_heads[b], pose_rng)
+            clothing_m = 0.0
+            if settings.clothed_share > 0 and clothes_rng.uniform() < settings.clothed_share:
+                clothing_m = float(clothes_rng.uniform(*settings.clothing_m))
+            cap = sample_capture(vertices, capture_rng, settings.capture)
+            mesh = model.skin_mesh(dressed_vertices(vertices, model.skin_faces, covered, clothing_m))
+            alone = settings.room and settings.alone_share > 0 and bool(room_rng.uniform() < settings.alone_share)
+            if alone and settings.scan_share > 0 and scan_rng.uniform() < settings.scan_share:
+                cap = as_scan_render(cap)
+            row = {c: truth[c] for c in TRUTH_COLUMNS if c in truth.index}
+            row.update(sample=sample, posture=posture, camera=cap.camera.name, azimuth_deg=cap.view.azimuth_deg,
+                       elevation_deg=cap.view.elevation_deg, distance_m=cap.view.distance_m,
+                       camera_height_m=cap.camera_height_m, fits=cap.fits,
+                       holes_fraction=cap.sensor.holes_fraction, pixel_dropout=cap.sensor.pixel_dropout,
+                       noise_scale=cap.sensor.effective_noise_scale,
+                       ideal_sensor=cap.sensor.is_ideal,
+                       edge_pixels=cap.edge_pixels, edge_share=cap.edge_share, clothing_m=clothing_m)
+            if settings.room:
+                row.update(alone=alone)
+                depth, mixed, mask, floor = _room_capture(mesh, cap, alone, room_rng, edge_rng, settings, seed,
+                                                          sample)
+            else:
+                scene = MeshScene(mesh, nthreads=1)
+                sim = simulate_view(scene, cap.camera, cap.view, sensor=cap.sensor, seed=seed,
+                                    subject_id=sample, reconstruct=("grid",), keep_frame=True)
+                floor = render_floor(pose_from_view(cap.view, scene.center), floor_rng, settings.floor_error_m,
+                                     settings.floor_tilt_deg, envelope_model(cap.camera))
+                row.update(vbsa_visible_m2=sim.row["vbsa_visible_m2"],
+                           vbsa_recon_grid_m2=sim.row["vbsa_recon_grid_m2"])
+                depth, mixed = repair_mixed_pixels(
+                    with_edge_pixels(sim.frame.depth_m, cap.edge_pixels, cap.edge_share, edge_rng), cap.camera.fx,
+                    envelope_model(cap.camera))
+                mask = depth > 0 if np.count_nonzero(depth) >= 200 else None
+            yield DrawnCapture(row, cap.camera, depth, mixed, mask, floor)
+            sample += 1
+
+
+def render_chunk(population: pd.DataFrame, first_sample: int, settings: RenderSettings, seed: int = 0,
+                 posture_names: tuple[str, ...] | None = None) -> Samples:
+    """Render and measure ``settings.views_per_subject`` captures of every body of ``population``.
+
+    Sample numbers start at ``first_sample`` (its seeds are ``SeedSequence([seed, sample])``); the captures are
+    :func:`draw_captures`'.
+    """
+    from wbsa.estimation.subject.measure import measure_subject
+    from wbsa.parallel import keep_large_allocations, single_threaded_math
 
     keep_large_allocations()
     rows, descriptors = [], []
     with single_threaded_math():
-        model = BodyModel()
-        poser = RandomPosture(model, settings.postures if posture_names is None else posture_names)
-        bodies = model.rest_bodies(population)
-        covered = model.vertices_of_bones(COVERED_BONES)
-        sample = first_sample
-        for b in range(len(population)):
-            truth = population.iloc[b]
-            for _ in range(settings.views_per_subject):
-                rng = np.random.default_rng(np.random.SeedSequence([seed, sample]))
-                # the sixth stream is the scan draw's, the seventh the clothes': spawning more leaves the first
-                # ones as they were
-                pose_rng, capture_rng, floor_rng, room_rng, edge_rng, scan_rng, clothes_rng = rng.spawn(7)
-                vertices, posture = poser(bodies.vertices[b], bodies.bone_heads[b], pose_rng)
-                clothing_m = 0.0
-                if settings.clothed_share > 0 and clothes_rng.uniform() < settings.clothed_share:
-                    clothing_m = float(clothes_rng.uniform(*settings.clothing_m))
-                cap = sample_capture(vertices, capture_rng, settings.capture)
-                mesh = model.skin_mesh(dressed_vertices(vertices, model.skin_faces, covered, clothing_m))
-                alone = settings.room and settings.alone_share > 0 and bool(room_rng.uniform() < settings.alone_share)
-                if alone and settings.scan_share > 0 and scan_rng.uniform() < settings.scan_share:
-                    cap = as_scan_render(cap)
-                row = {c: truth[c] for c in TRUTH_COLUMNS if c in truth.index}
-                row.update(sample=sample, posture=posture, camera=cap.camera.name, azimuth_deg=cap.view.azimuth_deg,
-                           elevation_deg=cap.view.elevation_deg, distance_m=cap.view.distance_m,
-                           camera_height_m=cap.camera_height_m, fits=cap.fits,
-                           holes_fraction=cap.sensor.holes_fraction, pixel_dropout=cap.sensor.pixel_dropout,
-                           noise_scale=cap.sensor.effective_noise_scale,
-                           ideal_sensor=cap.sensor.is_ideal,
-                           edge_pixels=cap.edge_pixels, edge_share=cap.edge_share, clothing_m=clothing_m)
-                if settings.room:
-                    row.update(alone=alone)
-                    depth, mixed, mask, floor = _room_capture(mesh, cap, alone, room_rng, edge_rng, settings, seed,
-                                                              sample)
-                else:
-                    scene = MeshScene(mesh, nthreads=1)
-                    sim = simulate_view(scene, cap.camera, cap.view, sensor=cap.sensor, seed=seed,
-                                        subject_id=sample, reconstruct=("grid",), keep_frame=True)
-                    floor = render_floor(pose_from_view(cap.view, scene.center), floor_rng, settings.floor_error_m,
-                                         settings.floor_tilt_deg, envelope_model(cap.camera))
-                    row.update(vbsa_visible_m2=sim.row["vbsa_visible_m2"],
-                               vbsa_recon_grid_m2=sim.row["vbsa_recon_grid_m2"])
-                    depth, mixed = repair_mixed_pixels(
-                        with_edge_pixels(sim.frame.depth_m, cap.edge_pixels, cap.edge_share, edge_rng), cap.camera.fx,
-                        envelope_model(cap.camera))
-                    mask = depth > 0 if np.count_nonzero(depth) >= 200 else None
-                if mask is None:
-                    row.update(m_ok=False)
-                    rows.append(row)
-                    descriptors.append(None)
-                    sample += 1
-                    continue
-                m = measure_subject(depth, mask, cap.camera, floor, mixed)
-                row.update({f"m_{k}": v for k, v in m.features().items()})
-                row.update(m_ok=True, m_touches_border=m.touches_border)
+        for drawn in draw_captures(population, first_sample, settings, seed, posture_names):
+            row = drawn.row
+            if drawn.mask is None:
+                row.update(m_ok=False)
                 rows.append(row)
-                descriptors.append(np.concatenate([m.descriptor, m.shape]))
-                sample += 1
+                descriptors.append(None)
+                continue
+            m = measure_subject(drawn.depth_m, drawn.mask, drawn.camera, drawn.floor, drawn.mixed)
+            row.update({f"m_{k}": v for k, v in m.features().items()})
+            row.update(m_ok=True, m_touches_border=m.touches_border)
+            rows.append(row)
+            descriptors.append(np.concatenate([m.descriptor, m.shape]))
     width = next((len(d) for d in descriptors if d is not None), 0)
     desc = np.stack([d if d is not None else np.full(width, np.nan, np.float32) for d in descriptors]) \
         if descriptors else np.zeros((0, width), np.float32)

@@ -703,6 +703,13 @@ def test_model_file_round_trip_and_refuses_non_finite_numbers(small_model, tmp_p
         m.predict({k: v for k, v in feats.items() if k != "gap_share"}, *args[1:])
     m.save(tmp_path / "again.npz")
     assert EstimatorModel.load(tmp_path / "again.npz").predict(*args)[0][0] == w[0]
+    # the same model saved again is the same bytes: no time of writing in the file
+    import zipfile
+
+    assert EstimatorModel.load(tmp_path / "again.npz").save(tmp_path / "twice.npz").read_bytes() == \
+        (tmp_path / "again.npz").read_bytes()
+    with zipfile.ZipFile(tmp_path / "twice.npz") as z:
+        assert {i.date_time for i in z.infolist()} == {(1980, 1, 1, 0, 0, 0)}
     # a file of the format before the stated clothes (36 regression and 12 spread terms) is refused in one line
     old = EstimatorModel.load(small_model)
     old.coef, old.spread_coef, old.meta["version"] = old.coef[:36], old.spread_coef[:12], 5

@@ -227,14 +227,14 @@ class EstimatorModel:
 
     # ------------------------------------------------------------------ file
     def save(self, path: str | os.PathLike) -> Path:
-        """Write the model as one ``.npz`` of numbers, atomically.
+        """Write the model as one ``.npz`` of numbers, atomically; the same model gives the same bytes.
 
         Parameters
         ----------
         path : str or path
             The ``.npz`` file to write.
         """
-        from wbsa.io import atomic_path
+        from wbsa.io import write_npz
 
         arrays = {**self.view.to_arrays(), "mean": self.mean, "scale": self.scale, "coef": self.coef,
                   "intercept": np.array([self.intercept]), "spread_coef": self.spread_coef,
@@ -243,11 +243,7 @@ class EstimatorModel:
             arrays.update(self.residual.to_arrays("residual_"))
         meta = {"format": FORMAT, "version": VERSION, **self.meta}
         arrays["meta_json"] = np.array(json.dumps(meta, default=_json_default))
-        path = Path(path)
-        with atomic_path(path, keep_suffix=True) as tmp:
-            with open(tmp, "wb") as fh:
-                np.savez_compressed(fh, **arrays)
-        return path
+        return write_npz(arrays, path)
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> "EstimatorModel":

@@ -164,7 +164,7 @@ def test_kill_9_at_random_points_of_a_scan_then_resume_gives_the_same_bytes(real
     code = (f"import sys\nfrom wbsa.cli import main\nsys.exit(main(['scan', {str(real_population)!r}, '--out', "
             f"{str(out)!r}, '--chunk-size', '1', *{SCAN_ARGS!r}]))")
     rng = random.Random(5)
-    for _ in range(3):
+    for _ in range(2):  # two kills, each at a random moment; the run then resumes from what they left
         proc = _python(code)
         try:
             proc.wait(timeout=rng.uniform(2.0, 8.0))

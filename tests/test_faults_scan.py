@@ -164,7 +164,7 @@ def test_kill_9_at_random_points_of_a_scan_then_resume_gives_the_same_bytes(real
     code = (f"import sys\nfrom wbsa.cli import main\nsys.exit(main(['scan', {str(real_population)!r}, '--out', "
             f"{str(out)!r}, '--chunk-size', '1', *{SCAN_ARGS!r}]))")
     rng = random.Random(5)
-    for _ in range(3):
+    for _ in range(2):  # two kills, each at a random moment; the run then resumes from what they left
         proc = _python(code)
         try:
             proc.wait(timeout=rng.uniform(2.0, 8.0))
@@ -181,15 +181,19 @@ def test_kill_9_at_random_points_of_a_scan_then_resume_gives_the_same_bytes(real
 
 @pytest.mark.slow
 def test_views_with_the_camera_inside_the_body_are_marked_and_counted(real_population, tmp_path, capsys):
-    """Behind and above the bounding-box centre at 0.1 m the camera is inside every body of this population."""
+    """Behind and above the bounding-box centre at 0.1 m the camera is inside every body of this population
+    (two of its subjects are scanned: a view from 0.1 m in front is seconds of grazing-triangle splits)."""
+    two = tmp_path / "two.parquet"
+    pq.write_table(pq.read_table(real_population).slice(0, 2), two)
     out = tmp_path / "inside"
-    assert main(["scan", str(real_population), "--out", str(out), "--azimuths", "0,180", "--elevations", "60",
+    assert main(["scan", str(two), "--out", str(out), "--azimuths", "0,180", "--elevations", "60",
                  "--distance", "0.1", "--workers", "1", "--no-progress"]) == 0
     err = capsys.readouterr().err
-    assert "warning: 5 of 10 views put the camera inside the body" in err and err.count("\n") == 1
+    assert "warning: 2 of 4 views put the camera inside the body" in err and err.count("\n") == 1
     table = pd.read_parquet(out / TABLE_FILE)
+    assert len(table) == 4
     inside = table["camera_inside"].to_numpy()
-    assert (table.loc[inside, "azimuth_deg"] == 180).all() and inside.sum() == 5
+    assert (table.loc[inside, "azimuth_deg"] == 180).all() and inside.sum() == 2
     assert (table.loc[inside, "n_pixels"] == 0).all() and table.loc[inside, "vbsa_visible_m2"].isna().all()
     assert table.loc[~inside, "vbsa_visible_m2"].gt(0).all()
     # wbsa view refuses the same view with one line

@@ -396,6 +396,14 @@ def test_seen_past_needs_a_larger_nearer_object_around_it():
     # two people touching are one object too wide at the hips: it still hides the wall between the legs
     pair = Cluster(6, 38_000, (380, 200), 2.5, 1.8, 1.2, 1.4, (280, 40, 520, 400))
     assert seen_past([pair, wall_between_legs]) == {2}
+    # the room seen between two people side by side: inside their boxes together, though in neither alone
+    left = Cluster(7, 20_000, (400, 200), 2.5, 1.8, 0.6, 0.4, (360, 40, 450, 400))
+    right = Cluster(8, 20_000, (490, 200), 2.2, 1.7, 0.6, 0.4, (440, 60, 540, 400))
+    between = Cluster(9, 2_000, (445, 270), 4.9, 0.9, 0.2, 0.2, (430, 220, 460, 320))
+    assert seen_past([left, right, between]) == {9}
+    # a gap between the two boxes leaves it in view
+    apart = Cluster(8, 20_000, (500, 200), 2.2, 1.7, 0.6, 0.4, (455, 60, 540, 400))
+    assert seen_past([left, apart, between]) == set()
 
 
 def test_a_steep_view_keeps_its_floor(bodies):
@@ -991,14 +999,6 @@ def test_a_scan_render_has_no_sensor_effects_and_keeps_the_capture():
         assert (scan.camera, scan.view, scan.camera_height_m, scan.fits) == (cap.camera, cap.view,
                                                                            cap.camera_height_m, cap.fits)
         assert not cap.sensor.is_ideal
-    # the room seen between two people side by side: inside their boxes together, though in neither alone
-    left = Cluster(7, 20_000, (400, 200), 2.5, 1.8, 0.6, 0.4, (360, 40, 450, 400))
-    right = Cluster(8, 20_000, (490, 200), 2.2, 1.7, 0.6, 0.4, (440, 60, 540, 400))
-    between = Cluster(9, 2_000, (445, 270), 4.9, 0.9, 0.2, 0.2, (430, 220, 460, 320))
-    assert seen_past([left, right, between]) == {9}
-    # a gap between the two boxes leaves it in view
-    apart = Cluster(8, 20_000, (500, 200), 2.2, 1.7, 0.6, 0.4, (455, 60, 540, 400))
-    assert seen_past([left, apart, between]) == set()
 
 
 def test_a_body_under_depth_noise_twice_its_relief_is_not_flat_and_a_board_under_it_is():

@@ -16,6 +16,7 @@ import numpy as np
 
 from wbsa.estimation.methods.body_fit.start_net import GAUSSIAN_TARGETS, StartModel, build_net, scalar_inputs
 from wbsa.errors import WbsaError
+from wbsa.parallel import torch_threads
 from wbsa.training.start.settings import StartSettings
 
 #: Age (years) from which a subject counts as an adult in the sex figures.
@@ -85,9 +86,7 @@ def fit_start(data: dict, train: np.ndarray, settings: StartSettings, log=None) 
     flipped, z_t_flipped = _mirrored(images, z_t.astype(np.float64))
     z_t_flipped = z_t_flipped.astype(np.float32)
 
-    threads = torch.get_num_threads()
-    torch.set_num_threads(1)
-    try:
+    with torch_threads(1):
         net = build_net(CROP_SHAPE, settings.seed)
         opt = torch.optim.AdamW(net.parameters(), lr=settings.learning_rate, weight_decay=settings.weight_decay)
         n = len(images)
@@ -116,8 +115,6 @@ def fit_start(data: dict, train: np.ndarray, settings: StartSettings, log=None) 
                 total += float(loss.detach())
             if log is not None:
                 log(f"epoch {epoch + 1}/{settings.epochs}: loss {total / max(n // settings.batch, 1):.4f}")
-    finally:
-        torch.set_num_threads(threads)
     state = {k: v.detach().numpy().copy() for k, v in net.state_dict().items()}
     n_params = int(sum(p.numel() for p in net.parameters()))
     card = {"n_train_crops": int(n), "n_train_bodies": int(len(np.unique(data["subject_id"][train]))),

@@ -380,7 +380,7 @@ def test_people_touching_are_told_apart_by_their_heads(bodies):
 
 
 def test_seen_past_needs_a_larger_nearer_object_around_it():
-    from wbsa.estimation.subject.people import Cluster, seen_past
+    from wbsa.estimation.subject.people import Cluster, seen_past, seen_past_object
 
     body = Cluster(1, 20_000, (320, 200), 2.5, 1.8, 0.6, 0.4, (280, 40, 360, 400))
     wall_between_legs = Cluster(2, 900, (320, 330), 3.3, 0.8, 0.2, 0.2, (312, 260, 328, 395))
@@ -399,8 +399,9 @@ def test_seen_past_needs_a_larger_nearer_object_around_it():
     # the room seen between two people side by side: inside their boxes together, though in neither alone
     left = Cluster(7, 20_000, (400, 200), 2.5, 1.8, 0.6, 0.4, (360, 40, 450, 400))
     right = Cluster(8, 20_000, (490, 200), 2.2, 1.7, 0.6, 0.4, (440, 60, 540, 400))
-    between = Cluster(9, 2_000, (445, 270), 4.9, 0.9, 0.2, 0.2, (430, 220, 460, 320))
-    assert seen_past([left, right, between]) == {9}
+    between = Cluster(9, 2_000, (435, 270), 4.9, 0.9, 0.2, 0.2, (430, 220, 460, 320))
+    assert seen_past([left, right, between]) == {9} == seen_past([between, right, left])
+    assert seen_past_object(between, [right, between, left]) is left  # the box that spans its middle column
     # a gap between the two boxes leaves it in view
     apart = Cluster(8, 20_000, (500, 200), 2.2, 1.7, 0.6, 0.4, (455, 60, 540, 400))
     assert seen_past([left, apart, between]) == set()
@@ -1026,3 +1027,7 @@ def test_a_body_under_depth_noise_twice_its_relief_is_not_flat_and_a_board_under
     assert clean > 1.5 * FLAT_MIN_M
     assert abs(shape_m(body_z, 0.06) - clean) < 0.3 * clean
     assert shape_m(np.full(body_z.shape, 2.5), 0.06) < FLAT_MIN_M / 2
+    # a one-pixel-wide object has no window half covered: its RMS and the whole noise
+    line = relief_m(np.arange(50), np.zeros(50, int), np.stack([np.zeros(50), np.arange(50) * 0.01,
+                                                               np.full(50, 2.0)], axis=1), 0.01)
+    assert line == (0.0, 0.01)

@@ -53,7 +53,8 @@ RELIEF_WINDOW_PX = 3
 LOWER_HALF = 0.5
 #: A person standing on a seen floor has returns this close to it (m): the feet.
 FLOOR_CONTACT_M = 0.15
-#: An object inside a nearer one's bounding box in the image and this much farther (m) is seen past it.
+#: An object inside a nearer one's bounding box in the image (or boxes side by side) and this much farther (m)
+#: is seen past it.
 #: The wall stands 0.5 m or more behind a subject's back; a body's own parts join it within 0.8 m of depth
 #: when they touch in the image (:func:`~wbsa.estimation.subject.clusters.merge_occluding`) and are larger.
 SEEN_PAST_M = 0.4
@@ -83,8 +84,9 @@ class Cluster:
     head_width_m : float
         Width of its top :data:`HEAD_BAND_M` across the floor (NaN without a floor).
     off_plane_m, noise_m : float
-        RMS distance of its returns from their best plane, and its depth noise (measured on it, or the
-        envelope at its distance where quantised depth reads none) (m).
+        RMS distance of its returns from their best plane averaged over windows of pixels, and the depth noise
+        left in that average (its noise measured on it, or the envelope at its distance where quantised depth
+        reads none) (m; :func:`relief_m`).
     top_cut, bottom_cut : bool
         Its top reaches the frame's top border; its lowest returns reach the frame's bottom border (the
         image's, or a band without returns along it: :mod:`~wbsa.estimation.subject.frame`).
@@ -193,7 +195,7 @@ def relief_m(rows: np.ndarray, cols: np.ndarray, points: np.ndarray, noise_m: fl
     :data:`RELIEF_WINDOW_PX` × :data:`RELIEF_WINDOW_PX` window around it (windows at least half covered by the
     object): a body's relief spans many pixels and survives the average, independent depth noise of σ falls to
     σ / √k over k returns. So a person stays a person under a noise as large as its relief (Kinect v2's noise
-    model at 3× its σ reads 6.6 cm at 3.5 m, where a body lies 4–5 cm off its plane), and a board stays flat.
+    model at 3× its σ reads 6.6 cm at 3.5 m, where a body lies 4–6 cm off its plane), and a board stays flat.
 
     Parameters
     ----------
@@ -387,7 +389,8 @@ def seen_past(clusters: list[Cluster]) -> set[int]:
 
 
 def seen_past_object(c: Cluster, clusters: list[Cluster]) -> Cluster | None:
-    """The leftmost of the nearer, larger objects ``c`` is seen past (see :func:`seen_past`), or None.
+    """The nearer, larger object ``c`` is seen past (see :func:`seen_past`), or None: of several side by side,
+    the nearest whose box spans ``c``'s middle column.
 
     Parameters
     ----------
@@ -409,7 +412,10 @@ def seen_past_object(c: Cluster, clusters: list[Cluster]) -> Cluster | None:
         if o.bbox_px[0] > reach + 1:
             break
         reach = max(reach, o.bbox_px[2])
-    return nearer[0] if nearer and reach >= x1 else None
+    if not nearer or reach < x1:
+        return None
+    middle = c.pixel_xy[0]
+    return min(nearer, key=lambda o: (not o.bbox_px[0] <= middle <= o.bbox_px[2], o.distance_m))
 
 
 def split_touching(clusters: list[Cluster], pixel_label: np.ndarray, pix: np.ndarray, points: np.ndarray,

@@ -220,16 +220,17 @@ def relief_m(rows: np.ndarray, cols: np.ndarray, points: np.ndarray, noise_m: fl
     normal = np.linalg.svd(sub - centre, full_matrices=False)[2][2]
     r0, c0 = rows.min(), cols.min()
     grid = (rows.max() - r0 + 1, cols.max() - c0 + 1)
+    distance = (points - centre) @ normal
     off = np.zeros(grid)
     seen = np.zeros(grid)
-    off[rows - r0, cols - c0] = (points - centre) @ normal
+    off[rows - r0, cols - c0] = distance
     seen[rows - r0, cols - c0] = 1.0
     k = RELIEF_WINDOW_PX
     total = ndimage.uniform_filter(off, k, mode="constant") * k * k
     count = np.rint(ndimage.uniform_filter(seen, k, mode="constant") * k * k)
     ok = (seen > 0) & (count >= k * k / 2)
     if not ok.any():
-        return float(np.sqrt(np.mean(((points - centre) @ normal) ** 2))), float(noise_m)
+        return float(np.sqrt(np.mean(distance ** 2))), float(noise_m)
     mean = total[ok] / count[ok]
     return float(np.sqrt(np.mean(mean ** 2))), float(noise_m * np.sqrt(np.mean(1.0 / count[ok])))
 

@@ -12,6 +12,7 @@ import random
 import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -171,20 +172,29 @@ def test_two_concurrent_runs_with_different_configs_on_one_folder(tmp_path):
     assert_nothing_incomplete(out)
 
 
+def files_in(folder: Path) -> int:
+    """How many files a study folder holds (0 before it exists): the work a run has done so far."""
+    return sum(1 for p in folder.rglob("*") if p.is_file()) if folder.exists() else 0
+
+
 def test_kill_9_at_random_points_then_resume_gives_the_same_bytes(reference, tmp_path):
-    """kill -9 twice at random moments of a run, then finish it: the data files equal an uninterrupted run's."""
+    """kill -9 twice at random points of a run (after a random number of its files are written, not after a
+    time), then finish it: the data files equal an uninterrupted run's."""
     root, _ = reference
     cfg = config(tmp_path, "study A")
     out = tmp_path / "killed"
     rng = random.Random(12)
+    total = files_in(root / "A")
     for attempt in range(2):
+        if files_in(out) >= total - 1:
+            break
+        written = rng.randint(files_in(out) + 1, total - 1)
         proc = wbsa_process("run", "--config", str(cfg), "--out", str(out))
-        delay = rng.uniform(3.0, 15.0)
-        try:
-            proc.wait(timeout=delay)
-        except subprocess.TimeoutExpired:
+        while proc.poll() is None and files_in(out) < written:
+            time.sleep(0.01)
+        if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait()
+        proc.wait()
         proc.communicate()
         if out.exists():
             assert_nothing_incomplete(out)

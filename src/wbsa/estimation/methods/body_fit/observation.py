@@ -18,6 +18,8 @@ from wbsa.errors import WbsaError
 _FREE_REACH_PX = 2
 #: Most outline pixels kept for the contour term.
 MAX_CONTOUR = 800
+#: The subject's lowest returns, as this quantile of their heights, give the floor band (:attr:`Observation.floor_band_m`).
+FEET_QUANTILE = 0.02
 #: Pixels of margin kept around the subject's mask in the silhouette's distance map.
 _PAD_PX = 24
 
@@ -62,6 +64,11 @@ class Observation:
     sensor : SensorModel or None
         The camera's depth-noise envelope (:func:`wbsa.sensor.technology.envelope_model`); None: that of a camera
         without a preset.
+    floor_band_m : float
+        Height above the floor (m) below which a return cannot be told from the floor: the segmentation's floor
+        cut (:meth:`wbsa.estimation.subject.cloud.Plane.tolerance`, the floor's measured noise) at the subject's
+        lowest returns; 0 without a floor. The mask may lack the feet there, so the silhouette does not
+        count the vertices below it.
     """
 
     points: np.ndarray
@@ -80,6 +87,7 @@ class Observation:
     contour_px: np.ndarray = None
     contour_depth: np.ndarray = None
     sensor: object = None
+    floor_band_m: float = 0.0
 
     def to_camera(self, points_f: np.ndarray) -> np.ndarray:
         """(k, 3) view-frame points in camera coordinates.
@@ -218,6 +226,8 @@ def observe(depth_m: np.ndarray, mask: np.ndarray, camera, floor, n_points: int,
     rows, cols = np.nonzero(valid)
     points = ray_directions(camera, rows, cols) * depth_m[rows, cols][:, None]
     keep = above_floor(points, floor)
+    floor_band = 0.0 if floor is None else float(np.median(floor.tolerance(points[floor.height(points) <= np.quantile(
+        floor.height(points), FEET_QUANTILE)])))
     points = points[keep]
     if len(points) < 200:
         raise WbsaError(f"only {len(points)} subject returns above the floor; too few to fit a body (move closer "
@@ -244,7 +254,7 @@ def observe(depth_m: np.ndarray, mask: np.ndarray, camera, floor, n_points: int,
                        skew=float(getattr(camera, "skew", 0.0) or 0.0), outside_px=outside, depth=depth,
                        crop=(int(r0), int(c0)), top_m=top, floor_seen=floor is not None, n_returns=n_returns,
                        noise_m=measured_depth_noise(depth_m, valid), contour_px=contour_px,
-                       contour_depth=contour_depth, sensor=sensor)
+                       contour_depth=contour_depth, sensor=sensor, floor_band_m=floor_band)
 
 
 def outline(depth: np.ndarray, sub: np.ndarray, corner: tuple[int, int], shape: tuple[int, int],

@@ -11,7 +11,7 @@ and build, beside Du Bois and Mosteller given the TRUE height and mass.
 
     python benchmarks/bench_body_fit.py --subjects 20 --seed 1000 [--out fits.csv] [--model MODEL.npz]
     python benchmarks/bench_body_fit.py --subjects 20 --displace   # bodies outside anny's shape space
-    python benchmarks/bench_body_fit.py --calibrate --subjects 40 --seed 2000   # rebuild the interval calibration
+    python benchmarks/bench_body_fit.py --calibrate --subjects 80 --seed 2000 --workers 2   # rebuild the interval
     python benchmarks/bench_body_fit.py --drift --subjects 10 --draws 3   # truth-started drift, seed 3000
     python benchmarks/bench_body_fit.py --subjects 40 --renderer both   # the plain renderer's captures beside
     python benchmarks/bench_body_fit.py --subjects 150 --renderer both --rows runs/fit-rows-both [--workers 2]

@@ -35,7 +35,7 @@ def anthropometer(body_model):
 @pytest.fixture(scope="session")
 def small_training_run(tmp_path_factory):
     """A small training run of ``wbsa.train`` (``helpers.training.small_training_settings``), once per test run
-    (about 100 s on two busy cores, most of it the 64 renders): its folder, with its renders and ``model.npz``."""
+    (about 30 s, most of it the 48 renders): its folder, with its renders and ``model.npz``."""
     from helpers.training import small_training_settings
     from wbsa.training.run import train
 

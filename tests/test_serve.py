@@ -76,14 +76,14 @@ def browser():
         yield driver
 
 
-#: Steps of the tests' body fits: few, so a fit takes a second or two (the page's behaviour, not the fit's quality).
+#: Steps of the tests' body fits (two restarts): few, so a fit takes a second or two (the page's behaviour, not the fit's quality).
 FIT_STEPS = 30
 
 
 def _fit_settings():
     from wbsa.estimation.methods.body_fit.settings import BodyFitSettings
 
-    return BodyFitSettings(steps=FIT_STEPS)
+    return BodyFitSettings(steps=FIT_STEPS, restarts=2, keep_restarts=1)
 
 
 def _estimate(path, model, pick=None, **kw):

@@ -21,9 +21,48 @@ from wbsa.errors import WbsaError, Worded
 
 #: Phenotypes whose value at 0 or 1 flags ``outside_model_range`` (the others are not measured by the view).
 _RANGE_CHECKED = ("p_age", "p_muscle", "p_weight", "p_height", "p_proportions")
-#: Residual (m) and inlier share beyond which ``poor_fit`` is flagged.
+#: Residual (m) and inlier share beyond which ``poor_fit`` is flagged on a clean frame; on a noisy one
+#: (:func:`poor_fit_detail`) the residual may reach :data:`POOR_NOISE_K` times the depth noise measured on the
+#: subject, and the share within 3 cm is taken against the share such noise leaves there.
 POOR_RESIDUAL_M = 0.015
 POOR_INLIER_SHARE = 0.85
+POOR_NOISE_K = 1.5
+#: Distance (m) of a point from the fitted surface within which it counts as explained.
+INLIER_M = 0.03
+
+
+def poor_fit_detail(residual_m: float, inlier_share: float, noise_m: float) -> str | None:
+    """The ``poor_fit`` flag's detail, or None when the fitted surface explains the points as well as their noise
+    allows.
+
+    A perfect fit to returns of depth noise σ leaves a residual of about σ and a share erf(3 cm / σ√2) of them
+    within 3 cm; a frame three times noisier than Kinect v2's model (σ 3–9 cm) leaves 20–50 mm whatever the body,
+    which is the camera's noise, not a poor fit.
+
+    Parameters
+    ----------
+    residual_m : float
+        Robust RMS distance of the points to the fitted surface (m).
+    inlier_share : float
+        Share of the points within :data:`INLIER_M` of it.
+    noise_m : float
+        Depth noise measured on the subject (m; :func:`wbsa.estimation.subject.measure.measured_depth_noise`).
+
+    Returns
+    -------
+    str or None
+
+    Examples
+    --------
+    >>> poor_fit_detail(0.030, 0.60, 0.002) is not None, poor_fit_detail(0.030, 0.60, 0.040) is None
+    (True, True)
+    """
+    limit_m = max(POOR_RESIDUAL_M, POOR_NOISE_K * noise_m)
+    expected = math.erf(INLIER_M / (noise_m * math.sqrt(2.0))) if noise_m > 0 else 1.0
+    if residual_m <= limit_m and inlier_share >= POOR_INLIER_SHARE * expected:
+        return None
+    noise = f" against {1000 * noise_m:.1f} mm of depth noise" if POOR_NOISE_K * noise_m > POOR_RESIDUAL_M else ""
+    return f"residual {1000 * residual_m:.1f} mm{noise}, {100 * inlier_share:.0f} % of points within 3 cm"
 
 
 @functools.lru_cache(maxsize=2)
@@ -158,7 +197,7 @@ def _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fi
     res = np.abs(opt.residuals_m)
     kept = np.sort(res)[: max(1, int(0.9 * len(res)))]
     residual = float(np.sqrt(np.mean(kept**2)))
-    inliers = float(np.mean(res < 0.03))
+    inliers = float(np.mean(res < INLIER_M))
 
     flags: dict[str, str] = {}
     if opt.timed_out:
@@ -175,8 +214,9 @@ def _fit(depth, mask, camera, floor, azimuth_deg, settings, seed, body_model, fi
     at_edge = model_edge_detail(table)
     if at_edge:
         flags["outside_model_range"] = at_edge
-    if residual > POOR_RESIDUAL_M or inliers < POOR_INLIER_SHARE:
-        flags["poor_fit"] = f"residual {1000 * residual:.1f} mm, {100 * inliers:.0f} % of points within 3 cm"
+    poor = poor_fit_detail(residual, inliers, obs.noise_m)
+    if poor:
+        flags["poor_fit"] = poor
     if mask[0].any() or mask[-1].any() or mask[:, 0].any() or mask[:, -1].any():
         flags["cut_off"] = "subject pixels on the image border; part of the body may be missing"
     if floor is None:

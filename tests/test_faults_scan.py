@@ -19,6 +19,7 @@ import pandas as pd
 import pyarrow.parquet as pq
 import pytest
 
+from helpers.kill import kill_when
 from test_scan_engine import VIEWS, _Camera, _population, stand_in_chunk
 from wbsa.cli import main
 from wbsa.errors import WbsaError
@@ -164,14 +165,14 @@ def test_kill_9_at_random_points_of_a_scan_then_resume_gives_the_same_bytes(real
     code = (f"import sys\nfrom wbsa.cli import main\nsys.exit(main(['scan', {str(real_population)!r}, '--out', "
             f"{str(out)!r}, '--chunk-size', '1', *{SCAN_ARGS!r}]))")
     rng = random.Random(5)
-    for _ in range(2):  # two kills, each at a random moment; the run then resumes from what they left
-        proc = _python(code)
-        try:
-            proc.wait(timeout=rng.uniform(2.0, 8.0))
-        except subprocess.TimeoutExpired:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait()
-        proc.communicate()
+    total = len(list((ref / PARTS_DIR).glob("part-*.parquet")))
+
+    def parts() -> int:
+        return len(list((out / PARTS_DIR).glob("part-*.parquet")))
+
+    for _ in range(2):  # two kills, each after a random number of parts; the run then resumes from what they left
+        if parts() < total - 1:
+            kill_when(_python(code), parts, rng.randint(parts() + 1, total - 1))
         for part in (out / PARTS_DIR).glob("part-*.parquet"):  # every part under its final name is whole
             pq.read_table(part)
     assert main(["scan", str(real_population), "--out", str(out), "--chunk-size", "1", *SCAN_ARGS]) == 0

@@ -9,15 +9,14 @@ from __future__ import annotations
 import json
 import os
 import random
-import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
 
 from helpers.cli import run_cli
+from helpers.kill import kill_when
 
 pytestmark = pytest.mark.slow  # real bodies, a scan, a fit and a report per study (10-30 s each)
 
@@ -189,13 +188,7 @@ def test_kill_9_at_random_points_then_resume_gives_the_same_bytes(reference, tmp
         if files_in(out) >= total - 1:
             break
         written = rng.randint(files_in(out) + 1, total - 1)
-        proc = wbsa_process("run", "--config", str(cfg), "--out", str(out))
-        while proc.poll() is None and files_in(out) < written:
-            time.sleep(0.01)
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGKILL)
-        proc.wait()
-        proc.communicate()
+        kill_when(wbsa_process("run", "--config", str(cfg), "--out", str(out)), lambda: files_in(out), written)
         if out.exists():
             assert_nothing_incomplete(out)
     code, _, err = run_cli("run", "--config", str(cfg), "--out", str(out))

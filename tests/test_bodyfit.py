@@ -129,8 +129,8 @@ def test_fit_recovers_a_known_body_from_a_noise_free_render(render, tmp_path):
 
 def test_feet_lost_in_a_noisy_floor_do_not_pull_the_body_up(render_with_body):
     """Where the floor is noisy the segmentation cannot tell the feet from it and the mask ends above them: the
-    silhouette does not count the body's vertices in that band, so the true body costs nothing there
-    (counted, those vertices alone cost it, and the fit lost 4–10 cm of stature at three times a camera's noise)."""
+    silhouette does not count the body's vertices in that band, so the true body costs nothing there (counted,
+    those vertices alone give it a cost)."""
     import dataclasses as dc
 
     import torch

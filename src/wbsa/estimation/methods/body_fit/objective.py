@@ -15,8 +15,7 @@ Every term is a mean of robust penalties of residuals in units of a scale, so th
 * **silhouette** (:meth:`Objective.silhouette`): how far each model vertex projects outside the subject's
   mask beyond a tolerance (pixels turned into metres at the vertex's depth), Huber with scale 1 cm: no body
   where the image shows none; not below the floor band, where the image cannot tell the feet from the floor
-  (at three times Kinect's noise that band held all the silhouette's cost at the true body, and the fit lost
-  4–10 cm of stature to it);
+  and the mask may end above them;
 * **contour** (:meth:`Objective.contour`): each outline pixel of the subject against the projection of its
   nearest model vertex on the body's outline (a vertex whose normal is near perpendicular to its viewing
   ray), beyond the silhouette tolerance, in metres at the pixel's depth, Geman–McClure with scale 1 cm: body wherever the image shows the

@@ -226,8 +226,10 @@ def observe(depth_m: np.ndarray, mask: np.ndarray, camera, floor, n_points: int,
     rows, cols = np.nonzero(valid)
     points = ray_directions(camera, rows, cols) * depth_m[rows, cols][:, None]
     keep = above_floor(points, floor)
-    floor_band = 0.0 if floor is None else float(np.median(floor.tolerance(points[floor.height(points) <= np.quantile(
-        floor.height(points), FEET_QUANTILE)])))
+    floor_band = 0.0
+    if floor is not None:
+        height = floor.height(points)
+        floor_band = float(np.median(floor.tolerance(points[height <= np.quantile(height, FEET_QUANTILE)])))
     points = points[keep]
     if len(points) < 200:
         raise WbsaError(f"only {len(points)} subject returns above the floor; too few to fit a body (move closer "
